@@ -1,0 +1,65 @@
+# mudcrack — the user's entry point. `make demo` and `make test` are the contract (README).
+# Each target installs what is missing (Debian 12 packages only), configures a Release build,
+# builds, and then runs the demo shot or the test suite.
+SHELL      := /bin/bash
+.DEFAULT_GOAL := help
+BUILD      ?= build
+BUILD_TYPE ?= Release
+JOBS       ?= $(shell nproc)
+OUT        ?= out
+CMAKE_ARGS ?=
+
+# One apt-get line: everything the build, the tests, the demo asset and the previews need.
+APT_PACKAGES := cmake make g++ pkg-config \
+  libeigen3-dev libcgal-dev libgmp-dev libmpfr-dev libassimp-dev libopenvdb-dev libboost-iostreams-dev \
+  libosmesa6-dev libtbb-dev libpng-dev nlohmann-json3-dev libcli11-dev \
+  libgtest-dev libgmock-dev libbenchmark-dev libcgal-demo tetgen ffmpeg
+
+# The demo asset: CGAL's Stanford bunny, extracted from Debian's libcgal-demo (never committed).
+CGAL_DATA  := /usr/share/doc/libcgal-dev/data.tar.gz
+BUNNY      := shots/assets/bunny00.off
+
+.PHONY: help deps configure build demo test bench clean assets
+
+help:
+	@echo "make demo   install missing packages, build, run the demo shot end to end"
+	@echo "make test   install missing packages, build, run the test suite (ctest)"
+	@echo "make bench  build and run the benchmarks"
+	@echo "make clean  remove the build tree"
+
+# install whatever is missing, in one apt-get line; nothing happens when all is present
+deps:
+	@missing=$$(for p in $(APT_PACKAGES); do \
+	    dpkg-query -W -f='$${Status}\n' $$p 2>/dev/null | grep -q '^install ok installed' || echo $$p; done); \
+	if [ -z "$$missing" ]; then echo "mudcrack: all Debian packages present"; exit 0; fi; \
+	echo "mudcrack: missing Debian packages:" $$missing; \
+	if [ "$$(id -u)" -ne 0 ]; then \
+	    echo "mudcrack: not root; install them with: sudo apt-get install -y --no-install-recommends" $$missing; exit 1; fi; \
+	(apt-get update -qq && DEBIAN_FRONTEND=noninteractive apt-get install -y -qq --no-install-recommends $$missing) \
+	  || { echo "mudcrack: apt-get failed installing:" $$missing; exit 1; }
+
+assets: $(BUNNY)
+$(BUNNY): | deps
+	@mkdir -p $(dir $@)
+	@test -f $(CGAL_DATA) || { echo "mudcrack: $(CGAL_DATA) not found (package libcgal-demo)"; exit 1; }
+	tar -xzf $(CGAL_DATA) -O data/meshes/bunny00.off > $@.tmp && mv $@.tmp $@
+
+$(BUILD)/CMakeCache.txt: | deps
+	cmake -S . -B $(BUILD) -DCMAKE_BUILD_TYPE=$(BUILD_TYPE) $(CMAKE_ARGS)
+
+configure: $(BUILD)/CMakeCache.txt
+
+build: deps configure
+	cmake --build $(BUILD) -j $(JOBS)
+
+test: build assets
+	cd $(BUILD) && ctest --output-on-failure -j $(JOBS) --timeout 900
+
+bench: build assets
+	$(BUILD)/bin/mc-bench-all 2>/dev/null || for b in $(BUILD)/bin/*_bench; do $$b; done
+
+demo: build assets
+	@bash pipeline/run_shot.sh $(BUILD)/bin shots/demo.json $(OUT)/demo
+
+clean:
+	rm -rf $(BUILD)

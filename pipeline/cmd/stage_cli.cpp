@@ -1,0 +1,82 @@
+#include "pipeline/cmd/stage_cli.h"
+
+#include <cstdio>
+#include <exception>
+#include <regex>
+
+#include "sim/core/error.h"
+#include "sim/core/log.h"
+#include "sim/core/parallel.h"
+#include "sim/core/stats.h"
+
+namespace mudcrack {
+
+FrameRange parse_frame_range(const std::string& text) {
+    static const std::regex range(R"(^\s*(\d+)\s*(?:-\s*(\d+))?\s*$)");
+    std::smatch m;
+    if (!std::regex_match(text, m, range))
+        throw InputError("--frames = \"" + text + "\": expected A-B or N (1-based frame numbers)");
+    FrameRange r;
+    r.first = std::stoi(m[1]);
+    r.last = m[2].matched ? std::stoi(m[2]) : r.first;
+    if (r.first < 1 || r.last < r.first)
+        throw InputError("--frames = \"" + text + "\": expected 1 <= A <= B");
+    return r;
+}
+
+int run_stage(const std::string& program, const std::string& description, int argc, char** argv,
+              const std::function<void(CLI::App&)>& add_flags,
+              const std::function<int(const StageOptions&)>& body) {
+    WallTimer timer;
+    log::set_program(program);
+    StageOptions opt;
+    opt.program = program;
+    CLI::App app{description, program};
+    app.set_version_flag("--version", std::string(program) + " (mudcrack) " MUDCRACK_VERSION);
+    app.add_option("--shot", opt.shot, "shot file (JSON)")->required()->check(CLI::ExistingFile);
+    app.add_option("--out", opt.out, "output root of the shot (stages write OUT/<stage>/)")->required();
+    app.add_option("--frames", opt.frames, "frame range A-B or a single frame N (default: the shot's)");
+    app.add_option("--threads", opt.threads, "worker threads (default: all cores)")->check(CLI::NonNegativeNumber);
+    app.add_option("--seed", opt.seed, "random seed (default: the shot's)");
+    app.add_option("--log-level", opt.log_level, "error|warning|info|debug")
+        ->check(CLI::IsMember({"error", "warning", "info", "debug"}));
+    app.add_flag("--quiet", opt.quiet, "print errors and warnings only");
+    app.add_flag("--keep-partial", opt.keep_partial, "keep the .partial/ output folder of a failed run");
+    if (add_flags) add_flags(app);
+    try {
+        app.parse(argc, argv);
+    } catch (const CLI::ParseError& e) {
+        const int code = app.exit(e);
+        return code == 0 ? 0 : 2;
+    }
+    const log::Level level = opt.quiet ? log::Level::Warning
+                             : opt.log_level == "error"   ? log::Level::Error
+                             : opt.log_level == "warning" ? log::Level::Warning
+                             : opt.log_level == "debug"   ? log::Level::Debug
+                                                          : log::Level::Info;
+    log::set_level(level);
+    set_thread_count(opt.threads);
+    int code = 1;
+    try {
+        if (!opt.frames.empty()) opt.frame_range = parse_frame_range(opt.frames);
+        code = body(opt);
+    } catch (const InputError& e) {
+        log::error(e.what());
+        code = 1;
+    } catch (const RuntimeError& e) {
+        log::error(e.what());
+        code = 1;
+    } catch (const std::exception& e) {
+        log::error(std::string("unexpected failure: ") + e.what());
+        code = 1;
+    }
+    log::summarize_warnings();
+    char line[160];
+    std::snprintf(line, sizeof line, "%s in %.2f s, peak memory %.1f MiB, %d threads",
+                  code == 0 ? "done" : "failed", timer.seconds(), peak_rss_bytes() / 1048576.0,
+                  thread_count());
+    log::info(line);
+    return code;
+}
+
+}  // namespace mudcrack

@@ -1,0 +1,63 @@
+#include "pipeline/io/atomic_output.h"
+
+#include <fstream>
+#include <system_error>
+
+#include "sim/core/error.h"
+
+namespace fs = std::filesystem;
+
+namespace mudcrack {
+
+void write_atomically(const fs::path& path, const std::function<void(const fs::path&)>& write) {
+    fs::path tmp = path;
+    tmp += ".tmp";
+    try {
+        write(tmp);
+    } catch (...) {
+        std::error_code ec;
+        fs::remove(tmp, ec);
+        throw;
+    }
+    std::error_code ec;
+    fs::rename(tmp, path, ec);
+    if (ec) {
+        fs::remove(tmp, ec);
+        throw RuntimeError(path.string() + ": cannot rename the finished file into place: " + ec.message());
+    }
+}
+
+void write_text_atomically(const fs::path& path, const std::string& text) {
+    write_atomically(path, [&](const fs::path& tmp) {
+        std::ofstream os(tmp, std::ios::binary);
+        os << text;
+        os.close();
+        if (!os) throw RuntimeError(tmp.string() + ": write failed");
+    });
+}
+
+StagingDir::StagingDir(fs::path final_dir, bool keep_partial)
+    : m_final(std::move(final_dir)), m_keep_partial(keep_partial) {
+    const fs::path parent = m_final.parent_path().empty() ? fs::path(".") : m_final.parent_path();
+    m_partial = parent / ("." + m_final.filename().string() + ".partial");
+    std::error_code ec;
+    fs::remove_all(m_partial, ec);
+    fs::create_directories(m_partial, ec);
+    if (ec) throw RuntimeError(m_partial.string() + ": cannot create the output folder: " + ec.message());
+}
+
+StagingDir::~StagingDir() {
+    if (m_committed || m_keep_partial) return;
+    std::error_code ec;
+    fs::remove_all(m_partial, ec);
+}
+
+void StagingDir::commit() {
+    std::error_code ec;
+    fs::remove_all(m_final, ec);
+    fs::rename(m_partial, m_final, ec);
+    if (ec) throw RuntimeError(m_final.string() + ": cannot move the finished output into place: " + ec.message());
+    m_committed = true;
+}
+
+}  // namespace mudcrack

@@ -1,0 +1,40 @@
+#pragma once
+/// Atomic outputs (style.md 2): make trusts mtimes, so a stage never leaves a half-written file or
+/// folder where a complete one is expected. Files go through `name.tmp` + rename; a stage's whole
+/// output folder is built as `.<name>.partial/` next to it and renamed on success.
+#include <filesystem>
+#include <functional>
+#include <string>
+
+namespace mudcrack {
+
+/// Writes `path` by calling write(tmp_path) and renaming tmp_path to path when it returns.
+/// If write throws, the temporary file is removed and the exception propagates.
+void write_atomically(const std::filesystem::path& path,
+                      const std::function<void(const std::filesystem::path& tmp)>& write);
+
+/// Writes a whole text file atomically.
+void write_text_atomically(const std::filesystem::path& path, const std::string& text);
+
+/// A stage's output folder under construction. The constructor makes a fresh
+/// `<parent>/.<name>.partial/`; commit() replaces `<parent>/<name>/` with it; destruction without
+/// commit() deletes it unless keep_partial was set (a TD inspecting a failed run).
+class StagingDir {
+public:
+    explicit StagingDir(std::filesystem::path final_dir, bool keep_partial = false);
+    ~StagingDir();
+    StagingDir(const StagingDir&) = delete;
+    StagingDir& operator=(const StagingDir&) = delete;
+
+    const std::filesystem::path& path() const { return m_partial; }
+    const std::filesystem::path& final_path() const { return m_final; }
+    void commit();
+
+private:
+    std::filesystem::path m_final;
+    std::filesystem::path m_partial;
+    bool m_keep_partial;
+    bool m_committed = false;
+};
+
+}  // namespace mudcrack

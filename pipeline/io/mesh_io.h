@@ -1,0 +1,40 @@
+#pragma once
+/// Triangle meshes through assimp: loading artists' input meshes (OBJ, PLY, STL, OFF, glTF, ...)
+/// and exporting the surfacing's meshes with UVs (glb default, obj, ply, dae).
+#include <filesystem>
+#include <string>
+#include <vector>
+
+#include "sim/core/tri_mesh.h"
+#include "sim/core/types.h"
+
+namespace mudcrack {
+
+/// An input surface, all of its meshes merged, vertices welded by exact position.
+struct InputSurface {
+    std::vector<Vec3> positions;              // [m]
+    std::vector<Tri> faces;                   // triangles (polygons are triangulated)
+    std::vector<std::array<Vec2, 3>> face_uv; // per-corner UVs, (n_faces) or empty if none
+};
+
+/// Loads a triangle mesh with assimp. Throws InputError naming the file if it is missing,
+/// unreadable, or has no triangles.
+InputSurface load_input_surface(const std::filesystem::path& path);
+
+/// The export formats: "glb", "obj", "ply", "dae". "fbx" is refused (assimp 5.2.5 writes binary
+/// FBX that no reader accepts: upstream issue 4686).
+bool is_supported_mesh_format(const std::string& format);
+/// Why a format is not supported (empty when it is).
+std::string mesh_format_refusal(const std::string& format);
+
+/// Writes the meshes as one scene (one node/object per mesh, named by TriMesh::name), with
+/// normals, UV channel 0, and saturation/alpha as vertex colors (r = saturation, g = alpha
+/// remapped, b = 0) when present. Atomic. Throws InputError for an unsupported format.
+void export_meshes(const std::filesystem::path& path, const std::vector<TriMesh>& meshes,
+                   const std::string& format);
+
+/// Reads a file written by export_meshes back (tests, the renderer): one TriMesh per mesh in
+/// the file, with positions, normals, UVs and faces as stored.
+std::vector<TriMesh> import_meshes(const std::filesystem::path& path);
+
+}  // namespace mudcrack

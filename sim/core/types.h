@@ -1,0 +1,23 @@
+#pragma once
+/// The scalar and small fixed-size linear-algebra types used everywhere (pbrt's Float,
+/// MuJoCo's mjtNum): change `Real` here and nowhere else.
+#include <Eigen/Core>
+#include <array>
+#include <cstdint>
+
+namespace mudcrack {
+
+using Real = double;
+using Vec2 = Eigen::Matrix<Real, 2, 1>;
+using Vec3 = Eigen::Matrix<Real, 3, 1>;
+using Mat3 = Eigen::Matrix<Real, 3, 3>;
+using Vec3i = Eigen::Matrix<int, 3, 1>;
+using Vec3f = Eigen::Matrix<float, 3, 1>;
+using Vec2f = Eigen::Matrix<float, 2, 1>;
+
+using Tet = std::array<int32_t, 4>;  // particle ids of a tetrahedron's corners
+using Tri = std::array<int32_t, 3>;  // vertex ids of a triangle
+
+constexpr int kDim = 3;
+
+}  // namespace mudcrack

@@ -1,0 +1,107 @@
+#pragma once
+/// The immutable simulation model (MuJoCo's mjModel): everything mc-sim needs from the shot,
+/// already validated, in SI units. Built by pipeline/shot; the sim never sees JSON. A section the
+/// shot leaves out is std::nullopt here and is never computed or allocated.
+#include <optional>
+#include <string>
+
+#include "sim/core/types.h"
+
+namespace mudcrack {
+
+/// Neo-Hookean solid (Tu et al. 2023 Eq. 4-5).
+struct ElasticParams {
+    Real density = 1;           // rho_s, solid density [kg/m^3]
+    Real youngs_modulus = 2000; // E [Pa]
+    Real poisson_ratio = 0.35;  // nu [-]
+    Real mu() const { return youngs_modulus / (2 * (1 + poisson_ratio)); }
+    Real lambda() const {
+        return youngs_modulus * poisson_ratio / ((1 + poisson_ratio) * (1 - 2 * poisson_ratio));
+    }
+    /// 3D bulk modulus kappa = lambda + 2/3 mu (physics.md 1.6).
+    Real kappa() const { return lambda() + Real(2) / 3 * mu(); }
+    /// P-wave speed sqrt((lambda + 2 mu)/rho) [m/s], for the elastic time-step bound.
+    Real wave_speed() const;
+};
+
+/// Non-associated Cam-Clay (Wolper et al. 2019; Tu et al. 2023 Eq. 7-9, 12).
+struct NaccParams {
+    Real alpha0 = 0;       // initial hardening state (ziran's logJp) [-]
+    Real beta0 = 1;        // cohesion when dry (s = 0) [-]
+    Real beta1 = 1;        // cohesion when saturated (s = 1) [-]
+    Real xi = 1;           // hardening factor in p0 = kappa sinh(xi max(-alpha, 0)) [-]
+    Real M = 1.87;         // critical-state slope (friction) [-]
+    bool hardening = true; // update alpha in the return mapping
+};
+
+/// Pore water (Tu et al. 2023 Sections 4.1, 5.2; physics.md 3-4).
+struct MoistureParams {
+    Real eta = 0.5;          // porosity: theta in [0, eta], Jw = 1 - eta (1 - s) [-]
+    Real k_r = 1;            // rho_s / rho_w [-]
+    Real eps = 0.5;          // saturation hardening rate, alpha += eps log(Jw ratio) [-]
+    Real D = 0.02;           // diffusivity [m^2/s]
+    Real lambda = 0.1;       // evaporation coefficient [m/s]
+    Real theta0 = 0;         // ambient moisture [-]
+    Real theta_init = -1;    // initial moisture; < 0 means eta (fully saturated) [-]
+    Real cg_tolerance = 1e-6;  // relative residual [-]
+    int cg_max_iterations = 50;
+    bool seal_colliders = true;  // faces against the ground/walls do not evaporate
+    bool implicit_robin = false; // evaporation term in the matrix instead of the rhs
+    int interval = 1;            // solve moisture every k MPM steps with dt_m = k dt
+    Real max_log_jw_step = 1e-3; // cap on |log(Jw^n/Jw^{n+1})| per step (physics.md 3.2)
+};
+
+enum class ColliderMode { Sticky, Slip, Separate };
+
+/// A horizontal ground plane y = height with outward normal +y.
+struct GroundParams {
+    Real height = 0;                       // [m]
+    ColliderMode mode = ColliderMode::Sticky;
+    Real friction = 0;                     // Coulomb coefficient (slip/separate) [-]
+};
+
+/// Axis-aligned simulation box: nodes within `padding` cells of a wall lose their outward
+/// velocity (separate behaviour). Particles never leave it.
+struct DomainParams {
+    Vec3 min = Vec3::Constant(-1);  // [m]
+    Vec3 max = Vec3::Constant(1);   // [m]
+    int padding = 3;                // [cells]
+};
+
+struct TimeParams {
+    Real dt_max = 1e-3;        // [s]
+    Real dt_fixed = 0;         // > 0 forces this dt (refused at load if above the elastic bound) [s]
+    Real cfl_velocity = 0.6;   // C_v: dt <= C_v h / max|v|
+    Real cfl_elastic = 0.5;    // C_E: dt <= C_E h / c_p
+    Real fps = 24;             // frames per second
+    int frame_start = 1;       // first frame (1-based)
+    int frame_end = 24;        // last frame, inclusive
+};
+
+/// Which per-particle attributes the frame caches carry (what later stages need).
+struct CacheAttributes {
+    bool velocity = true;
+    bool theta = false;
+    bool saturation = false;
+    bool alpha = false;
+    bool Jw = false;
+    bool Fe = false;
+};
+
+struct SimModel {
+    Real h = 0.05;                         // grid spacing [m]
+    Vec3 gravity = Vec3(0, -9.81, 0);      // [m/s^2]
+    ElasticParams elastic;
+    std::optional<NaccParams> nacc;        // nullopt: pure elasticity
+    std::optional<MoistureParams> moisture;// nullopt: no theta arrays, no moisture grid, no CG
+    std::optional<GroundParams> ground;
+    DomainParams domain;
+    TimeParams time;
+    int checkpoint_every = 10;             // frames between full-precision checkpoints (0: off)
+    CacheAttributes cache;
+};
+
+/// The elastic time-step bound C_E h / c_p [s].
+Real elastic_dt_bound(const SimModel& model);
+
+}  // namespace mudcrack
