@@ -63,6 +63,7 @@ struct GroundParams {
 /// Axis-aligned simulation box: nodes within `padding` cells of a wall lose their outward
 /// velocity (separate behaviour). Particles never leave it.
 struct DomainParams {
+    bool is_auto = true;            // derive from the particles' bounds (see sim/mpm) when unset
     Vec3 min = Vec3::Constant(-1);  // [m]
     Vec3 max = Vec3::Constant(1);   // [m]
     int padding = 3;                // [cells]
@@ -91,6 +92,7 @@ struct CacheAttributes {
 struct SimModel {
     Real h = 0.05;                         // grid spacing [m]
     Vec3 gravity = Vec3(0, -9.81, 0);      // [m/s^2]
+    Vec3 initial_velocity = Vec3::Zero();  // of every particle at t = 0 [m/s]
     ElasticParams elastic;
     std::optional<NaccParams> nacc;        // nullopt: pure elasticity
     std::optional<MoistureParams> moisture;// nullopt: no theta arrays, no moisture grid, no CG

@@ -1,0 +1,66 @@
+#pragma once
+/// The MPM simulation's state and step (MuJoCo's mjData / mj_step split): SimModel is immutable,
+/// SimState holds particles, time and scratch; `step` advances one substep.
+/// Tu et al. 2023 Sections 4-5; the consolidated step of physics.md Section 7.
+#include <cstdint>
+#include <memory>
+#include <vector>
+
+#include "sim/core/particle_frame.h"
+#include "sim/core/types.h"
+#include "sim/model.h"
+
+namespace mudcrack {
+
+struct SimWorkspace;  // grid and scratch, rebuilt every step; never serialized
+
+/// Mutable simulation state. Particle arrays are SoA, (n_particles), kept sorted by grid cell for
+/// memory coherence; `id` maps a slot to its particle id. Moisture arrays are empty when the
+/// model has no moisture section.
+struct SimState {
+    double time = 0;               // simulated time [s]
+    int64_t step_count = 0;        // substeps taken since t = 0
+    std::vector<int32_t> id;       // particle id per slot
+    std::vector<Vec3> x;           // position [m]
+    std::vector<Vec3> v;           // velocity [m/s]
+    std::vector<Mat3> C;           // APIC affine velocity [1/s]
+    std::vector<Mat3> Fe;          // elastic deformation gradient
+    std::vector<Real> J;           // det of the total deformation gradient (volume tracking)
+    std::vector<Real> alpha;       // NACC hardening state (empty without plasticity)
+    std::vector<Real> V0;          // rest volume [m^3]
+    std::vector<Real> mass;        // [kg]
+    std::vector<Real> theta;       // water content in [0, eta] (moisture only)
+    std::vector<Real> Jw;          // pore determinant 1 - eta (1 - s) (moisture only)
+    std::shared_ptr<SimWorkspace> workspace;  // scratch; recreated on demand
+
+    size_t size() const { return x.size(); }
+};
+
+/// Counters of one step, for progress lines and the manifest.
+struct StepStats {
+    int cg_iterations = 0;         // moisture CG iterations (0 without moisture)
+    double cg_residual = 0;        // final relative residual
+    int64_t active_nodes = 0;      // grid nodes with mass
+    int64_t allocated_nodes = 0;   // grid nodes allocated (sparse blocks)
+    Real max_speed = 0;            // max |v_p| after the step [m/s]
+};
+
+/// Initial state: particles at rest positions X with rest volumes V0 (from the tet mesh), moving
+/// at model.initial_velocity, at theta_init when the model has moisture.
+SimState make_initial_state(const SimModel& model, const std::vector<Vec3>& X,
+                            const std::vector<Real>& V0);
+
+/// The adaptive time step min(dt_max, C_v h / max|v|, C_E h / c_p), or dt_fixed when set.
+Real stable_dt(const SimModel& model, const SimState& state);
+
+/// Advances one substep of length dt. After the step every particle is checked for finite
+/// state; a failure throws RuntimeError naming the particle id and its state (theta, J, alpha).
+StepStats step(const SimModel& model, SimState& state, Real dt);
+
+/// The cacheable view of the state in particle-id order, with only the requested attributes.
+ParticleFrame state_to_frame(const SimModel& model, const SimState& state, const CacheAttributes& attrs);
+
+/// Bytes held by the state's particle arrays and workspace (for bytes-per-particle reports).
+int64_t state_memory_bytes(const SimState& state);
+
+}  // namespace mudcrack
