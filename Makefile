@@ -19,7 +19,7 @@ APT_PACKAGES := cmake make g++ pkg-config \
 CGAL_DATA  := /usr/share/doc/libcgal-dev/data.tar.gz
 BUNNY      := shots/assets/bunny00.off
 
-.PHONY: help deps configure build demo test bench clean assets
+.PHONY: help deps configure build demo test bench clean assets shot shots clean-shot
 
 help:
 	@echo "make demo   install missing packages, build, run the demo shot end to end"
@@ -59,7 +59,22 @@ bench: build assets
 	$(BUILD)/bin/mc-bench-all 2>/dev/null || for b in $(BUILD)/bin/*_bench; do $$b; done
 
 demo: build assets
-	@bash pipeline/run_shot.sh $(BUILD)/bin shots/demo.json $(OUT)/demo
+	@$(MAKE) --no-print-directory shot SHOT=demo
+
+# one shot end to end: only what changed runs (pipeline/shot.mk)
+shot: build assets
+	@test -n "$(SHOT)" || { echo "usage: make shot SHOT=<name of shots/<name>.json>"; exit 2; }
+	@test -f shots/$(SHOT).json || { echo "mudcrack: shots/$(SHOT).json: no such shot"; exit 1; }
+	@$(BUILD)/bin/mc-shot validate shots/$(SHOT).json >/dev/null
+	@$(MAKE) --no-print-directory -f Makefile -f pipeline/shot.mk shot-run shot-summary SHOT=$(SHOT)
+
+SHOTS ?= $(filter-out bench_%,$(basename $(notdir $(wildcard shots/*.json))))
+shots: build assets
+	@for s in $(SHOTS); do $(MAKE) --no-print-directory shot SHOT=$$s || exit 1; done
+
+clean-shot:
+	@test -n "$(SHOT)" || { echo "usage: make clean-shot SHOT=<name>"; exit 2; }
+	rm -rf $(OUT)/$(SHOT)
 
 clean:
 	rm -rf $(BUILD)
