@@ -1,12 +1,21 @@
 #include "pipeline/io/mesh_io.h"
 
+#include <assimp/Exporter.hpp>
 #include <assimp/Importer.hpp>
+#include <assimp/material.h>
 #include <assimp/postprocess.h>
 #include <assimp/scene.h>
 
+#include <algorithm>
+#include <climits>
+#include <cmath>
+#include <functional>
 #include <map>
+#include <memory>
+#include <regex>
 #include <system_error>
 
+#include "pipeline/io/atomic_output.h"
 #include "sim/core/error.h"
 
 namespace fs = std::filesystem;
@@ -122,6 +131,319 @@ InputSurface load_input_surface(const fs::path& path) {
     surface.faces = std::move(builder.faces);
     surface.face_uv = std::move(builder.face_uv);
     return surface;
+}
+
+}  // namespace mudcrack
+
+// ---- export / import of the surfacing's meshes ----
+
+namespace mudcrack {
+
+namespace {
+
+struct MeshFormat {
+    const char* name;       // what the shot and the CLI say
+    const char* assimp_id;  // Assimp::Exporter format id
+};
+constexpr MeshFormat kMeshFormats[] = {
+    {"glb", "glb2"}, {"obj", "obj"}, {"ply", "plyb"}, {"dae", "collada"}};
+
+const MeshFormat* find_format(const std::string& format) {
+    for (const MeshFormat& f : kMeshFormats)
+        if (format == f.name) return &f;
+    return nullptr;
+}
+
+// vertex color g channel: the NACC hardening state alpha (unbounded, either sign) through the
+// logistic function, so g in (0,1), g = 0.5 at alpha = 0, and alpha = log(g / (1 - g)) inverts it
+float alpha_to_color(float alpha) { return float(1.0 / (1.0 + std::exp(-double(alpha)))); }
+float color_to_alpha(float g) {
+    const double clamped = std::clamp(double(g), 1e-7, 1.0 - 1e-7);
+    return float(std::log(clamped / (1.0 - clamped)));
+}
+
+/// A TriMesh whose vertices are never shared by faces of different fragments, so the per-face
+/// fragment id can travel as a per-vertex attribute (UV channel 1).
+TriMesh split_vertices_by_fragment(const TriMesh& mesh) {
+    if (mesh.face_fragment.empty()) return mesh;
+    TriMesh out = mesh;
+    std::vector<int32_t> fragment_of_vertex(mesh.positions.size(), INT32_MIN);
+    std::map<std::pair<int32_t, int32_t>, int32_t> copy_of;  // (vertex, fragment) -> new vertex
+    auto append_copy = [&](int32_t v) {
+        out.positions.push_back(mesh.positions[v]);
+        if (!mesh.normals.empty()) out.normals.push_back(mesh.normals[v]);
+        if (!mesh.uvs.empty()) out.uvs.push_back(mesh.uvs[v]);
+        if (!mesh.saturation.empty()) out.saturation.push_back(mesh.saturation[v]);
+        if (!mesh.alpha.empty()) out.alpha.push_back(mesh.alpha[v]);
+        return int32_t(out.positions.size() - 1);
+    };
+    for (size_t f = 0; f < mesh.faces.size(); ++f) {
+        const int32_t fragment = mesh.face_fragment[f];
+        for (int32_t& v : out.faces[f]) {
+            if (fragment_of_vertex[v] == INT32_MIN) fragment_of_vertex[v] = fragment;
+            if (fragment_of_vertex[v] == fragment) continue;
+            auto [it, inserted] = copy_of.emplace(std::make_pair(v, fragment), 0);
+            if (inserted) it->second = append_copy(v);
+            v = it->second;
+        }
+    }
+    return out;
+}
+
+aiVector3D to_ai(const Vec3f& v) { return aiVector3D(v.x(), v.y(), v.z()); }
+
+aiMesh* make_ai_mesh(const fs::path& path, const TriMesh& in, unsigned material) {
+    const TriMesh mesh = split_vertices_by_fragment(in);
+    const size_t n = mesh.positions.size();
+    auto check = [&](size_t size, const char* what) {
+        if (size != 0 && size != n) {
+            throw RuntimeError(path.string() + ": mesh '" + in.name + "' has " + std::to_string(size) + " " +
+                               what + " for " + std::to_string(n) + " vertices");
+        }
+    };
+    check(mesh.normals.size(), "normals");
+    check(mesh.uvs.size(), "uvs");
+    check(mesh.saturation.size(), "saturation values");
+    check(mesh.alpha.size(), "alpha values");
+    if (!in.face_fragment.empty() && in.face_fragment.size() != in.faces.size()) {
+        throw RuntimeError(path.string() + ": mesh '" + in.name + "' has " + std::to_string(in.face_fragment.size()) +
+                           " fragment ids for " + std::to_string(in.faces.size()) + " faces");
+    }
+    auto* m = new aiMesh;
+    m->mName = in.name;
+    m->mMaterialIndex = material;
+    m->mPrimitiveTypes = aiPrimitiveType_TRIANGLE;
+    m->mNumVertices = unsigned(n);
+    m->mVertices = new aiVector3D[n];
+    for (size_t i = 0; i < n; ++i) m->mVertices[i] = to_ai(mesh.positions[i]);
+    if (!mesh.normals.empty()) {
+        m->mNormals = new aiVector3D[n];
+        for (size_t i = 0; i < n; ++i) m->mNormals[i] = to_ai(mesh.normals[i]);
+    }
+    if (!mesh.uvs.empty()) {
+        m->mNumUVComponents[0] = 2;
+        m->mTextureCoords[0] = new aiVector3D[n];
+        for (size_t i = 0; i < n; ++i) m->mTextureCoords[0][i] = aiVector3D(mesh.uvs[i].x(), mesh.uvs[i].y(), 0);
+    }
+    if (!mesh.saturation.empty() || !mesh.alpha.empty()) {
+        m->mColors[0] = new aiColor4D[n];
+        for (size_t i = 0; i < n; ++i) {
+            const float s = mesh.saturation.empty() ? 0.f : mesh.saturation[i];
+            const float g = mesh.alpha.empty() ? alpha_to_color(0.f) : alpha_to_color(mesh.alpha[i]);
+            m->mColors[0][i] = aiColor4D(s, g, 0.f, 1.f);
+        }
+    }
+    if (!mesh.face_fragment.empty()) {
+        // assimp's exporters stop at the first empty UV channel: give channel 0 zeros
+        if (m->mTextureCoords[0] == nullptr) {
+            m->mNumUVComponents[0] = 2;
+            m->mTextureCoords[0] = new aiVector3D[n];
+            for (size_t i = 0; i < n; ++i) m->mTextureCoords[0][i] = aiVector3D(0, 0, 0);
+        }
+        // UV channel 1 = (fragment id, 0): exact in float for ids below 2^24
+        m->mNumUVComponents[1] = 2;
+        m->mTextureCoords[1] = new aiVector3D[n];
+        for (size_t i = 0; i < n; ++i) m->mTextureCoords[1][i] = aiVector3D(0, 0, 0);
+        for (size_t f = 0; f < mesh.faces.size(); ++f)
+            for (int32_t v : mesh.faces[f]) m->mTextureCoords[1][v].x = float(mesh.face_fragment[f]);
+    }
+    m->mNumFaces = unsigned(mesh.faces.size());
+    m->mFaces = new aiFace[mesh.faces.size()];
+    for (size_t f = 0; f < mesh.faces.size(); ++f) {
+        aiFace& face = m->mFaces[f];
+        face.mNumIndices = 3;
+        face.mIndices = new unsigned[3];
+        for (int c = 0; c < 3; ++c) {
+            const int32_t v = mesh.faces[f][c];
+            if (v < 0 || size_t(v) >= n) {
+                delete m;
+                throw RuntimeError(path.string() + ": mesh '" + in.name + "' face " + std::to_string(f) +
+                                   " references vertex " + std::to_string(v) + " of " + std::to_string(n));
+            }
+            face.mIndices[c] = unsigned(v);
+        }
+    }
+    return m;
+}
+
+/// One node per mesh under a root, one plain soil-coloured material per mesh.
+std::unique_ptr<aiScene> make_scene(const fs::path& path, const std::vector<TriMesh>& meshes) {
+    auto scene = std::make_unique<aiScene>();
+    scene->mRootNode = new aiNode("root");
+    const unsigned count = unsigned(meshes.size());
+    scene->mNumMeshes = count;
+    scene->mMeshes = new aiMesh*[count]();
+    scene->mNumMaterials = count;
+    scene->mMaterials = new aiMaterial*[count]();
+    scene->mRootNode->mNumChildren = count;
+    scene->mRootNode->mChildren = new aiNode*[count]();
+    for (unsigned i = 0; i < count; ++i) {
+        auto* material = new aiMaterial;
+        const aiString material_name(meshes[i].name + "_material");
+        material->AddProperty(&material_name, AI_MATKEY_NAME);
+        const aiColor4D soil(0.55f, 0.42f, 0.30f, 1.f);
+        material->AddProperty(&soil, 1, AI_MATKEY_COLOR_DIFFUSE);
+        scene->mMaterials[i] = material;
+        scene->mMeshes[i] = make_ai_mesh(path, meshes[i], i);
+        auto* node = new aiNode(meshes[i].name);
+        node->mParent = scene->mRootNode;
+        node->mNumMeshes = 1;
+        node->mMeshes = new unsigned[1]{i};
+        scene->mRootNode->mChildren[i] = node;
+    }
+    return scene;
+}
+
+std::string blob_text(const aiExportDataBlob& blob) {
+    return std::string(static_cast<const char*>(blob.data), blob.size);
+}
+
+// makes the exporters' output depend on the meshes only, and readable by the DCCs we target
+std::string post_process(const std::string& format, std::string bytes) {
+    if (format == "dae") {
+        // the COLLADA exporter stamps <created>/<modified> with the wall clock
+        static const std::regex created("<created>[^<]*</created>"), modified("<modified>[^<]*</modified>");
+        bytes = std::regex_replace(bytes, created, "<created>1970-01-01T00:00:00</created>");
+        bytes = std::regex_replace(bytes, modified, "<modified>1970-01-01T00:00:00</modified>");
+    } else if (format == "obj") {
+        // Blender 3.4's OBJ importer splits objects on `o` lines, while assimp writes `g` groups
+        std::string out;
+        size_t begin = 0;
+        while (begin < bytes.size()) {
+            size_t end = bytes.find('\n', begin);
+            end = end == std::string::npos ? bytes.size() : end + 1;
+            if (bytes.compare(begin, 2, "g ") == 0) out += "o " + bytes.substr(begin + 2, end - begin - 2);
+            out.append(bytes, begin, end - begin);
+            begin = end;
+        }
+        bytes = std::move(out);
+    }
+    return bytes;
+}
+
+}  // namespace
+
+bool is_supported_mesh_format(const std::string& format) { return find_format(format) != nullptr; }
+
+std::string mesh_format_refusal(const std::string& format) {
+    if (is_supported_mesh_format(format)) return "";
+    if (format == "fbx") {
+        return "fbx is not supported: assimp 5.2.5 (Debian 12) writes binary FBX that no reader accepts, "
+               "not even assimp itself (upstream assimp issue 4686, fixed after 5.2.5); use glb, obj, ply or dae";
+    }
+    return "unknown mesh format '" + format + "': expected glb, obj, ply or dae";
+}
+
+void export_meshes(const fs::path& path, const std::vector<TriMesh>& meshes, const std::string& format) {
+    const MeshFormat* f = find_format(format);
+    if (f == nullptr) throw InputError(path.string() + ": " + mesh_format_refusal(format));
+    // assimp 5.2.5's PLY exporter declares vertex colours as uchar but writes four floats, which
+    // corrupts every face after them (no reader, assimp included, gets the faces back): PLY files
+    // carry no colours
+    std::vector<TriMesh> stripped;
+    if (format == "ply") {
+        stripped = meshes;
+        for (TriMesh& m : stripped) {
+            m.saturation.clear();
+            m.alpha.clear();
+        }
+    }
+    const auto scene = make_scene(path, format == "ply" ? stripped : meshes);
+    Assimp::Exporter exporter;
+    Assimp::ExportProperties properties;
+    properties.SetPropertyString(AI_CONFIG_EXPORT_BLOB_NAME, path.stem().string());  // obj: "mtllib <stem>.mtl"
+    const aiExportDataBlob* blob = exporter.ExportToBlob(scene.get(), f->assimp_id, 0u, &properties);
+    if (blob == nullptr) {
+        throw RuntimeError(path.string() + ": assimp could not export " + format + ": " + exporter.GetErrorString());
+    }
+    // side files first (obj's .mtl), then the main file, so the main file never points at nothing
+    for (const aiExportDataBlob* side = blob->next; side != nullptr; side = side->next) {
+        // assimp names side blobs "<blob name>.<ext>" (e.g. "scene.mtl"), or just "<ext>"
+        const std::string side_name = side->name.C_Str();
+        fs::path side_path = path;
+        if (side_name.find('.') != std::string::npos) {
+            side_path = path.parent_path() / side_name;
+        } else {
+            side_path.replace_extension(side_name);
+        }
+        write_text_atomically(side_path, blob_text(*side));
+    }
+    write_text_atomically(path, post_process(format, blob_text(*blob)));
+}
+
+std::vector<TriMesh> import_meshes(const fs::path& path) {
+    std::error_code ec;
+    if (!fs::is_regular_file(path, ec)) throw InputError(path.string() + ": mesh file not found");
+    // assimp's OBJ, PLY and COLLADA readers make one vertex per face corner; corners are joined
+    // back below by exact equality of every attribute (assimp 5.2.5's own join compares only
+    // position, normal and UV 0, which would merge vertices told apart by colour or fragment)
+    Assimp::Importer importer;
+    const aiScene* scene = importer.ReadFile(path.string(), aiProcess_Triangulate);
+    if (scene == nullptr || scene->mRootNode == nullptr) {
+        throw InputError(path.string() + ": cannot read the mesh: " + importer.GetErrorString());
+    }
+    std::vector<TriMesh> meshes;
+    // depth-first over the nodes, so meshes come back in the order they were written
+    std::function<void(const aiNode&, const aiMatrix4x4&)> visit = [&](const aiNode& node, const aiMatrix4x4& parent) {
+        const aiMatrix4x4 world_from_node = parent * node.mTransformation;
+        const aiMatrix3x3 normal_matrix = aiMatrix3x3(world_from_node).Inverse().Transpose();
+        for (unsigned k = 0; k < node.mNumMeshes; ++k) {
+            const aiMesh& m = *scene->mMeshes[node.mMeshes[k]];
+            TriMesh corners;  // one vertex per assimp vertex
+            corners.name = node.mName.length > 0 ? node.mName.C_Str() : m.mName.C_Str();
+            std::vector<std::array<float, 13>> keys(m.mNumVertices);  // every attribute, for joining
+            for (unsigned v = 0; v < m.mNumVertices; ++v) {
+                const aiVector3D p = world_from_node * m.mVertices[v];
+                corners.positions.emplace_back(p.x, p.y, p.z);
+                auto& key = keys[v];
+                key.fill(0.f);
+                key[0] = p.x, key[1] = p.y, key[2] = p.z;
+                if (m.HasNormals()) {
+                    aiVector3D nrm = normal_matrix * m.mNormals[v];
+                    nrm.NormalizeSafe();
+                    corners.normals.emplace_back(nrm.x, nrm.y, nrm.z);
+                    key[3] = nrm.x, key[4] = nrm.y, key[5] = nrm.z;
+                }
+                if (m.HasTextureCoords(0)) {
+                    corners.uvs.emplace_back(m.mTextureCoords[0][v].x, m.mTextureCoords[0][v].y);
+                    key[6] = m.mTextureCoords[0][v].x, key[7] = m.mTextureCoords[0][v].y;
+                }
+                if (m.HasVertexColors(0)) {
+                    const aiColor4D& c = m.mColors[0][v];
+                    corners.saturation.push_back(c.r);
+                    corners.alpha.push_back(color_to_alpha(c.g));
+                    key[8] = c.r, key[9] = c.g, key[10] = c.b, key[11] = c.a;
+                }
+                if (m.HasTextureCoords(1)) key[12] = m.mTextureCoords[1][v].x;
+            }
+            // join corners with identical attributes, in first-seen order
+            std::map<std::array<float, 13>, int32_t> joined;
+            std::vector<int32_t> index_of(m.mNumVertices, -1);
+            TriMesh out;
+            out.name = corners.name;
+            for (unsigned v = 0; v < m.mNumVertices; ++v) {
+                auto [it, inserted] = joined.emplace(keys[v], int32_t(out.positions.size()));
+                index_of[v] = it->second;
+                if (!inserted) continue;
+                out.positions.push_back(corners.positions[v]);
+                if (!corners.normals.empty()) out.normals.push_back(corners.normals[v]);
+                if (!corners.uvs.empty()) out.uvs.push_back(corners.uvs[v]);
+                if (!corners.saturation.empty()) out.saturation.push_back(corners.saturation[v]);
+                if (!corners.alpha.empty()) out.alpha.push_back(corners.alpha[v]);
+            }
+            for (unsigned f = 0; f < m.mNumFaces; ++f) {
+                const aiFace& face = m.mFaces[f];
+                if (face.mNumIndices != 3) continue;
+                const unsigned* c = face.mIndices;
+                out.faces.push_back({index_of[c[0]], index_of[c[1]], index_of[c[2]]});
+                if (m.HasTextureCoords(1)) out.face_fragment.push_back(int32_t(std::lround(m.mTextureCoords[1][c[0]].x)));
+            }
+            meshes.push_back(std::move(out));
+        }
+        for (unsigned c = 0; c < node.mNumChildren; ++c) visit(*node.mChildren[c], world_from_node);
+    };
+    visit(*scene->mRootNode, aiMatrix4x4());
+    return meshes;
 }
 
 }  // namespace mudcrack

@@ -19,6 +19,8 @@ struct InputSurface {
 
 /// Loads a triangle mesh with assimp. Throws InputError naming the file if it is missing,
 /// unreadable, or has no triangles.
+/// @note Node transforms are applied. Points, lines, and triangles with two corners at the same
+/// position (zero area after welding) are dropped; vertices used by no kept triangle are left out.
 InputSurface load_input_surface(const std::filesystem::path& path);
 
 /// The export formats: "glb", "obj", "ply", "dae". "fbx" is refused (assimp 5.2.5 writes binary
@@ -30,11 +32,19 @@ std::string mesh_format_refusal(const std::string& format);
 /// Writes the meshes as one scene (one node/object per mesh, named by TriMesh::name), with
 /// normals, UV channel 0, and saturation/alpha as vertex colors (r = saturation, g = alpha
 /// remapped, b = 0) when present. Atomic. Throws InputError for an unsupported format.
+/// @note g = 1 / (1 + exp(-alpha)) (alpha = log(g / (1 - g)) inverts it). Fragment ids travel in
+/// UV channel 1 as (fragment id, 0); vertices shared by faces of different fragments are
+/// duplicated first. ply holds one merged mesh without colours (assimp 5.2.5's PLY exporter
+/// corrupts files with colours); obj carries no fragment ids; glb: assimp's glTF exporter joins
+/// vertices equal in position, normal and UV 0, so such vertices lose per-vertex colour and
+/// fragment differences. obj gets `o <name>` lines for Blender 3.4; dae timestamps are fixed to
+/// 1970-01-01 so identical meshes give identical bytes.
 void export_meshes(const std::filesystem::path& path, const std::vector<TriMesh>& meshes,
                    const std::string& format);
 
 /// Reads a file written by export_meshes back (tests, the renderer): one TriMesh per mesh in
-/// the file, with positions, normals, UVs and faces as stored.
+/// the file, with positions, normals, UVs and faces as stored (plus saturation/alpha from the
+/// colours and face_fragment from UV channel 1 when present). Throws InputError naming the file.
 std::vector<TriMesh> import_meshes(const std::filesystem::path& path);
 
 }  // namespace mudcrack

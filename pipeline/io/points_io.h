@@ -34,7 +34,12 @@ struct PointCloud {
 
 /// Writes `cloud` as one PointDataGrid named "particles" with the given voxel size [m] (the sim's h
 /// is a good choice). Atomic: written to a temporary name and renamed. Sets
-/// mudcrack:format_version.
+/// mudcrack:format_version and mudcrack:point_count (int64).
+/// @note Encoding: P vec3s (NullCodec: full float precision), id int32, floats "float", Vec3f
+/// "vec3s", Mat3f "mat3s" (openvdb::math::Mat3s, element (i,j) = M(i,j); Houdini's VDB-to-points
+/// conversion makes it a matrix3 attribute, transposed to Houdini's row-vector convention), all
+/// NullCodec. Empty `id` means ids 0..n-1. Identical clouds give byte-identical files (the
+/// header UUID is derived from the content).
 void write_points(const std::filesystem::path& path, const PointCloud& cloud, double voxel_size);
 
 /// Reads a file written by write_points, reordered by ascending id. Throws InputError naming the
