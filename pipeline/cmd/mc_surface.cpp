@@ -1,0 +1,369 @@
+// mc-surface: the particle-core surfacing stage (issue 4; Tu et al. 2023 Section 6; physics.md 5).
+// Reads DIR/init/tets.vtu and DIR/sim/particles.####.vdb, writes DIR/surface/boundary.####.<ext>,
+// crack.####.<ext>, edge_breaks.bin (the Eq. 14 break history) and manifest.json (last).
+//
+// Frames are independent: the break history ("t <= n" in Eq. 14) is the first frame at which each
+// edge broke, computed once by a pass over all cached frames and kept in edge_breaks.bin, so any
+// frame range can be surfaced, in any order and in parallel, with identical files.
+#include <algorithm>
+#include <cstdio>
+#include <cstring>
+#include <exception>
+#include <filesystem>
+#include <fstream>
+#include <map>
+#include <mutex>
+#include <optional>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+
+#include "pipeline/cmd/stage_cli.h"
+#include "pipeline/io/atomic_output.h"
+#include "pipeline/io/checksum.h"
+#include "pipeline/io/manifest.h"
+#include "pipeline/io/mesh_io.h"
+#include "pipeline/io/points_io.h"
+#include "pipeline/io/tet_mesh_io.h"
+#include "pipeline/shot/shot.h"
+#include "sim/core/error.h"
+#include "sim/core/log.h"
+#include "sim/core/parallel.h"
+#include "sim/core/stats.h"
+#include "surfacing/core_surface.h"
+#include "surfacing/edge_breaks.h"
+
+namespace fs = std::filesystem;
+using nlohmann::json;
+
+namespace mudcrack {
+namespace {
+
+constexpr char kBreaksMagic[8] = {'M', 'C', 'B', 'R', 'K', 'v', '1', '\0'};
+constexpr const char* kBreaksFile = "edge_breaks.bin";
+
+/// The break history on disk: which inputs it was computed from, the frames scanned, and the
+/// first break frame per edge.
+struct BreakHistory {
+    uint64_t source_hash = 0;  // sim manifest + break parameters + mesh size
+    int32_t first_frame = 0, last_frame = 0;
+    std::vector<int32_t> first_break;
+};
+
+/// The shot slice hash a manifest records (make_manifest's "shot_slice_hash"; "slice_hash" too).
+std::string slice_hash_of(const json& manifest) {
+    for (const char* key : {"shot_slice_hash", "slice_hash"}) {
+        const auto it = manifest.find(key);
+        if (it != manifest.end() && it->is_string()) return it->get<std::string>();
+    }
+    return std::string();
+}
+
+/// Reads DIR/<stage>/manifest.json and checks it was made from this shot's slice of that stage.
+json read_input_manifest(const fs::path& dir, const Shot& shot, Stage stage, const char* producer) {
+    const fs::path file = dir / "manifest.json";
+    if (!fs::exists(file)) throw InputError(file.string() + ": missing: run " + producer + " first");
+    json m = read_manifest(dir);
+    const std::string expected = shot.slice_hash(stage), found = slice_hash_of(m);
+    if (found != expected)
+        throw InputError(file.string() + ": slice_hash = \"" + found + "\": stale for this shot (expected \"" +
+                         expected + "\"): re-run " + producer);
+    return m;
+}
+
+/// Hash of everything the break history depends on: the sim run (its manifest), Eq. 14's
+/// parameters, and the mesh.
+uint64_t break_source_hash(const json& sim_manifest, const SurfaceParams& params, const CoreTopology& topo) {
+    std::ostringstream os;
+    os << sim_manifest.dump() << "|" << surface_mode_name(params.mode) << "|";
+    os.precision(17);
+    os << params.zeta << "|" << params.length_consistent << "|" << topo.n_edges() << "|" << topo.n_tets();
+    const std::string s = os.str();
+    return fnv1a64(s.data(), s.size());
+}
+
+void write_break_history(const fs::path& path, const BreakHistory& h) {
+    write_atomically(path, [&](const fs::path& tmp) {
+        std::ofstream out(tmp, std::ios::binary);
+        const int64_t n = static_cast<int64_t>(h.first_break.size());
+        const uint64_t checksum = fnv1a64(h.first_break.data(), h.first_break.size() * sizeof(int32_t));
+        out.write(kBreaksMagic, sizeof kBreaksMagic);
+        out.write(reinterpret_cast<const char*>(&h.source_hash), sizeof h.source_hash);
+        out.write(reinterpret_cast<const char*>(&h.first_frame), sizeof h.first_frame);
+        out.write(reinterpret_cast<const char*>(&h.last_frame), sizeof h.last_frame);
+        out.write(reinterpret_cast<const char*>(&n), sizeof n);
+        out.write(reinterpret_cast<const char*>(h.first_break.data()), n * sizeof(int32_t));
+        out.write(reinterpret_cast<const char*>(&checksum), sizeof checksum);
+        if (!out) throw RuntimeError(tmp.string() + ": cannot write the edge break history");
+    });
+}
+
+/// The stored history if it is intact and was computed from the same inputs; nullopt otherwise
+/// (it is a cache: a stale or damaged one is recomputed, not an error).
+std::optional<BreakHistory> read_break_history(const fs::path& path, uint64_t source_hash, int64_t n_edges) {
+    std::ifstream in(path, std::ios::binary);
+    if (!in) return std::nullopt;
+    char magic[8];
+    BreakHistory h;
+    int64_t n = 0;
+    in.read(magic, sizeof magic);
+    in.read(reinterpret_cast<char*>(&h.source_hash), sizeof h.source_hash);
+    in.read(reinterpret_cast<char*>(&h.first_frame), sizeof h.first_frame);
+    in.read(reinterpret_cast<char*>(&h.last_frame), sizeof h.last_frame);
+    in.read(reinterpret_cast<char*>(&n), sizeof n);
+    if (!in || std::memcmp(magic, kBreaksMagic, sizeof magic) != 0 || h.source_hash != source_hash || n != n_edges)
+        return std::nullopt;
+    h.first_break.resize(n);
+    uint64_t checksum = 0;
+    in.read(reinterpret_cast<char*>(h.first_break.data()), n * sizeof(int32_t));
+    in.read(reinterpret_cast<char*>(&checksum), sizeof checksum);
+    if (!in || checksum != fnv1a64(h.first_break.data(), h.first_break.size() * sizeof(int32_t))) return std::nullopt;
+    return h;
+}
+
+/// Loads one sim cache and checks that it is the expected frame of this mesh.
+ParticleFrame load_frame(const fs::path& sim_dir, int frame_number, const CoreTopology& topo) {
+    const fs::path path = frame_path(sim_dir, "particles", frame_number, "vdb");
+    const PointCloud cloud = read_points(path);  // missing, truncated, foreign or other-version files throw
+    ParticleFrame frame = points_to_frame(cloud, path.string());
+    const auto it = cloud.meta_int.find("mudcrack:frame");
+    if (it != cloud.meta_int.end() && it->second != frame_number)
+        throw InputError(path.string() + ": mudcrack:frame = " + std::to_string(it->second) + ": expected " +
+                         std::to_string(frame_number));
+    frame.frame = frame_number;
+    try {
+        check_frame_fits(topo, frame);
+    } catch (const InputError& e) {
+        throw InputError(path.string() + ": " + e.what() + " in DIR/init/tets.vtu");
+    }
+    return frame;
+}
+
+/// Runs fn(i) for i in [0, n), over items in parallel when there are enough of them (each item
+/// then runs single-threaded inside), else one by one with the threads inside each item.
+/// Rethrows the exception of the lowest failing index, so errors are deterministic.
+template <class Fn>
+void for_each_item(int n, Fn&& fn) {
+    std::vector<std::exception_ptr> error(n);
+    auto guarded = [&](int64_t i) {
+        try {
+            fn(static_cast<int>(i));
+        } catch (...) {
+            error[i] = std::current_exception();
+        }
+    };
+    if (n >= thread_count() && thread_count() > 1)
+        parallel_for(n, guarded);
+    else
+        for (int i = 0; i < n; ++i) guarded(i);
+    for (const auto& e : error)
+        if (e) std::rethrow_exception(e);
+}
+
+/// The break history of frames first..last: Eq. 14 on every cached frame (order-free: a minimum).
+BreakHistory scan_breaks(const fs::path& sim_dir, int first, int last, const CoreTopology& topo,
+                         const SurfaceParams& params, uint64_t source_hash) {
+    BreakHistory h;
+    h.source_hash = source_hash;
+    h.first_frame = first;
+    h.last_frame = last;
+    h.first_break = no_edge_breaks(topo);
+    std::mutex merge;
+    for_each_item(last - first + 1, [&](int i) {
+        const ParticleFrame frame = load_frame(sim_dir, first + i, topo);
+        std::vector<int32_t> mine = no_edge_breaks(topo);
+        record_edge_breaks(topo, frame, params, mine);
+        const std::lock_guard<std::mutex> lock(merge);
+        merge_edge_breaks(h.first_break, mine);
+    });
+    return h;
+}
+
+struct FrameResult {
+    json entry;
+    double surfacing_seconds = 0;  // surface_frame only (no file I/O)
+    int64_t triangles = 0;
+};
+
+int run_surface_stage(const StageOptions& options, const std::string& mode_flag, const std::string& format_flag) {
+    WallTimer wall;
+    const Shot shot = load_shot(options.shot);
+    if (!shot.surface)
+        throw InputError(shot.path + ": /surfacing: missing: this shot has no surfacing stage (add a \"surfacing\" section)");
+    SurfaceParams params = *shot.surface;
+    if (!mode_flag.empty()) params.mode = mode_flag == "wang2019" ? SurfaceMode::Wang2019 : SurfaceMode::Ours;
+    if (!format_flag.empty()) params.format = format_flag;
+    if (!is_supported_mesh_format(params.format))
+        throw InputError("--format " + params.format + ": " + mesh_format_refusal(params.format));
+
+    const fs::path out = options.out, init_dir = out / "init", sim_dir = out / "sim", surface_dir = out / "surface";
+    const json init_manifest = read_input_manifest(init_dir, shot, Stage::Init, "mc-init");
+    const json sim_manifest = read_input_manifest(sim_dir, shot, Stage::Sim, "mc-sim");
+    int sim_first = 0, sim_last = -1;
+    try {
+        sim_first = sim_manifest.at("frames").at("first").get<int>();
+        sim_last = sim_manifest.at("frames").at("last").get<int>();
+    } catch (const json::exception&) {
+        throw InputError((sim_dir / "manifest.json").string() + ": /frames/first and /frames/last: missing or not integers");
+    }
+    int first = sim_first, last = sim_last;
+    if (options.frame_range.is_set()) {
+        first = options.frame_range.first;
+        last = options.frame_range.last;
+        if (first < sim_first || last > sim_last)
+            throw InputError("--frames " + options.frames + ": outside the cached frames " + std::to_string(sim_first) +
+                             "-" + std::to_string(sim_last) + " of " + (sim_dir / "manifest.json").string());
+    }
+
+    // preprocessing, once per tet mesh
+    WallTimer timer;
+    const fs::path tets_file = init_dir / "tets.vtu";
+    const TetMesh mesh = read_tet_mesh_vtu(tets_file);
+    CoreTopology topo;
+    try {
+        topo = build_core_topology(mesh);
+    } catch (const InputError& e) {
+        throw InputError(tets_file.string() + ": " + e.what());
+    }
+    const double preprocessing_seconds = timer.seconds();
+    log::info("particle cores: " + std::to_string(topo.n_particles) + " particles, " + std::to_string(topo.n_tets()) +
+              " tets, " + std::to_string(topo.n_edges()) + " edges, " + std::to_string(topo.skin_faces.size()) +
+              " boundary faces (" + std::to_string(preprocessing_seconds) + " s)");
+
+    // an existing surface folder of the same shot, mode and format is updated in place by --frames
+    json previous;
+    const bool update_in_place = options.frame_range.is_set() && fs::exists(surface_dir / "manifest.json") && [&] {
+        try {
+            previous = read_manifest(surface_dir);
+        } catch (const InputError&) {
+            return false;
+        }
+        return slice_hash_of(previous) == shot.slice_hash(Stage::Surface) &&
+               previous.value("mode", "") == surface_mode_name(params.mode) &&
+               previous.value("format", "") == params.format;
+    }();
+    std::optional<StagingDir> staging;
+    if (!update_in_place) staging.emplace(surface_dir, options.keep_partial);
+    const fs::path dir = update_in_place ? surface_dir : staging->path();
+
+    // the break history: reused when it matches the inputs and covers the frames, else scanned
+    timer.reset();
+    const uint64_t source_hash = break_source_hash(sim_manifest, params, topo);
+    std::optional<BreakHistory> history;
+    if (update_in_place) history = read_break_history(surface_dir / kBreaksFile, source_hash, topo.n_edges());
+    const bool reused = history && history->first_frame <= sim_first && history->last_frame >= last;
+    if (!reused) {
+        log::info("break history: scanning frames " + std::to_string(sim_first) + "-" + std::to_string(sim_last));
+        history = scan_breaks(sim_dir, sim_first, sim_last, topo, params, source_hash);
+        write_break_history(dir / kBreaksFile, *history);
+    }
+    const double break_seconds = timer.seconds();
+
+    // frames, in parallel; each writes its own files atomically
+    const int n_frames = last - first + 1;
+    std::vector<FrameResult> results(n_frames);
+    for_each_item(n_frames, [&](int i) {
+        const int n = first + i;
+        const ParticleFrame frame = load_frame(sim_dir, n, topo);
+        WallTimer t;
+        const SurfacedFrame s = surface_frame(topo, frame, history->first_break, params);
+        results[i].surfacing_seconds = t.seconds();
+        results[i].triangles = int64_t(s.boundary.faces.size() + s.crack.faces.size());
+        const fs::path boundary_file = frame_path(dir, "boundary", n, params.format);
+        export_meshes(boundary_file, {s.boundary}, params.format);
+        json entry = {{"frame", n},
+                      {"boundary", {{"file", boundary_file.filename().string()},
+                                    {"vertices", s.boundary.positions.size()},
+                                    {"faces", s.boundary.faces.size()}}},
+                      {"broken_edges", s.broken_edges},
+                      {"fragments", s.fragments},
+                      {"culled_fragments", s.culled_fragments},
+                      {"surfacing_seconds", results[i].surfacing_seconds}};
+        if (params.cracks) {
+            // a frame without cracks gets no crack file: assimp writes an empty mesh that no
+            // reader (assimp included) accepts; the manifest records "file": null
+            const fs::path crack_file = frame_path(dir, "crack", n, params.format);
+            std::error_code ec;
+            fs::remove(crack_file, ec);  // a stale file of an earlier run
+            if (!s.crack.faces.empty()) export_meshes(crack_file, {s.crack}, params.format);
+            entry["crack"] = {{"file", s.crack.faces.empty() ? json(nullptr) : json(crack_file.filename().string())},
+                              {"vertices", s.crack.positions.size()},
+                              {"faces", s.crack.faces.size()}};
+        }
+        results[i].entry = std::move(entry);
+    });
+
+    // the manifest, last (merged with the frames already there when updating in place)
+    std::map<int, json> frames;
+    if (update_in_place && previous.contains("per_frame"))
+        for (const json& e : previous["per_frame"]) frames[e.value("frame", 0)] = e;
+    double surfacing_seconds = 0;
+    int64_t triangles = 0;
+    for (const FrameResult& r : results) {
+        frames[r.entry["frame"].get<int>()] = r.entry;
+        surfacing_seconds += r.surfacing_seconds;
+        triangles += r.triangles;
+    }
+    json per_frame = json::array();
+    for (auto& [n, e] : frames) per_frame.push_back(e);
+    json m = make_manifest("surface", shot.path, shot.slice_hash(Stage::Surface));
+    m["inputs"] = {{"init", {{"dir", init_dir.string()}, {"slice_hash", slice_hash_of(init_manifest)}}},
+                   {"sim", {{"dir", sim_dir.string()}, {"slice_hash", slice_hash_of(sim_manifest)}}}};
+    m["mode"] = surface_mode_name(params.mode);
+    m["format"] = params.format;
+    m["zeta"] = params.zeta;
+    m["length_consistent"] = params.length_consistent;
+    m["cracks"] = params.cracks;
+    m["min_fragment_particles"] = params.min_fragment_particles;
+    m["frames"] = {{"first", frames.begin()->first}, {"last", frames.rbegin()->first}, {"count", frames.size()},
+                   {"this_run", {{"first", first}, {"last", last}}}};
+    m["particles"] = topo.n_particles;
+    m["tets"] = topo.n_tets();
+    m["edges"] = topo.n_edges();
+    m["boundary_faces"] = topo.skin_faces.size();
+    m["preprocessing_seconds"] = preprocessing_seconds;
+    m["topology_bytes"] = topo.memory_bytes();
+    m["topology_bytes_per_tet"] = double(topo.memory_bytes()) / topo.n_tets();
+    m["break_history"] = {{"file", kBreaksFile}, {"reused", reused}, {"frames_scanned", reused ? 0 : sim_last - sim_first + 1},
+                          {"seconds", break_seconds}};
+    m["surfacing_seconds"] = surfacing_seconds;
+    m["tets_per_second"] = surfacing_seconds > 0 ? double(topo.n_tets()) * n_frames / surfacing_seconds : 0.0;
+    m["triangles_per_second"] = surfacing_seconds > 0 ? double(triangles) / surfacing_seconds : 0.0;
+    m["threads"] = thread_count();
+    m["wall_seconds"] = wall.seconds();
+    m["peak_memory_bytes"] = peak_rss_bytes();
+    m["per_frame"] = per_frame;
+    write_manifest(dir, m);
+    if (staging) staging->commit();
+
+    // results table on stdout
+    std::printf("frame  boundary_faces  crack_faces  broken_edges  fragments\n");
+    for (const FrameResult& r : results)
+        std::printf("%5d  %14lld  %11lld  %12lld  %9d\n", r.entry["frame"].get<int>(),
+                    (long long)r.entry["boundary"]["faces"].get<int64_t>(),
+                    (long long)(r.entry.contains("crack") ? r.entry["crack"]["faces"].get<int64_t>() : 0),
+                    (long long)r.entry["broken_edges"].get<int64_t>(), r.entry["fragments"].get<int>());
+    std::printf("surfaced %d frames: %.3g tets/s, %.3g triangles/s per frame compute; wall %.2f s\n", n_frames,
+                m["tets_per_second"].get<double>(), m["triangles_per_second"].get<double>(), wall.seconds());
+    return 0;
+}
+
+}  // namespace
+}  // namespace mudcrack
+
+int main(int argc, char** argv) {
+    using namespace mudcrack;
+    std::string mode, format;
+    return run_stage(
+        "mc-surface",
+        "particle-core surfacing: boundary and crack meshes per frame from OUT/init/ and OUT/sim/ into OUT/surface/",
+        argc, argv,
+        [&](CLI::App& app) {
+            app.add_option("--mode", mode, "ours (moisture-aware Eq. 13/14) or wang2019 (the baseline); default: the shot's")
+                ->check(CLI::IsMember({"ours", "wang2019"}));
+            app.add_option("--format", format, "glb, obj, ply or dae (fbx is refused); default: the shot's");
+        },
+        [&](const StageOptions& options) { return run_surface_stage(options, mode, format); });
+}

@@ -1,0 +1,423 @@
+#include "surfacing/core_surface.h"
+
+#include <Eigen/Dense>
+#include <algorithm>
+#include <cmath>
+#include <string>
+
+#include "sim/core/error.h"
+#include "sim/core/parallel.h"
+#include "surfacing/core_rotation.h"
+#include "surfacing/edge_breaks.h"
+#include "surfacing/fragments.h"
+#include "surfacing/weld_classes.h"
+
+namespace mudcrack {
+namespace {
+
+/// A rest point with its owners (the corners of its simplex) and their weld classes this frame.
+struct PointOwners {
+    int n = 0;                       // number of owners, 1-4
+    std::array<int32_t, 4> owner{};  // particle ids
+    WeldReps rep{};                  // class representative of each owner slot
+    Vec3 y0 = Vec3::Zero();          // rest position [m]
+
+    int slot_of(int32_t particle) const {
+        for (int j = 0; j < n; ++j)
+            if (owner[j] == particle) return j;
+        return 0;
+    }
+};
+
+/// Everything a frame's core vertices depend on: positions, the core transforms s_p R_p of
+/// Eq. 13, broken edges, and the shading attributes.
+class FrameCores {
+public:
+    FrameCores(const CoreTopology& topo, const ParticleFrame& frame, const std::vector<uint8_t>& is_broken,
+               const SurfaceParams& params)
+        : m_topo(topo), m_frame(frame), m_broken(is_broken), m_x(topo.n_particles), m_A(topo.n_particles) {
+        const bool has_jw = !frame.Jw.empty() && params.mode == SurfaceMode::Ours;
+        const bool has_fe = !frame.Fe.empty();
+        // per particle: x_p and J_w^(1/3) R_p (Eq. 13; Wang 2019 drops the J_w factor)
+        parallel_for(topo.n_particles, [&](int64_t p) {
+            m_x[p] = frame.P[p].cast<Real>();
+            const Mat3 R = has_fe ? core_rotation(frame.Fe[p].cast<Real>()) : Mat3::Identity();
+            m_A[p] = has_jw ? Real(std::cbrt(Real(frame.Jw[p]))) * R : R;
+        });
+    }
+
+    bool has_saturation() const { return !m_frame.saturation.empty(); }
+    bool has_alpha() const { return !m_frame.alpha.empty(); }
+
+    PointOwners particle_point(int32_t p) const {
+        PointOwners o;
+        o.n = 1;
+        o.owner[0] = p;
+        o.rep = {0, 1, 2, 3};
+        o.y0 = m_topo.X[p];
+        return o;
+    }
+    PointOwners edge_point(int32_t e) const {
+        PointOwners o;
+        o.n = 2;
+        o.owner = {m_topo.edges[e][0], m_topo.edges[e][1], 0, 0};
+        o.rep = {0, int8_t(m_broken[e] ? 1 : 0), 2, 3};
+        o.y0 = (m_topo.X[o.owner[0]] + m_topo.X[o.owner[1]]) / 2;
+        return o;
+    }
+    /// The centroid of the face of tet t opposite local corner l; owners sorted by id.
+    PointOwners face_point(int32_t t, int l) const {
+        const Tet& tet = m_topo.tets[t];
+        std::array<int, 3> local{};
+        for (int k = 0, j = 0; k < 4; ++k)
+            if (k != l) local[j++] = k;
+        std::sort(local.begin(), local.end(), [&](int a, int b) { return tet[a] < tet[b]; });
+        unsigned mask = 0;
+        for (int k = 0; k < 3; ++k) {
+            const int e = m_topo.tet_edges[t][kTetLocalEdge[local[kFaceEdgeOwners[k][0]]][local[kFaceEdgeOwners[k][1]]]];
+            if (m_broken[e]) mask |= 1u << k;
+        }
+        PointOwners o;
+        o.n = 3;
+        o.owner = {tet[local[0]], tet[local[1]], tet[local[2]], 0};
+        o.rep = face_weld_reps(mask);
+        o.y0 = (m_topo.X[o.owner[0]] + m_topo.X[o.owner[1]] + m_topo.X[o.owner[2]]) / 3;
+        return o;
+    }
+    PointOwners tet_point(int32_t t) const {
+        const Tet& tet = m_topo.tets[t];
+        unsigned mask = 0;
+        for (int k = 0; k < 6; ++k)
+            if (m_broken[m_topo.tet_edges[t][k]]) mask |= 1u << k;
+        PointOwners o;
+        o.n = 4;
+        o.owner = tet;
+        o.rep = tet_weld_reps(mask);
+        o.y0 = (m_topo.X[tet[0]] + m_topo.X[tet[1]] + m_topo.X[tet[2]] + m_topo.X[tet[3]]) / 4;
+        return o;
+    }
+
+    /// Eq. 13: y = x_p + J_w,p^(1/3) R_p (y0 - X_p).
+    Vec3 extrapolate(int32_t p, const Vec3& y0) const { return m_x[p] + m_A[p] * (y0 - m_topo.X[p]); }
+
+    struct Welded {
+        Vec3 position = Vec3::Zero();
+        Real saturation = 0, alpha = 0;
+    };
+    /// The welded vertex of class `rep`: the average of its members' extrapolated copies.
+    Welded welded(const PointOwners& o, int rep) const {
+        Welded w;
+        int members = 0;
+        for (int j = 0; j < o.n; ++j) {
+            if (o.rep[j] != rep) continue;
+            const int32_t p = o.owner[j];
+            w.position += extrapolate(p, o.y0);
+            if (has_saturation()) w.saturation += m_frame.saturation[p];
+            if (has_alpha()) w.alpha += m_frame.alpha[p];
+            ++members;
+        }
+        w.position /= members;
+        w.saturation /= members;
+        w.alpha /= members;
+        return w;
+    }
+
+private:
+    const CoreTopology& m_topo;
+    const ParticleFrame& m_frame;
+    const std::vector<uint8_t>& m_broken;
+    std::vector<Vec3> m_x;  // current positions [m], (n_particles)
+    std::vector<Mat3> m_A;  // core transforms s_p R_p, (n_particles)
+};
+
+/// A triangle under construction: output slots (vertex identity incl. UV split), weld slots
+/// (normal sharing) and the owner particle.
+struct SlotTri {
+    std::array<int32_t, 3> out_slot;
+    std::array<int32_t, 3> weld_slot;
+    int32_t owner = -1;  // -1: culled
+};
+
+/// Numbers the output slots by first appearance in triangle order and fills faces, fragment
+/// ids and, per vertex, its slot and first face. Sequential, hence deterministic.
+struct Numbered {
+    std::vector<int32_t> vertex_slot;   // out slot of each vertex
+    std::vector<int32_t> vertex_weld;   // weld slot of each vertex
+    std::vector<int32_t> vertex_face;   // first face using the vertex
+};
+
+Numbered number_vertices(const std::vector<SlotTri>& tris, int64_t n_out_slots, const Fragments& frag, TriMesh& mesh) {
+    Numbered num;
+    std::vector<int32_t> vertex_of(n_out_slots, -1);
+    for (const SlotTri& t : tris) {
+        if (t.owner < 0) continue;
+        const int32_t f = static_cast<int32_t>(mesh.faces.size());
+        Tri face{};
+        for (int k = 0; k < 3; ++k) {
+            int32_t& v = vertex_of[t.out_slot[k]];
+            if (v < 0) {
+                v = static_cast<int32_t>(num.vertex_slot.size());
+                num.vertex_slot.push_back(t.out_slot[k]);
+                num.vertex_weld.push_back(t.weld_slot[k]);
+                num.vertex_face.push_back(f);
+            }
+            face[k] = v;
+        }
+        mesh.faces.push_back(face);
+        mesh.face_fragment.push_back(frag.id[t.owner]);
+    }
+    return num;
+}
+
+/// Area-weighted normals per weld slot, shared by all vertices of that slot (across UV seams).
+void compute_normals(const std::vector<Vec3>& position, const Numbered& num, int64_t n_weld_slots, TriMesh& mesh) {
+    const size_t nf = mesh.faces.size();
+    std::vector<Vec3> face_normal(nf);
+    parallel_for(static_cast<int64_t>(nf), [&](int64_t f) {
+        const Tri& t = mesh.faces[f];
+        face_normal[f] = (position[t[1]] - position[t[0]]).cross(position[t[2]] - position[t[0]]);
+    });
+    std::vector<Vec3> weld_normal(n_weld_slots, Vec3::Zero());
+    for (size_t f = 0; f < nf; ++f)
+        for (int k = 0; k < 3; ++k) weld_normal[num.vertex_weld[mesh.faces[f][k]]] += face_normal[f];
+    mesh.normals.resize(position.size());
+    parallel_for(static_cast<int64_t>(position.size()), [&](int64_t v) {
+        Vec3 n = weld_normal[num.vertex_weld[v]];
+        if (!(n.norm() > 1e-12 * face_normal[num.vertex_face[v]].norm())) n = face_normal[num.vertex_face[v]];
+        const Real len = n.norm();
+        mesh.normals[v] = (len > 0 ? Vec3(n / len) : Vec3(0, 1, 0)).cast<float>();
+    });
+}
+
+/// Positions, UVs and shading attributes of the numbered vertices, from a per-vertex evaluator.
+template <class Eval>
+std::vector<Vec3> fill_vertices(const FrameCores& cores, const Numbered& num, Eval&& eval, TriMesh& mesh,
+                                std::vector<uint64_t>& keys) {
+    const size_t nv = num.vertex_slot.size();
+    std::vector<Vec3> position(nv);
+    mesh.positions.resize(nv);
+    mesh.uvs.resize(nv);
+    keys.resize(nv);
+    if (cores.has_saturation()) mesh.saturation.resize(nv);
+    if (cores.has_alpha()) mesh.alpha.resize(nv);
+    parallel_for(static_cast<int64_t>(nv), [&](int64_t v) {
+        Vec2 uv;
+        const FrameCores::Welded w = eval(num.vertex_slot[v], uv, keys[v]);
+        position[v] = w.position;
+        mesh.positions[v] = w.position.cast<float>();
+        mesh.uvs[v] = uv.cast<float>();
+        if (cores.has_saturation()) mesh.saturation[v] = static_cast<float>(w.saturation);
+        if (cores.has_alpha()) mesh.alpha[v] = static_cast<float>(w.alpha);
+    });
+    return position;
+}
+
+/// The owners of rest point j (0-6, SkinFace numbering) of a skin face.
+PointOwners skin_point(const FrameCores& cores, const SkinFace& sf, int j) {
+    if (j < 3) return cores.particle_point(sf.corner[j]);
+    if (j < 6) return cores.edge_point(sf.edge[j - 3]);
+    return cores.face_point(sf.tet, sf.opposite);
+}
+
+void build_boundary(const CoreTopology& topo, const FrameCores& cores, const Fragments& frag, SurfacedFrame& out) {
+    TriMesh& mesh = out.boundary;
+    const int64_t nb = static_cast<int64_t>(topo.skin_faces.size());
+    // six skin triangles per boundary face, two per corner, owned by the corner particle
+    std::vector<SlotTri> tris(nb * 6);
+    parallel_for(nb, [&](int64_t i) {
+        const SkinFace& sf = topo.skin_faces[i];
+        std::array<PointOwners, 7> pt;
+        for (int j = 0; j < 7; ++j) pt[j] = skin_point(cores, sf, j);
+        for (int k = 0; k < 6; ++k) {
+            const auto& corners = kSkinTriangles[k];
+            const int32_t owner = sf.corner[corners[0]];
+            SlotTri& t = tris[i * 6 + k];
+            t.owner = frag.id[owner] >= 0 ? owner : -1;
+            for (int c = 0; c < 3; ++c) {
+                const PointOwners& o = pt[corners[c]];
+                const int rep = o.rep[o.slot_of(owner)];
+                const SkinUvVertex& uvv = topo.skin_uv_vertices[sf.uv_vertex[corners[c]]];
+                t.out_slot[c] = uvv.out_slot + rep;
+                t.weld_slot[c] = uvv.weld_slot + rep;
+            }
+        }
+    });
+    const Numbered num = number_vertices(tris, topo.n_skin_out_slots, frag, mesh);
+
+    // out slot -> (skin face, rest point j) of some triangle using it, to evaluate the vertex
+    std::vector<std::array<int32_t, 2>> slot_source(topo.n_skin_out_slots, {-1, -1});
+    for (int64_t i = 0; i < nb; ++i)
+        for (int j = 0; j < 7; ++j) {
+            const SkinUvVertex& uvv = topo.skin_uv_vertices[topo.skin_faces[i].uv_vertex[j]];
+            for (int r = 0; r <= static_cast<int>(uvv.kind); ++r)
+                if (slot_source[uvv.out_slot + r][0] < 0) slot_source[uvv.out_slot + r] = {int32_t(i), j};
+        }
+    auto eval = [&](int32_t slot, Vec2& uv, uint64_t& key) {
+        const auto [i, j] = slot_source[slot];
+        const SkinFace& sf = topo.skin_faces[i];
+        const SkinUvVertex& uvv = topo.skin_uv_vertices[sf.uv_vertex[j]];
+        const int rep = slot - uvv.out_slot;
+        uv = uvv.uv;
+        key = weld_key(uvv.kind, uvv.point, rep);
+        return cores.welded(skin_point(cores, sf, j), rep);
+    };
+    const std::vector<Vec3> position = fill_vertices(cores, num, eval, mesh, out.boundary_weld_key);
+    compute_normals(position, num, topo.n_skin_weld_slots, mesh);
+}
+
+/// The smallest projection axis that gives rest point y0 the same UV as `axis`, so a vertex is
+/// split by projection only where its UVs actually differ.
+int canonical_axis(const Vec3& y0, int axis, Real uv_per_meter) {
+    const Vec2 uv = triplanar_uv(y0, axis, uv_per_meter);
+    for (int a = 0; a < axis; ++a)
+        if (triplanar_uv(y0, a, uv_per_meter) == uv) return a;
+    return axis;
+}
+
+/// Parity of the permutation (i, j, k, l) of (0, 1, 2, 3): true when even.
+bool is_even_permutation(int i, int j, int k, int l) {
+    const int p[4] = {i, j, k, l};
+    int inversions = 0;
+    for (int a = 0; a < 4; ++a)
+        for (int b = a + 1; b < 4; ++b) inversions += p[a] > p[b];
+    return inversions % 2 == 0;
+}
+
+void build_crack(const CoreTopology& topo, const FrameCores& cores, const Fragments& frag,
+                 const std::vector<uint8_t>& is_broken, SurfacedFrame& out) {
+    TriMesh& mesh = out.crack;
+    std::vector<int32_t> broken;
+    for (int32_t e = 0; e < topo.n_edges(); ++e)
+        if (is_broken[e]) broken.push_back(e);
+    const int64_t nbr = static_cast<int64_t>(broken.size());
+
+    // faces and tets around broken edges get compact ranks, in order of first use
+    std::vector<int32_t> face_rank(topo.n_faces, -1), tet_rank(topo.n_tets(), -1);
+    std::vector<std::array<int32_t, 2>> active_face;  // (tet, opposite corner)
+    std::vector<int32_t> active_tet;
+    std::vector<int64_t> tri_begin(nbr + 1, 0);
+    for (int64_t r = 0; r < nbr; ++r) {
+        const int32_t e = broken[r];
+        const int32_t b = topo.edge_tet_begin[e], end = topo.edge_tet_begin[e + 1];
+        tri_begin[r + 1] = tri_begin[r] + 4 * int64_t(end - b);
+        for (int32_t c = b; c < end; ++c) {
+            const int32_t t = topo.edge_tet[c] / 6;
+            for (int l = 0; l < 4; ++l) {
+                const int32_t f = topo.tet_faces[t][l];
+                const auto& ij = kTetEdgeCorners[topo.edge_tet[c] % 6];
+                if (l == ij[0] || l == ij[1] || face_rank[f] >= 0) continue;
+                face_rank[f] = static_cast<int32_t>(active_face.size());
+                active_face.push_back({t, l});
+            }
+            if (tet_rank[t] < 0) {
+                tet_rank[t] = static_cast<int32_t>(active_tet.size());
+                active_tet.push_back(t);
+            }
+        }
+    }
+    // weld slots: 2 per broken-edge midpoint, 3 per active face centroid, 4 per active tet
+    // centroid; out slot = 3 * weld slot + projection axis
+    const int64_t face0 = 2 * nbr, tet0 = face0 + 3 * int64_t(active_face.size());
+    const int64_t n_weld = tet0 + 4 * int64_t(active_tet.size());
+
+    // per (broken edge, incident tet): 2 interface triangles, each on both sides
+    std::vector<SlotTri> tris(tri_begin[nbr]);
+    parallel_for(nbr, [&](int64_t r) {
+        const int32_t e = broken[r];
+        const PointOwners m = cores.edge_point(e);
+        for (int32_t c = topo.edge_tet_begin[e]; c < topo.edge_tet_begin[e + 1]; ++c) {
+            const int32_t t = topo.edge_tet[c] / 6, le = topo.edge_tet[c] % 6;
+            const int i = kTetEdgeCorners[le][0], j = kTetEdgeCorners[le][1];
+            int k = -1, l = -1;
+            for (int q = 0; q < 4; ++q)
+                if (q != i && q != j) (k < 0 ? k : l) = q;
+            // c_ijk is the face opposite l, c_ijl the face opposite k
+            const PointOwners ck = cores.face_point(t, l), cl = cores.face_point(t, k), g = cores.tet_point(t);
+            const int64_t wck = face0 + 3 * int64_t(face_rank[topo.tet_faces[t][l]]);
+            const int64_t wcl = face0 + 3 * int64_t(face_rank[topo.tet_faces[t][k]]);
+            const int64_t wg = tet0 + 4 * int64_t(tet_rank[t]);
+            const int axis_k = dominant_axis((ck.y0 - m.y0).cross(g.y0 - m.y0));
+            const int axis_l = dominant_axis((cl.y0 - m.y0).cross(g.y0 - m.y0));
+            // (m, c_ijk, g) points from i towards j iff (i, j, k, l) is an even permutation
+            const bool even = is_even_permutation(i, j, k, l);
+            int64_t out_index = tri_begin[r] + 4 * int64_t(c - topo.edge_tet_begin[e]);
+            for (int side = 0; side < 2; ++side) {
+                const int32_t owner = topo.tets[t][side == 0 ? i : j];
+                auto corner = [&](const PointOwners& o, int64_t w0, int axis, SlotTri& tri, int slot) {
+                    const int rep = o.rep[o.slot_of(owner)];
+                    axis = canonical_axis(o.y0, axis, topo.uv_per_meter);
+                    tri.weld_slot[slot] = static_cast<int32_t>(w0 + rep);
+                    tri.out_slot[slot] = static_cast<int32_t>(3 * (w0 + rep) + axis);
+                };
+                // side i keeps (m, c_ijk, g) when even; side j is the mirror image
+                const bool flip_k = (side == 0) != even;
+                SlotTri& tk = tris[out_index++];
+                SlotTri& tl = tris[out_index++];
+                tk.owner = tl.owner = frag.id[owner] >= 0 ? owner : -1;
+                corner(m, 2 * r, axis_k, tk, 0);
+                corner(ck, wck, axis_k, tk, flip_k ? 2 : 1);
+                corner(g, wg, axis_k, tk, flip_k ? 1 : 2);
+                corner(m, 2 * r, axis_l, tl, 0);
+                corner(cl, wcl, axis_l, tl, flip_k ? 1 : 2);
+                corner(g, wg, axis_l, tl, flip_k ? 2 : 1);
+            }
+        }
+    });
+    const Numbered num = number_vertices(tris, 3 * n_weld, frag, mesh);
+
+    auto eval = [&](int32_t slot, Vec2& uv, uint64_t& key) {
+        const int64_t w = slot / 3;
+        const int axis = slot % 3;
+        PointOwners o;
+        int rep;
+        if (w < face0) {
+            o = cores.edge_point(broken[w / 2]);
+            rep = static_cast<int>(w % 2);
+            key = weld_key(RestPointKind::EdgeMidpoint, broken[w / 2], rep);
+        } else if (w < tet0) {
+            const auto [t, l] = active_face[(w - face0) / 3];
+            o = cores.face_point(t, l);
+            rep = static_cast<int>((w - face0) % 3);
+            key = weld_key(RestPointKind::FaceCentroid, topo.tet_faces[t][l], rep);
+        } else {
+            const int32_t t = active_tet[(w - tet0) / 4];
+            o = cores.tet_point(t);
+            rep = static_cast<int>((w - tet0) % 4);
+            key = weld_key(RestPointKind::TetCentroid, t, rep);
+        }
+        uv = triplanar_uv(o.y0, axis, topo.uv_per_meter);
+        return cores.welded(o, rep);
+    };
+    const std::vector<Vec3> position = fill_vertices(cores, num, eval, mesh, out.crack_weld_key);
+    compute_normals(position, num, n_weld, mesh);
+}
+
+}  // namespace
+
+SurfacedFrame surface_frame(const CoreTopology& topo, const ParticleFrame& frame,
+                            const std::vector<int32_t>& first_break, const SurfaceParams& params) {
+    check_frame_fits(topo, frame);
+    if (first_break.size() != topo.edges.size())
+        throw InputError("frame " + std::to_string(frame.frame) + ": edge break history has " +
+                         std::to_string(first_break.size()) + " edges; the tet mesh has " +
+                         std::to_string(topo.edges.size()));
+    SurfacedFrame out;
+    out.boundary.name = "boundary";
+    out.crack.name = "crack";
+
+    // Eq. 14 with the permanent broken state: broken at n iff it first broke at some t <= n
+    std::vector<uint8_t> is_broken(topo.edges.size());
+    parallel_for(topo.n_edges(), [&](int64_t e) { is_broken[e] = first_break[e] <= frame.frame ? 1 : 0; });
+    out.broken_edges = count_broken_edges(first_break, frame.frame);
+
+    const Fragments frag = find_fragments(topo, is_broken, params.min_fragment_particles);
+    out.fragments = frag.count;
+    out.culled_fragments = frag.culled;
+
+    const FrameCores cores(topo, frame, is_broken, params);
+    build_boundary(topo, cores, frag, out);
+    if (params.cracks) build_crack(topo, cores, frag, is_broken, out);
+    return out;
+}
+
+}  // namespace mudcrack

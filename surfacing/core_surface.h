@@ -1,0 +1,47 @@
+#pragma once
+/// Per-frame particle-core surfacing (Tu et al. 2023 Section 6; physics.md 5.3): extrapolate
+/// the core-vertex copies with Eq. 13, weld them across intact edges, and emit the boundary
+/// skin and the crack faces of broken edges as two meshes.
+#include <cstdint>
+#include <vector>
+
+#include "sim/core/particle_frame.h"
+#include "sim/core/tri_mesh.h"
+#include "surfacing/core_topology.h"
+#include "surfacing/surface_params.h"
+
+namespace mudcrack {
+
+/// Identity of a welded core vertex: its rest point and the smallest owner slot of its weld
+/// class. Equal keys in the boundary and crack meshes are the same point, which stitches a
+/// fragment's pieces into one closed surface.
+inline uint64_t weld_key(RestPointKind kind, int32_t point, int rep) {
+    return (uint64_t(kind) << 62) | (uint64_t(uint32_t(point)) << 2) | uint64_t(rep);
+}
+
+struct SurfacedFrame {
+    TriMesh boundary;                       // skin of the original boundary faces, "boundary"
+    TriMesh crack;                          // both sides of broken interfaces, "crack"
+    std::vector<uint64_t> boundary_weld_key; // weld_key of each boundary vertex
+    std::vector<uint64_t> crack_weld_key;    // weld_key of each crack vertex
+    int64_t broken_edges = 0;               // edges with first_break <= frame
+    int32_t fragments = 0;                  // fragments kept
+    int32_t culled_fragments = 0;           // fragments below min_fragment_particles
+};
+
+/// Surfaces one frame. Deterministic: the result depends only on the arguments, never on the
+/// thread count or on which other frames were surfaced before.
+///
+/// Boundary UVs are TetMesh::boundary_uv interpolated at the skin vertices' barycentric
+/// coordinates; they are split at UV seams, while normals are shared across seams. Crack UVs are
+/// triplanar_uv of the rest position by the dominant axis of the crack triangle's rest normal,
+/// at the boundary's texture density (CoreTopology::uv_per_meter). Normals are area-weighted per
+/// welded vertex. Saturation and alpha are averaged over the owners of each welded vertex.
+/// @note At a crack tip inside a tet, the two sides of an interface share welded vertices and
+///       their normals cancel; such a vertex takes the normal of its first face.
+/// @param first_break first frame at which each edge broke (edge_breaks.h), (n_edges)
+/// Throws InputError when the frame does not fit the mesh (check_frame_fits).
+SurfacedFrame surface_frame(const CoreTopology& topo, const ParticleFrame& frame,
+                            const std::vector<int32_t>& first_break, const SurfaceParams& params);
+
+}  // namespace mudcrack
