@@ -5,6 +5,7 @@
 /// Internal to pipeline/shot; other modules use shot.h.
 #include <optional>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include <nlohmann/json.hpp>
@@ -44,6 +45,8 @@ struct KeySpec {
     Presence presence;
     nlohmann::json default_value;      // for Presence::Default leaves
     std::vector<std::string> choices;  // for KeyType::Enum
+    /// Enum values users will try that are refused on purpose: {value, why not}.
+    std::vector<std::pair<std::string, std::string>> refused;
     std::optional<Bound> min, max;
     std::string units;                 // "Pa", "m", "-" (dimensionless), "" (not a quantity)
     std::string doc;                   // one line

@@ -1,0 +1,51 @@
+#pragma once
+/// Typed stage parameters from a checked, default-filled shot tree (validate.h), with the checks
+/// that involve more than one key. Each builder writes the values it derives back into the tree
+/// (resolved paths, beta0/beta1, theta_init), so the slices record what the stages will run with.
+/// Internal to pipeline/shot.
+#include <optional>
+#include <string>
+
+#include <nlohmann/json.hpp>
+
+#include "pipeline/init/init_params.h"
+#include "pipeline/shot/validate.h"
+#include "render/render_params.h"
+#include "sim/model.h"
+#include "surfacing/surface_params.h"
+
+namespace mudcrack::spec {
+
+/// /source and /init. Resolves paths against the folder of `shot_path` and checks the files
+/// exist; checks box extents and the heightfield channel. Drops the unselected /source/<type>
+/// sections from `tree`.
+InitParams build_init(nlohmann::json& tree, const std::string& shot_path, Issues& issues);
+
+/// /material, /plasticity, /moisture, /sim, /frames, /colliders, /source/initial_velocity.
+/// Refuses a fixed /sim/dt above the elastic bound, theta_init outside [0, eta], empty boxes
+/// and frame ranges. The cache attributes are left at their defaults (see derive_cache).
+SimModel build_sim(nlohmann::json& tree, Issues& issues);
+
+/// /surfacing, or nullopt when the section is off.
+std::optional<SurfaceParams> build_surface(const nlohmann::json& tree);
+
+/// /render, or nullopt when the section is off.
+std::optional<RenderParams> build_render(const nlohmann::json& tree);
+
+/// What the frame caches must carry for the stages that are on: Fe (and Jw with moisture) for
+/// surfacing; saturation for surfacing or a moisture-colored render; alpha for surfacing or a
+/// hardening-colored render; theta whenever moisture is on; velocity always.
+CacheAttributes derive_cache(const SimModel& sim, const std::optional<SurfaceParams>& surface,
+                             const std::optional<RenderParams>& render);
+
+/// Checks between sections: the box source inside the domain, the ground inside the domain, the
+/// turntable frame inside the frame range.
+void check_across(const nlohmann::json& tree, const InitParams& init, const SimModel& sim,
+                  const std::optional<RenderParams>& render, Issues& issues);
+
+/// Warnings for valid but doubtful settings: zeta below the bound of physics.md 5.5, under which
+/// intact dried material breaks spuriously.
+void warn_doubtful(const SimModel& sim, const std::optional<SurfaceParams>& surface,
+                   const std::string& shot_path);
+
+}  // namespace mudcrack::spec

@@ -1,0 +1,141 @@
+// mc-shot's command line, run as a user would (MuJoCo's compile_test.sh): exit codes, error
+// lines on stderr, the key table, and slices rewritten only on change.
+#include <gtest/gtest.h>
+
+#include <sys/wait.h>
+
+#include <chrono>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+#include <string>
+#include <thread>
+
+namespace {
+
+namespace fs = std::filesystem;
+
+struct Result {  // of one mc-shot run
+    int code;
+    std::string out, err;
+};
+
+std::string read(const fs::path& p) {
+    std::ifstream in(p);
+    std::ostringstream s;
+    s << in.rdbuf();
+    return s.str();
+}
+
+class McShotCli : public ::testing::Test {
+protected:
+    void SetUp() override {
+        m_dir = fs::temp_directory_path() /
+                ("mudcrack_mc_shot_cli_" + std::string(::testing::UnitTest::GetInstance()->current_test_info()->name()));
+        fs::remove_all(m_dir);
+        fs::create_directories(m_dir);
+    }
+    void TearDown() override { fs::remove_all(m_dir); }
+
+    // runs mc-shot with `args`, capturing stdout and stderr in files
+    Result mc_shot(const std::string& args) const {
+        const fs::path out = m_dir / "stdout.txt", err = m_dir / "stderr.txt";
+        const std::string cmd = std::string(MUDCRACK_BIN_DIR) + "/mc-shot " + args + " >" + out.string() +
+                                " 2>" + err.string();
+        const int status = std::system(cmd.c_str());
+        return {WIFEXITED(status) ? WEXITSTATUS(status) : -1, read(out), read(err)};
+    }
+
+    fs::path write(const std::string& name, const std::string& text) const {
+        std::ofstream(m_dir / name) << text;
+        return m_dir / name;
+    }
+
+    fs::path m_dir;
+};
+
+TEST_F(McShotCli, NoArgumentsIsBadUsage) { EXPECT_EQ(mc_shot("").code, 2); }
+
+TEST_F(McShotCli, HelpAndVersionExitZero) {
+    const Result help = mc_shot("--help");
+    EXPECT_EQ(help.code, 0);
+    EXPECT_NE(help.out.find("validate"), std::string::npos) << help.out;
+    const Result version = mc_shot("--version");
+    EXPECT_EQ(version.code, 0);
+    EXPECT_NE(version.out.find("mudcrack"), std::string::npos) << version.out;
+    EXPECT_EQ(mc_shot("slice").code, 2);
+    EXPECT_EQ(mc_shot("bogus").code, 2);
+}
+
+TEST_F(McShotCli, ValidateBadShotExitsOneNamingEveryKey) {
+    const fs::path shot = write("bad.json", R"({"mudcrack": 1, "source": {"type": "box"},
+        "material": {"youngs_modulus": -300000}, "sim": {"h": -1}})");
+    const Result r = mc_shot("validate " + shot.string());
+    EXPECT_EQ(r.code, 1);
+    EXPECT_NE(r.err.find("mc-shot: error: " + shot.string() + ": /material/youngs_modulus = -300000: must be > 0 [Pa]"),
+              std::string::npos) << r.err;
+    EXPECT_NE(r.err.find("mc-shot: error: " + shot.string() + ": /sim/h = -1"), std::string::npos) << r.err;
+    EXPECT_EQ(r.out.find("ok"), std::string::npos);
+    EXPECT_EQ(mc_shot("validate " + (m_dir / "missing.json").string()).code, 1);
+}
+
+TEST_F(McShotCli, ValidateGoodShotPrintsOk) {
+    const std::string demo = std::string(MUDCRACK_SOURCE_DIR) + "/shots/demo.json";
+    const Result r = mc_shot("validate " + demo);
+    EXPECT_EQ(r.code, 0) << r.err;
+    EXPECT_EQ(r.out.rfind("ok: " + demo + "\n", 0), 0u) << r.out;
+    EXPECT_NE(r.out.find("moisture on"), std::string::npos) << r.out;
+}
+
+TEST_F(McShotCli, KeysListsTheSpec) {
+    const Result r = mc_shot("keys");
+    EXPECT_EQ(r.code, 0);
+    EXPECT_NE(r.out.find("/material/youngs_modulus"), std::string::npos);
+    EXPECT_NE(r.out.find("/surfacing/zeta"), std::string::npos);
+}
+
+TEST_F(McShotCli, StagesListsWhatTheShotTurnsOn) {
+    const std::string shots = std::string(MUDCRACK_SOURCE_DIR) + "/shots/";
+    EXPECT_EQ(mc_shot("stages " + shots + "demo.json").out, "init sim surface render\n");
+    EXPECT_EQ(mc_shot("stages " + shots + "bench_nacc_cube.json").out, "init sim\n");
+}
+
+TEST_F(McShotCli, SummaryReadsTheManifests) {
+    fs::create_directories(m_dir / "out" / "init");
+    std::ofstream(m_dir / "out" / "init" / "manifest.json") << R"({"stage": "init", "particles": 4805})";
+    const Result r = mc_shot("summary " + (m_dir / "out").string());
+    EXPECT_EQ(r.code, 0) << r.err;
+    EXPECT_EQ(r.out.rfind("init: 1 files", 0), 0u) << r.out;
+    EXPECT_NE(r.out.find("particles 4805"), std::string::npos) << r.out;
+    EXPECT_EQ(mc_shot("summary " + (m_dir / "empty").string()).code, 1);
+}
+
+TEST_F(McShotCli, SliceIsRewrittenOnlyWhenItChanges) {
+    const std::string base = R"({"mudcrack": 1, "source": {"type": "box"}, "material": {},
+        "render": {"resolution": [%d, 360]}})";
+    char text[256];
+    std::snprintf(text, sizeof text, base.c_str(), 640);
+    const fs::path shot = write("s.json", text);
+    const fs::path sim = m_dir / "out" / "sim.params.json", render = m_dir / "out" / "render.params.json";
+    ASSERT_EQ(mc_shot("slice " + shot.string() + " sim --out " + sim.string()).code, 0);
+    ASSERT_EQ(mc_shot("slice " + shot.string() + " render --out " + render.string()).code, 0);
+    const Result printed = mc_shot("slice " + shot.string() + " sim");
+    EXPECT_EQ(printed.out, read(sim));
+    EXPECT_NE(read(sim).find("\"youngs_modulus\": 2000.0"), std::string::npos);
+
+    // push both mtimes into the past, then edit only the render section
+    const auto past = fs::file_time_type::clock::now() - std::chrono::hours(1);
+    fs::last_write_time(sim, past);
+    fs::last_write_time(render, past);
+    std::snprintf(text, sizeof text, base.c_str(), 1280);
+    write("s.json", text);
+    ASSERT_EQ(mc_shot("slice " + shot.string() + " sim --out " + sim.string()).code, 0);
+    ASSERT_EQ(mc_shot("slice " + shot.string() + " render --out " + render.string()).code, 0);
+    EXPECT_EQ(fs::last_write_time(sim), past);
+    EXPECT_NE(fs::last_write_time(render), past);
+    EXPECT_NE(read(render).find("1280"), std::string::npos);
+    EXPECT_EQ(mc_shot("slice " + shot.string() + " paint").code, 2);
+}
+
+}  // namespace
