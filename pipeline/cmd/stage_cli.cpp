@@ -24,6 +24,21 @@ FrameRange parse_frame_range(const std::string& text) {
     return r;
 }
 
+namespace {
+/// One "program: error: ..." line per line of a (possibly multi-line) message, so every problem
+/// a validation reports is greppable on its own.
+void report_error_lines(const std::string& message) {
+    size_t begin = 0;
+    while (begin <= message.size()) {
+        const size_t end = message.find('\n', begin);
+        const std::string line = message.substr(begin, end == std::string::npos ? std::string::npos : end - begin);
+        if (!line.empty()) log::error(line);
+        if (end == std::string::npos) break;
+        begin = end + 1;
+    }
+}
+}  // namespace
+
 int run_stage(const std::string& program, const std::string& description, int argc, char** argv,
               const std::function<void(CLI::App&)>& add_flags,
               const std::function<int(const StageOptions&)>& body) {
@@ -61,10 +76,10 @@ int run_stage(const std::string& program, const std::string& description, int ar
         if (!opt.frames.empty()) opt.frame_range = parse_frame_range(opt.frames);
         code = body(opt);
     } catch (const InputError& e) {
-        log::error(e.what());
+        report_error_lines(e.what());
         code = 1;
     } catch (const RuntimeError& e) {
-        log::error(e.what());
+        report_error_lines(e.what());
         code = 1;
     } catch (const std::exception& e) {
         log::error(std::string("unexpected failure: ") + e.what());
