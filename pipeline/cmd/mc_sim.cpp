@@ -1,0 +1,25 @@
+// mc-sim: the MPM simulation stage (issue 3). Reads DIR/init/, writes DIR/sim/.
+#include "pipeline/cmd/sim_stage.h"
+#include "pipeline/cmd/stage_cli.h"
+#include "pipeline/shot/shot.h"
+
+int main(int argc, char** argv) {
+    using namespace mudcrack;
+    SimStageOptions sim_options;
+    return run_stage(
+        "mc-sim", "MPM simulation of drying soil: writes per-frame particle caches to OUT/sim/", argc,
+        argv,
+        [&](CLI::App& app) {
+            app.add_flag("--resume", sim_options.resume,
+                         "continue from the last valid checkpoint in OUT/sim/ (bitwise identical "
+                         "caches at the same thread count)");
+            // a testing aid, hidden from --help (an empty group)
+            app.add_option("--inject-nan-at-frame", sim_options.inject_nan_at_frame,
+                           "testing: particle 0's velocity becomes NaN at the start of this frame")
+                ->group("");
+        },
+        [&](const StageOptions& options) {
+            const Shot shot = load_shot(options.shot);
+            return run_sim_stage(shot, options, sim_options);
+        });
+}

@@ -1,0 +1,148 @@
+#include "pipeline/cmd/sim_checkpoint.h"
+
+#include <algorithm>
+#include <cstdio>
+#include <cstring>
+#include <regex>
+#include <string>
+
+#include "pipeline/io/checkpoint_io.h"
+#include "sim/core/error.h"
+
+namespace fs = std::filesystem;
+
+namespace mudcrack {
+namespace {
+
+// bump when the set or meaning of the saved arrays changes; a reader refuses other versions
+constexpr int64_t kSimCheckpointVersion = 1;
+
+// Eigen fixed-size types are plain arrays of their scalar (column-major, no padding), so the
+// state's arrays are copied as raw doubles: a restored state is bitwise the saved one
+static_assert(sizeof(Vec3) == 3 * sizeof(double) && sizeof(Mat3) == 9 * sizeof(double),
+              "checkpoints store Vec3/Mat3 as packed doubles");
+
+template <class Element>
+std::vector<double> flatten(const std::vector<Element>& values) {
+    std::vector<double> flat(values.size() * (sizeof(Element) / sizeof(double)));
+    if (!flat.empty()) std::memcpy(flat.data(), values.data(), flat.size() * sizeof(double));
+    return flat;
+}
+
+// the named array as n elements of `Element` (n = 0 accepted for optional arrays)
+template <class Element>
+std::vector<Element> unflatten(const Checkpoint& c, const std::string& name, size_t n, bool is_optional) {
+    constexpr size_t kWidth = sizeof(Element) / sizeof(double);
+    const std::vector<double>& flat =
+        is_optional && c.f64.count(name) && c.f64.at(name).empty() ? c.f64.at(name)
+                                                                   : c.require_f64(name, n * kWidth);
+    std::vector<Element> values(flat.size() / kWidth);
+    if (!flat.empty()) std::memcpy(static_cast<void*>(values.data()), flat.data(), flat.size() * sizeof(double));
+    return values;
+}
+
+}  // namespace
+
+fs::path checkpoint_path(const fs::path& dir, int frame) {
+    char name[64];
+    std::snprintf(name, sizeof name, "checkpoint.%04d.bin", frame);
+    return dir / name;
+}
+
+std::vector<int> list_checkpoint_frames(const fs::path& dir) {
+    static const std::regex pattern(R"(^checkpoint\.(\d+)\.bin$)");
+    std::vector<int> frames;
+    std::error_code ec;
+    for (const fs::directory_entry& entry : fs::directory_iterator(dir, ec)) {
+        std::smatch m;
+        const std::string name = entry.path().filename().string();
+        if (std::regex_match(name, m, pattern)) frames.push_back(std::stoi(m[1]));
+    }
+    std::sort(frames.begin(), frames.end());
+    return frames;
+}
+
+void write_sim_checkpoint(const fs::path& path, const SimCheckpoint& checkpoint) {
+    const SimState& s = checkpoint.state;
+    const SimTotals& t = checkpoint.totals;
+    Checkpoint c;
+    // identity: what wrote it, for which shot slice, at which frame
+    c.meta_string["stage"] = "sim";
+    c.meta_int["sim_checkpoint_version"] = kSimCheckpointVersion;
+    c.meta_string["slice_hash"] = checkpoint.slice_hash;
+    c.meta_int["frame"] = checkpoint.frame;
+    c.meta_int["threads"] = checkpoint.threads;
+    // the state, slot order included (id maps slots to particles)
+    c.meta_double["time"] = s.time;
+    c.meta_int["step_count"] = s.step_count;
+    c.meta_int["particles"] = int64_t(s.size());
+    c.i32["id"] = s.id;
+    c.f64["x"] = flatten(s.x);
+    c.f64["v"] = flatten(s.v);
+    c.f64["C"] = flatten(s.C);
+    c.f64["Fe"] = flatten(s.Fe);
+    c.f64["J"] = s.J;
+    c.f64["alpha"] = s.alpha;
+    c.f64["V0"] = s.V0;
+    c.f64["mass"] = s.mass;
+    c.f64["theta"] = s.theta;
+    c.f64["Jw"] = s.Jw;
+    c.f64["domain_min"] = flatten(std::vector<Vec3>{s.domain_min});
+    c.f64["domain_max"] = flatten(std::vector<Vec3>{s.domain_max});
+    // the run's counters, so a resumed run's manifest covers every frame
+    c.meta_int["totals.substeps"] = t.substeps;
+    c.meta_double["totals.dt_min"] = t.dt_min;
+    c.meta_double["totals.dt_max"] = t.dt_max;
+    c.meta_int["totals.cg_iterations"] = t.cg_iterations;
+    c.meta_int["totals.cg_max"] = t.cg_max;
+    c.meta_int["totals.active_nodes_max"] = t.active_nodes_max;
+    c.meta_int["totals.allocated_nodes_max"] = t.allocated_nodes_max;
+    c.meta_double["totals.max_speed"] = t.max_speed;
+    write_checkpoint(path, c);
+}
+
+SimCheckpoint read_sim_checkpoint(const fs::path& path) {
+    const Checkpoint c = read_checkpoint(path);
+    if (c.meta_string.count("stage") == 0 || c.meta_string.at("stage") != "sim")
+        throw InputError(path.string() + ": not a simulation checkpoint (no stage = \"sim\")");
+    const int64_t version = c.require_int("sim_checkpoint_version");
+    if (version != kSimCheckpointVersion)
+        throw InputError(path.string() + ": sim_checkpoint_version = " + std::to_string(version) +
+                         ": this build reads version " + std::to_string(kSimCheckpointVersion));
+    const int64_t n_signed = c.require_int("particles");
+    if (n_signed < 0) throw InputError(path.string() + ": particles = " + std::to_string(n_signed) + ": expected >= 0");
+    const size_t n = size_t(n_signed);
+
+    SimCheckpoint sc;
+    sc.frame = int(c.require_int("frame"));
+    sc.slice_hash = c.require_string("slice_hash");
+    sc.threads = int(c.require_int("threads"));
+    SimState& s = sc.state;
+    s.time = c.require_double("time");
+    s.step_count = c.require_int("step_count");
+    s.id = c.require_i32("id", n);
+    s.x = unflatten<Vec3>(c, "x", n, false);
+    s.v = unflatten<Vec3>(c, "v", n, false);
+    s.C = unflatten<Mat3>(c, "C", n, false);
+    s.Fe = unflatten<Mat3>(c, "Fe", n, false);
+    s.J = unflatten<Real>(c, "J", n, false);
+    s.alpha = unflatten<Real>(c, "alpha", n, true);
+    s.V0 = unflatten<Real>(c, "V0", n, false);
+    s.mass = unflatten<Real>(c, "mass", n, false);
+    s.theta = unflatten<Real>(c, "theta", n, true);
+    s.Jw = unflatten<Real>(c, "Jw", n, true);
+    s.domain_min = unflatten<Vec3>(c, "domain_min", 1, false)[0];
+    s.domain_max = unflatten<Vec3>(c, "domain_max", 1, false)[0];
+    SimTotals& t = sc.totals;
+    t.substeps = c.require_int("totals.substeps");
+    t.dt_min = c.require_double("totals.dt_min");
+    t.dt_max = c.require_double("totals.dt_max");
+    t.cg_iterations = c.require_int("totals.cg_iterations");
+    t.cg_max = c.require_int("totals.cg_max");
+    t.active_nodes_max = c.require_int("totals.active_nodes_max");
+    t.allocated_nodes_max = c.require_int("totals.allocated_nodes_max");
+    t.max_speed = c.require_double("totals.max_speed");
+    return sc;
+}
+
+}  // namespace mudcrack

@@ -1,0 +1,38 @@
+#pragma once
+/// mc-sim's full-precision checkpoints (issue 3): every SimState array bit for bit (in its sorted
+/// slot order), the time and step count, the run's counters, and the shot's sim slice hash, in
+/// DIR/sim/checkpoint.####.bin (#### = the frame whose end the state is at). `--resume` restarts
+/// from one and must then produce caches bitwise identical to an uninterrupted run.
+#include <filesystem>
+#include <string>
+#include <vector>
+
+#include "pipeline/cmd/sim_frame_stepper.h"
+#include "sim/mpm/simulation.h"
+
+namespace mudcrack {
+
+/// A simulation state at the end of a frame, with what is needed to trust and continue it.
+struct SimCheckpoint {
+    int frame = 0;           // the state is at the end of this frame (time = frame / fps)
+    std::string slice_hash;  // Shot::slice_hash(Stage::Sim) of the run that wrote it
+    int threads = 0;         // worker threads of that run (bitwise determinism is per count)
+    SimState state;          // workspace is not saved (step() rebuilds it)
+    SimTotals totals;        // counters from t = 0 to the end of `frame`
+};
+
+/// "dir/checkpoint.0042.bin".
+std::filesystem::path checkpoint_path(const std::filesystem::path& dir, int frame);
+
+/// Frames of the checkpoint files in `dir` (by name only, not validated), ascending.
+std::vector<int> list_checkpoint_frames(const std::filesystem::path& dir);
+
+/// Writes a checkpoint atomically (tmp + rename) with a checksum over its contents.
+void write_sim_checkpoint(const std::filesystem::path& path, const SimCheckpoint& checkpoint);
+
+/// Reads a checkpoint written by write_sim_checkpoint. Throws InputError naming the file when it
+/// is missing, truncated, fails its checksum, is of another format, or its arrays are
+/// inconsistent (sizes differ from the particle count).
+SimCheckpoint read_sim_checkpoint(const std::filesystem::path& path);
+
+}  // namespace mudcrack

@@ -1,0 +1,41 @@
+#pragma once
+/// Advancing the simulation frame by frame (issue 3): frame k covers simulated time
+/// ((k-1)/fps, k/fps]; each frame is substepped with the stable dt, clamped so that the frame
+/// ends exactly at k/fps, and run-wide counters are accumulated for the manifest.
+#include <cstdint>
+#include <functional>
+
+#include "sim/model.h"
+#include "sim/mpm/simulation.h"
+
+namespace mudcrack {
+
+/// Counters of a run (deterministic: they depend on the simulation only, never on wall time),
+/// saved in checkpoints so a resumed run's manifest covers every frame.
+struct SimTotals {
+    int64_t substeps = 0;         // MPM steps taken
+    double dt_min = 0;            // smallest step [s] (0 until the first step)
+    double dt_max = 0;            // largest step [s]
+    int64_t cg_iterations = 0;    // moisture CG iterations, summed over substeps
+    int64_t cg_max = 0;           // most CG iterations in one substep
+    int64_t active_nodes_max = 0; // most grid nodes with mass in one substep
+    int64_t allocated_nodes_max = 0;  // most grid nodes allocated in one substep
+    double max_speed = 0;         // fastest particle seen [m/s]
+};
+
+/// End time of frame k: k / fps [s] (frame 0 ends at t = 0, the initial state).
+double frame_end_time(const SimModel& model, int frame);
+
+/// Called after every substep with the frame's substep count so far.
+using SubstepCallback = std::function<void(int frame_substeps)>;
+
+/// Advances `state` from its current time to the end of `frame` (state.time must lie before it).
+/// The last substep lands exactly on k/fps; a step that would leave a sliver shorter than half a
+/// stable step is split into two equal halves instead. Returns the number of substeps taken.
+/// @throws RuntimeError "frame K substep S (t = ..., dt = ...): <step's message>" when step()
+///         reports a non-finite state, or when the stable dt collapses (non-finite, or below
+///         1e-9 of the frame length, which would never finish).
+int advance_frame(const SimModel& model, SimState& state, int frame, SimTotals& totals,
+                  const SubstepCallback& on_substep = {});
+
+}  // namespace mudcrack

@@ -1,0 +1,333 @@
+#include "pipeline/cmd/sim_stage.h"
+
+#include <algorithm>
+#include <cstdio>
+#include <filesystem>
+#include <limits>
+#include <optional>
+#include <regex>
+#include <string>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+
+#include "pipeline/cmd/sim_checkpoint.h"
+#include "pipeline/cmd/sim_frame_stepper.h"
+#include "pipeline/cmd/sim_progress.h"
+#include "pipeline/io/manifest.h"
+#include "pipeline/io/points_io.h"
+#include "sim/core/error.h"
+#include "sim/core/log.h"
+#include "sim/core/parallel.h"
+#include "sim/core/stats.h"
+#include "sim/mpm/simulation.h"
+
+namespace fs = std::filesystem;
+
+namespace mudcrack {
+namespace {
+
+constexpr int kCheckpointsKept = 2;  // the newest two: one may be mid-write when a run is killed
+
+/// The rest state mc-init produced.
+struct InitParticles {
+    std::vector<Vec3> X;   // rest positions [m], index = particle id
+    std::vector<Real> V0;  // rest volumes [m^3]
+    nlohmann::json manifest;
+};
+
+std::string slice_hash_of(const nlohmann::json& manifest) {
+    const auto it = manifest.find("shot_slice_hash");
+    return it != manifest.end() && it->is_string() ? it->get<std::string>() : std::string();
+}
+
+// read DIR/init/ and check that it was made from this shot's init slice
+InitParticles read_init(const fs::path& init_dir, const Shot& shot) {
+    const fs::path manifest_file = init_dir / "manifest.json";
+    if (!fs::exists(manifest_file))
+        throw InputError(manifest_file.string() + ": missing: run mc-init first");
+    InitParticles init;
+    init.manifest = read_manifest(init_dir);
+    const std::string expected = shot.slice_hash(Stage::Init);
+    const std::string found = slice_hash_of(init.manifest);
+    if (found != expected)
+        throw InputError(manifest_file.string() + ": shot_slice_hash = \"" + found +
+                         "\": the init outputs are stale for this shot (its init slice hashes to \"" +
+                         expected + "\"): re-run mc-init");
+
+    const fs::path particles_file = init_dir / "particles.vdb";
+    const PointCloud cloud = read_points(particles_file);
+    const std::vector<float>* volume0 = cloud.find_float("volume0");
+    if (!volume0)
+        throw InputError(particles_file.string() + ": no volume0 attribute: expected the rest volume "
+                         "of every particle (re-run mc-init)");
+    if (volume0->size() != cloud.P.size() || cloud.id.size() != cloud.P.size())
+        throw InputError(particles_file.string() + ": " + std::to_string(cloud.P.size()) +
+                         " positions but " + std::to_string(cloud.id.size()) + " ids and " +
+                         std::to_string(volume0->size()) + " volume0 values: expected one each");
+    if (cloud.P.empty()) throw InputError(particles_file.string() + ": no particles");
+    for (size_t i = 0; i < cloud.id.size(); ++i) {
+        if (cloud.id[i] != int32_t(i))
+            throw InputError(particles_file.string() + ": particle ids are not 0.." +
+                             std::to_string(cloud.P.size() - 1) + " (slot " + std::to_string(i) +
+                             " has id " + std::to_string(cloud.id[i]) + ")");
+        if (!((*volume0)[i] > 0))
+            throw InputError(particles_file.string() + ": particle " + std::to_string(i) +
+                             " has volume0 = " + std::to_string((*volume0)[i]) + ": expected > 0");
+    }
+    init.X.reserve(cloud.P.size());
+    init.V0.reserve(cloud.P.size());
+    for (size_t i = 0; i < cloud.P.size(); ++i) {
+        init.X.push_back(cloud.P[i].cast<Real>());
+        init.V0.push_back((*volume0)[i]);
+    }
+    return init;
+}
+
+// the frame number in a file name "<stem>.<digits>.<ext>", or -1
+int frame_of(const fs::path& file, const std::string& stem, const std::string& ext) {
+    static const std::regex pattern(R"(^([A-Za-z_]+)\.(\d+)\.([a-z]+)$)");
+    std::smatch m;
+    const std::string name = file.filename().string();
+    if (!std::regex_match(name, m, pattern) || m[1] != stem || m[3] != ext) return -1;
+    return std::stoi(m[2]);
+}
+
+void remove_file(const fs::path& file) {
+    std::error_code ec;
+    fs::remove(file, ec);
+    if (ec) throw RuntimeError(file.string() + ": cannot remove: " + ec.message());
+}
+
+// remove this stage's own files in DIR/sim/: frame caches and checkpoints after frame
+// `keep_through` (all of them for -1), half-written temporaries, and the manifest
+void clear_sim_dir(const fs::path& sim_dir, int keep_through) {
+    for (const fs::directory_entry& entry : fs::directory_iterator(sim_dir)) {
+        const fs::path& file = entry.path();
+        const int cache_frame = frame_of(file, "particles", "vdb");
+        const int checkpoint_frame = frame_of(file, "checkpoint", "bin");
+        if (file.extension() == ".tmp" || file.filename() == "manifest.json" ||
+            cache_frame > keep_through || checkpoint_frame > keep_through)
+            remove_file(file);
+    }
+}
+
+// the newest checkpoint that is intact, made from this shot's sim slice, for these particles,
+// not past the last frame, and whose in-range frames are all on disk
+std::optional<SimCheckpoint> find_resume_checkpoint(const fs::path& sim_dir, const Shot& shot,
+                                                    size_t n_particles, int first, int last) {
+    std::vector<int> frames = list_checkpoint_frames(sim_dir);
+    std::reverse(frames.begin(), frames.end());
+    for (const int c : frames) {
+        const fs::path file = checkpoint_path(sim_dir, c);
+        if (c > last) {
+            log::info(file.string() + ": past the last frame " + std::to_string(last) + ", not used");
+            continue;
+        }
+        SimCheckpoint checkpoint;
+        try {
+            checkpoint = read_sim_checkpoint(file);
+        } catch (const InputError& e) {
+            log::warn("bad checkpoint", std::string(e.what()) + ": skipped");
+            continue;
+        }
+        if (checkpoint.slice_hash != shot.slice_hash(Stage::Sim)) {
+            log::warn("stale checkpoint", file.string() + ": written for another version of the shot's "
+                                          "sim settings: skipped");
+            continue;
+        }
+        if (checkpoint.state.size() != n_particles || checkpoint.frame != c) {
+            log::warn("bad checkpoint", file.string() + ": holds " + std::to_string(checkpoint.state.size()) +
+                                        " particles at frame " + std::to_string(checkpoint.frame) +
+                                        ", expected " + std::to_string(n_particles) + " at frame " +
+                                        std::to_string(c) + ": skipped");
+            continue;
+        }
+        bool has_frames = true;
+        for (int f = first; f <= c && has_frames; ++f)
+            has_frames = fs::exists(frame_path(sim_dir, "particles", f, "vdb"));
+        if (!has_frames) {
+            log::info(file.string() + ": some frames before it are missing, not used");
+            continue;
+        }
+        if (checkpoint.threads != thread_count())
+            log::warn("checkpoint threads",
+                      file.string() + ": written with " + std::to_string(checkpoint.threads) +
+                          " threads, resuming with " + std::to_string(thread_count()) +
+                          ": caches will not be bitwise identical to an uninterrupted run");
+        return checkpoint;
+    }
+    return std::nullopt;
+}
+
+// keep only the newest kCheckpointsKept checkpoints
+void prune_checkpoints(const fs::path& sim_dir) {
+    const std::vector<int> frames = list_checkpoint_frames(sim_dir);
+    for (size_t i = 0; i + kCheckpointsKept < frames.size(); ++i)
+        remove_file(checkpoint_path(sim_dir, frames[i]));
+}
+
+std::vector<std::string> attribute_names(const PointCloud& cloud) {
+    std::vector<std::string> names = {"P", "id"};
+    for (const auto& [name, values] : cloud.vec3s) names.push_back(name);
+    for (const auto& [name, values] : cloud.floats) names.push_back(name);
+    for (const auto& [name, values] : cloud.mat3s) names.push_back(name);
+    return names;
+}
+
+}  // namespace
+
+int run_sim_stage(const Shot& shot, const StageOptions& options, const SimStageOptions& sim_options) {
+    WallTimer wall;
+    const SimModel& model = shot.sim;
+    const fs::path out(options.out);
+    const fs::path sim_dir = out / "sim";
+    const InitParticles init = read_init(out / "init", shot);
+    const size_t n = init.X.size();
+
+    // the frames to write
+    const int first = options.frame_range.is_set() ? options.frame_range.first : model.time.frame_start;
+    const int last = options.frame_range.is_set() ? options.frame_range.last : model.time.frame_end;
+    if (first < 1 || last < first)
+        throw InputError(shot.path + ": frames " + std::to_string(first) + "-" + std::to_string(last) +
+                         ": expected 1 <= start <= end");
+
+    // the starting state: a checkpoint (--resume) or the rest state at t = 0 (end of "frame 0")
+    std::error_code ec;
+    fs::create_directories(sim_dir, ec);
+    if (ec) throw RuntimeError(sim_dir.string() + ": cannot create: " + ec.message());
+    std::optional<SimCheckpoint> resumed;
+    if (sim_options.resume) {
+        resumed = find_resume_checkpoint(sim_dir, shot, n, first, last);
+        if (!resumed) log::info("--resume: no usable checkpoint in " + sim_dir.string() + ", starting from t = 0");
+    }
+    SimState state;
+    SimTotals totals;
+    int done_frame = 0;  // the state is at the end of this frame
+    if (resumed) {
+        state = std::move(resumed->state);
+        totals = resumed->totals;
+        done_frame = resumed->frame;
+        log::info("resuming from " + checkpoint_path(sim_dir, done_frame).string());
+    } else {
+        state = make_initial_state(model, init.X, init.V0);
+    }
+    // the old manifest goes first, so make sees an incomplete stage until this run succeeds;
+    // stale frames and checkpoints (after the resumed one) and half-written temporaries too
+    clear_sim_dir(sim_dir, resumed ? done_frame : -1);
+
+    SimProgress progress(int64_t(n), first, last, state.time, frame_end_time(model, last), !options.quiet,
+                         stderr, is_terminal(stderr));
+    WallTimer step_timer;
+    double step_seconds = 0;          // in advance_frame only: the rate's denominator
+    const int64_t substeps_before = totals.substeps;
+    std::vector<std::string> cached_attributes;
+    int64_t state_bytes = state_memory_bytes(state);
+    for (int frame = done_frame + 1; frame <= last; ++frame) {
+        if (frame == sim_options.inject_nan_at_frame) {
+            const auto slot = std::find(state.id.begin(), state.id.end(), 0) - state.id.begin();
+            state.v[size_t(slot)] = Vec3::Constant(std::numeric_limits<Real>::quiet_NaN());
+        }
+
+        // substep to the frame's end
+        int frame_substeps = 0;
+        try {
+            step_timer.reset();
+            frame_substeps = advance_frame(model, state, frame, totals, [&](int k) {
+                progress.substep(frame, k, state.time, totals.substeps - substeps_before,
+                                 step_seconds + step_timer.seconds());
+            });
+            step_seconds += step_timer.seconds();
+        } catch (const RuntimeError& e) {
+            progress.finish();
+            const int kept = frame - 1;
+            throw RuntimeError(std::string(e.what()) +
+                               (kept >= first ? "; frames " + std::to_string(first) + "-" +
+                                                    std::to_string(kept) + " are kept in " + sim_dir.string()
+                                              : std::string()) +
+                               " (no manifest written)");
+        }
+        state_bytes = std::max(state_bytes, state_memory_bytes(state));
+
+        // the frame's cache (frames before the requested range are simulated, not written)
+        if (frame >= first) {
+            ParticleFrame particles = state_to_frame(model, state, model.cache);
+            particles.frame = frame;
+            particles.time = state.time;
+            particles.substeps = frame_substeps;
+            PointCloud cloud = frame_to_points(particles);
+            cloud.meta_string["mudcrack:stage"] = "sim";
+            cloud.meta_int["mudcrack:frame"] = frame;
+            cloud.meta_int["mudcrack:substeps"] = frame_substeps;
+            cloud.meta_double["mudcrack:time"] = state.time;
+            write_points(frame_path(sim_dir, "particles", frame, "vdb"), cloud, model.h);
+            if (cached_attributes.empty()) cached_attributes = attribute_names(cloud);
+        }
+
+        // a full-precision checkpoint every checkpoint_every frames (by absolute frame number,
+        // so a resumed run checkpoints the same frames as an uninterrupted one)
+        if (model.checkpoint_every > 0 && frame % model.checkpoint_every == 0) {
+            SimCheckpoint checkpoint;
+            checkpoint.frame = frame;
+            checkpoint.slice_hash = shot.slice_hash(Stage::Sim);
+            checkpoint.threads = thread_count();
+            checkpoint.totals = totals;
+            // lend the state to the checkpoint instead of copying it (it can be GBs)
+            checkpoint.state = std::move(state);
+            try {
+                write_sim_checkpoint(checkpoint_path(sim_dir, frame), checkpoint);
+            } catch (...) {
+                state = std::move(checkpoint.state);
+                throw;
+            }
+            state = std::move(checkpoint.state);
+            prune_checkpoints(sim_dir);
+        }
+        progress.frame_done(frame, frame_substeps, state.time, totals.substeps - substeps_before, step_seconds);
+    }
+    progress.finish();
+    if (cached_attributes.empty())  // resumed past the last frame: name what the caches hold
+        cached_attributes = attribute_names(frame_to_points(state_to_frame(model, state, model.cache)));
+
+    // the manifest, last
+    const int64_t run_substeps = totals.substeps - substeps_before;
+    const double rate = step_seconds > 0 ? double(run_substeps) * double(n) / step_seconds : 0;
+    const double cg_mean = totals.substeps > 0 ? double(totals.cg_iterations) / double(totals.substeps) : 0;
+    nlohmann::json m = make_manifest("sim", shot.path, shot.slice_hash(Stage::Sim));
+    m["inputs"] = {{"init", {{"dir", (out / "init").string()}, {"slice_hash", slice_hash_of(init.manifest)}}}};
+    m["frames"] = {{"first", first}, {"last", last}, {"count", last - first + 1}, {"fps", model.time.fps}};
+    m["particles"] = n;
+    m["threads"] = thread_count();
+    m["resumed_from_frame"] = resumed ? nlohmann::json(done_frame) : nlohmann::json(nullptr);
+    m["wall_seconds"] = wall.seconds();
+    m["step_loop_seconds"] = step_seconds;
+    m["substeps_this_run"] = run_substeps;
+    m["particle_steps_per_second"] = rate;
+    m["substeps"] = totals.substeps;
+    m["dt"] = {{"min", totals.dt_min}, {"max", totals.dt_max}};
+    m["max_speed"] = totals.max_speed;
+    m["grid_nodes"] = {{"active_max", totals.active_nodes_max}, {"allocated_max", totals.allocated_nodes_max}};
+    m["moisture"] = model.moisture.has_value();
+    m["cg_iterations"] = {{"mean_per_substep", cg_mean}, {"max", totals.cg_max}, {"total", totals.cg_iterations}};
+    m["peak_memory_bytes"] = peak_rss_bytes();
+    m["state_bytes"] = state_bytes;
+    m["bytes_per_particle"] = double(state_bytes) / double(n);
+    m["allocated"] = {{"moisture_grid", model.moisture.has_value()},
+                      {"theta", !state.theta.empty()},
+                      {"Jw", !state.Jw.empty()},
+                      {"plasticity", !state.alpha.empty()}};
+    m["cached_attributes"] = cached_attributes;
+    m["checkpoint_every"] = model.checkpoint_every;
+    std::vector<std::string> checkpoints;
+    for (const int c : list_checkpoint_frames(sim_dir)) checkpoints.push_back(checkpoint_path(sim_dir, c).filename().string());
+    m["checkpoints"] = checkpoints;
+    write_manifest(sim_dir, m);
+
+    char line[200];
+    std::snprintf(line, sizeof line, "frames %d-%d: %lld substeps, %.3g M particle-steps/s, %.0f bytes/particle",
+                  first, last, (long long)run_substeps, rate * 1e-6, double(state_bytes) / double(n));
+    log::info(line);
+    return 0;
+}
+
+}  // namespace mudcrack

@@ -1,0 +1,286 @@
+// mc-sim's checkpoints: bitwise round trip of every SimState array, corruption detection, and a
+// mid-run save/restore that continues bitwise identically to an uninterrupted run.
+#include <gtest/gtest.h>
+
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <random>
+
+#include "pipeline/cmd/sim_checkpoint.h"
+#include "pipeline/cmd/sim_frame_stepper.h"
+#include "sim/core/error.h"
+#include "sim/core/parallel.h"
+#include "sim/mpm/simulation.h"
+
+namespace fs = std::filesystem;
+using namespace mudcrack;
+
+namespace {
+
+fs::path temp_dir(const std::string& name) {
+    const fs::path dir = fs::temp_directory_path() / ("mudcrack_simstage_" + name + "_" + std::to_string(::getpid()));
+    fs::remove_all(dir);
+    fs::create_directories(dir);
+    return dir;
+}
+
+template <class T>
+bool same_bits(const std::vector<T>& a, const std::vector<T>& b) {
+    return a.size() == b.size() && (a.empty() || std::memcmp(a.data(), b.data(), a.size() * sizeof(T)) == 0);
+}
+
+bool same_bits(const Vec3& a, const Vec3& b) { return std::memcmp(a.data(), b.data(), sizeof(Vec3)) == 0; }
+
+// every array and scalar of the state, bit for bit (the workspace is scratch)
+void expect_same_state(const SimState& a, const SimState& b) {
+    EXPECT_EQ(std::memcmp(&a.time, &b.time, sizeof(double)), 0) << a.time << " vs " << b.time;
+    EXPECT_EQ(a.step_count, b.step_count);
+    EXPECT_TRUE(same_bits(a.id, b.id));
+    EXPECT_TRUE(same_bits(a.x, b.x));
+    EXPECT_TRUE(same_bits(a.v, b.v));
+    EXPECT_TRUE(same_bits(a.C, b.C));
+    EXPECT_TRUE(same_bits(a.Fe, b.Fe));
+    EXPECT_TRUE(same_bits(a.J, b.J));
+    EXPECT_TRUE(same_bits(a.alpha, b.alpha));
+    EXPECT_TRUE(same_bits(a.V0, b.V0));
+    EXPECT_TRUE(same_bits(a.mass, b.mass));
+    EXPECT_TRUE(same_bits(a.theta, b.theta));
+    EXPECT_TRUE(same_bits(a.Jw, b.Jw));
+    EXPECT_TRUE(same_bits(a.domain_min, b.domain_min));
+    EXPECT_TRUE(same_bits(a.domain_max, b.domain_max));
+}
+
+// a state with random bits in every array, including values a text format would round
+SimState random_state(size_t n, bool has_moisture, bool has_plasticity, unsigned seed) {
+    std::mt19937_64 rng(seed);
+    std::uniform_real_distribution<double> u(-1, 1);
+    SimState s;
+    s.time = 0.1 + 1e-17;
+    s.step_count = 12345;
+    for (size_t i = 0; i < n; ++i) {
+        s.id.push_back(int32_t((i * 7) % n));  // a permuted slot order
+        s.x.push_back(Vec3(u(rng), u(rng), u(rng)) / 3.0);
+        s.v.push_back(Vec3(u(rng), u(rng), u(rng)) * 1e-3);
+        s.C.push_back(Mat3::Random() / 7.0);
+        s.Fe.push_back(Mat3::Identity() + Mat3::Random() * 1e-9);
+        s.J.push_back(1 + u(rng) * 1e-13);
+        s.V0.push_back(1e-6 * (1 + u(rng)));
+        s.mass.push_back(2e-6 * (1 + u(rng)));
+        if (has_plasticity) s.alpha.push_back(std::log(0.99) + u(rng) * 1e-3);
+        if (has_moisture) {
+            s.theta.push_back(0.25 + 0.2 * u(rng));
+            s.Jw.push_back(0.5 + 0.5 * u(rng));
+        }
+    }
+    s.domain_min = Vec3(-1.0 / 3, 0, -0.7);
+    s.domain_max = Vec3(1.0 / 3, 1.1, 0.7);
+    return s;
+}
+
+SimCheckpoint sample_checkpoint(bool has_moisture, bool has_plasticity) {
+    SimCheckpoint c;
+    c.frame = 42;
+    c.slice_hash = "0123456789abcdef";
+    c.threads = 2;
+    c.state = random_state(101, has_moisture, has_plasticity, 7);
+    c.totals.substeps = 999;
+    c.totals.dt_min = 1.0 / 3e4;
+    c.totals.dt_max = 2e-4;
+    c.totals.cg_iterations = 4321;
+    c.totals.cg_max = 17;
+    c.totals.active_nodes_max = 5000;
+    c.totals.allocated_nodes_max = 8192;
+    c.totals.max_speed = 2.5;
+    return c;
+}
+
+// a tiny free-falling elastic block: 5x5x5 particles on a 0.025 m lattice, h = 0.05
+SimModel small_model() {
+    SimModel model;
+    model.h = 0.05;
+    model.elastic.youngs_modulus = 2000;
+    model.elastic.poisson_ratio = 0.35;
+    model.elastic.density = 1;
+    model.initial_velocity = Vec3(0.3, -0.5, 0.1);
+    model.ground = GroundParams{};
+    model.ground->height = 0;
+    model.time.fps = 96;  // ~24 substeps a frame: quick, yet several per frame
+    return model;
+}
+
+SimState small_state(const SimModel& model) {
+    std::vector<Vec3> X;
+    std::vector<Real> V0;
+    const double spacing = 0.025;
+    for (int i = 0; i < 5; ++i)
+        for (int j = 0; j < 5; ++j)
+            for (int k = 0; k < 5; ++k) {
+                X.push_back(Vec3(i, j + 2, k) * spacing);
+                V0.push_back(spacing * spacing * spacing);
+            }
+    return make_initial_state(model, X, V0);
+}
+
+}  // namespace
+
+TEST(SimCheckpoint, FileNames) {
+    EXPECT_EQ(checkpoint_path("out/sim", 7).string(), "out/sim/checkpoint.0007.bin");
+    const fs::path dir = temp_dir("names");
+    for (int f : {12, 3, 100}) std::ofstream(checkpoint_path(dir, f)) << "x";
+    std::ofstream(dir / "checkpoint.0005.bin.tmp") << "half-written";
+    std::ofstream(dir / "particles.0004.vdb") << "not a checkpoint";
+    EXPECT_EQ(list_checkpoint_frames(dir), (std::vector<int>{3, 12, 100}));
+    fs::remove_all(dir);
+}
+
+TEST(SimCheckpoint, RoundTripIsBitwise) {
+    const fs::path dir = temp_dir("roundtrip");
+    for (const bool has_moisture : {false, true}) {
+        for (const bool has_plasticity : {false, true}) {
+            const SimCheckpoint saved = sample_checkpoint(has_moisture, has_plasticity);
+            const fs::path file = checkpoint_path(dir, saved.frame);
+            write_sim_checkpoint(file, saved);
+            const SimCheckpoint read = read_sim_checkpoint(file);
+            EXPECT_EQ(read.frame, saved.frame);
+            EXPECT_EQ(read.slice_hash, saved.slice_hash);
+            EXPECT_EQ(read.threads, saved.threads);
+            expect_same_state(saved.state, read.state);
+            EXPECT_EQ(read.state.theta.empty(), !has_moisture);
+            EXPECT_EQ(read.state.alpha.empty(), !has_plasticity);
+            EXPECT_EQ(read.totals.substeps, saved.totals.substeps);
+            EXPECT_EQ(read.totals.dt_min, saved.totals.dt_min);
+            EXPECT_EQ(read.totals.dt_max, saved.totals.dt_max);
+            EXPECT_EQ(read.totals.cg_iterations, saved.totals.cg_iterations);
+            EXPECT_EQ(read.totals.cg_max, saved.totals.cg_max);
+            EXPECT_EQ(read.totals.active_nodes_max, saved.totals.active_nodes_max);
+            EXPECT_EQ(read.totals.allocated_nodes_max, saved.totals.allocated_nodes_max);
+            EXPECT_EQ(read.totals.max_speed, saved.totals.max_speed);
+            EXPECT_FALSE(fs::exists(file.string() + ".tmp"));
+        }
+    }
+    fs::remove_all(dir);
+}
+
+TEST(SimCheckpoint, SavesEveryStateField) {
+    // SimState's size changes when a field is added; the checkpoint must then save it too
+    // (sim_checkpoint.cpp), or a resumed run silently diverges. Update this number with it.
+    constexpr size_t kVectors = 11, kVec3s = 2;
+    constexpr size_t kExpected = sizeof(double) + sizeof(int64_t) + kVectors * sizeof(std::vector<Real>) +
+                                 kVec3s * sizeof(Vec3) + sizeof(std::shared_ptr<SimWorkspace>);
+    EXPECT_EQ(sizeof(SimState), kExpected) << "SimState gained or lost a field: update sim_checkpoint.cpp";
+}
+
+TEST(SimCheckpoint, CorruptionAndTruncationAreRefused) {
+    const fs::path dir = temp_dir("corrupt");
+    const fs::path file = checkpoint_path(dir, 1);
+    write_sim_checkpoint(file, sample_checkpoint(true, true));
+    const auto size = fs::file_size(file);
+
+    // one flipped bit in the middle of the particle data
+    const fs::path flipped = dir / "flipped.bin";
+    fs::copy_file(file, flipped);
+    {
+        std::fstream f(flipped, std::ios::in | std::ios::out | std::ios::binary);
+        f.seekg(std::streamoff(size / 2));
+        char byte = 0;
+        f.read(&byte, 1);
+        byte ^= 0x10;
+        f.seekp(std::streamoff(size / 2));
+        f.write(&byte, 1);
+    }
+    try {
+        read_sim_checkpoint(flipped);
+        ADD_FAILURE() << "a corrupt checkpoint was accepted";
+    } catch (const InputError& e) {
+        EXPECT_NE(std::string(e.what()).find("flipped.bin"), std::string::npos) << e.what();
+    }
+
+    // a file cut short (a killed writer that bypassed the atomic rename)
+    const fs::path cut = dir / "cut.bin";
+    fs::copy_file(file, cut);
+    fs::resize_file(cut, size - 100);
+    EXPECT_THROW(read_sim_checkpoint(cut), InputError);
+    EXPECT_THROW(read_sim_checkpoint(dir / "missing.bin"), InputError);
+    fs::remove_all(dir);
+}
+
+// the stepping logic is thread-agnostic: one thread keeps these quick on a loaded machine
+class SimFrameStepper : public ::testing::Test {
+protected:
+    void SetUp() override { set_thread_count(1); }
+    void TearDown() override { set_thread_count(0); }
+};
+
+TEST_F(SimFrameStepper, FramesEndExactlyOnTheFrameTime) {
+    const SimModel model = small_model();
+    SimState state = small_state(model);
+    SimTotals totals;
+    for (int frame = 1; frame <= 3; ++frame) {
+        const int substeps = advance_frame(model, state, frame, totals);
+        EXPECT_GE(substeps, 1);
+        EXPECT_EQ(state.time, double(frame) / model.time.fps) << "frame " << frame;
+    }
+    EXPECT_EQ(state.step_count, totals.substeps);
+    EXPECT_LE(totals.dt_max, stable_dt(model, small_state(model)) * (1 + 1e-12));
+    EXPECT_GT(totals.dt_min, 0);
+}
+
+TEST_F(SimFrameStepper, FixedStepSplitsTheRemainderInsteadOfASliver) {
+    SimModel model = small_model();
+    const double frame_length = 1.0 / model.time.fps;
+    model.time.dt_fixed = frame_length / 2.5;  // 2.5 steps a frame: dt, then 0.75 dt twice
+    SimState state = small_state(model);
+    SimTotals totals;
+    EXPECT_EQ(advance_frame(model, state, 1, totals), 3);
+    EXPECT_EQ(totals.dt_max, model.time.dt_fixed);
+    EXPECT_NEAR(totals.dt_min, 0.75 * model.time.dt_fixed, 1e-12 * frame_length);
+    EXPECT_EQ(state.time, frame_length);
+}
+
+TEST_F(SimFrameStepper, CollapsedStepNamesFrameAndParticle) {
+    const SimModel model = small_model();
+    SimState state = small_state(model);
+    SimTotals totals;
+    // one particle so fast that the velocity bound on dt is ~1e-302 s
+    size_t slot = 0;
+    while (state.id[slot] != 17) ++slot;
+    state.v[slot] = Vec3(0, 1e300, 0);
+    try {
+        advance_frame(model, state, 1, totals);
+        ADD_FAILURE() << "a collapsed time step went unnoticed";
+    } catch (const RuntimeError& e) {
+        const std::string msg = e.what();
+        EXPECT_NE(msg.find("frame 1 substep 1"), std::string::npos) << msg;
+        EXPECT_NE(msg.find("particle 17"), std::string::npos) << msg;
+    }
+}
+
+TEST_F(SimFrameStepper, ResumeFromCheckpointIsBitwiseIdentical) {
+    set_thread_count(2);  // bitwise determinism is promised per thread count: test the parallel path
+    SimModel model = small_model();
+    model.time.fps = 192;  // ~12 substeps a frame: 3 frames cross the particle re-sorts (every 16)
+    const fs::path dir = temp_dir("resume");
+
+    // uninterrupted: frames 1-3
+    SimState straight = small_state(model);
+    SimTotals straight_totals;
+    for (int frame = 1; frame <= 3; ++frame) advance_frame(model, straight, frame, straight_totals);
+
+    // interrupted after frame 1: saved, read back into a fresh state (no workspace), continued
+    SimState first_part = small_state(model);
+    SimCheckpoint saved;
+    advance_frame(model, first_part, 1, saved.totals);
+    saved.frame = 1;
+    saved.state = first_part;
+    write_sim_checkpoint(checkpoint_path(dir, 1), saved);
+    SimCheckpoint resumed = read_sim_checkpoint(checkpoint_path(dir, 1));
+    EXPECT_EQ(resumed.state.workspace, nullptr);
+    for (int frame = 2; frame <= 3; ++frame) advance_frame(model, resumed.state, frame, resumed.totals);
+
+    EXPECT_GT(straight.step_count, 32);
+    expect_same_state(straight, resumed.state);
+    EXPECT_EQ(resumed.totals.substeps, straight_totals.substeps);
+    EXPECT_EQ(resumed.totals.dt_min, straight_totals.dt_min);
+    fs::remove_all(dir);
+}
