@@ -85,6 +85,7 @@ void print_summary(const InitParams& params, const InitResult& r, double build_s
     std::printf("  %-22s %14.0f\n", "tets/s", q.tets / build_seconds);
     std::printf("  %-22s %14.2f\n", "total [s]", wall_seconds);
     std::printf("  %-22s %14.1f\n", "peak memory [MiB]", peak_rss_bytes() / 1048576.0);
+    std::fflush(stdout);  // before run_stage's closing log line on stderr
 }
 
 int run_init(const StageOptions& opt, bool parallel_mesh) {

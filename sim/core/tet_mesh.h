@@ -1,6 +1,7 @@
 #pragma once
 /// The rest-space tetrahedral mesh made by mc-init: every vertex is an MPM particle (its index
 /// is the particle id). Read by the simulation (rest volumes) and the surfacing (particle cores).
+#include <Eigen/Geometry>  // cross() in signed_tet_volume
 #include <vector>
 
 #include "sim/core/types.h"

@@ -1,0 +1,126 @@
+#include "pipeline/init/init_builder.h"
+
+#include <algorithm>
+#include <cmath>
+#include <sstream>
+
+#include "pipeline/init/boundary_uv.h"
+#include "pipeline/init/heightfield.h"
+#include "pipeline/init/lattice.h"
+#include "pipeline/init/surface_check.h"
+#include "sim/core/error.h"
+#include "sim/core/log.h"
+#include "sim/core/stats.h"
+
+namespace mudcrack {
+namespace {
+
+std::string num(Real v) {
+    std::ostringstream s;
+    s << v;
+    return s.str();
+}
+
+}  // namespace
+
+Real default_edge_length(Real h) { return Real(0.6) * h; }
+
+MesherOptions mesher_options(const InitParams& params, Real h) {
+    MesherOptions o;
+    o.edge_length = params.edge_length > 0 ? params.edge_length : default_edge_length(h);
+    o.seed = params.seed;
+    return o;
+}
+
+InputSurface load_placed_surface(const MeshSource& source) {
+    InputSurface surface = load_input_surface(source.path);
+    for (Vec3& p : surface.positions) p = source.scale * p + source.translate;
+    if (source.fit_to_ground && !surface.positions.empty()) {
+        Real lowest = surface.positions[0].y();
+        for (const Vec3& p : surface.positions) lowest = std::min(lowest, p.y());
+        for (Vec3& p : surface.positions) p.y() -= lowest;
+    }
+    return surface;
+}
+
+InitResult finish_tet_mesh(TetMesh mesh, const InputSurface* uv_source) {
+    drop_unused_vertices(mesh);
+    if (const int64_t bad = count_non_positive_tets(mesh); bad > 0)
+        throw RuntimeError("init mesh: " + std::to_string(bad) + " of " + std::to_string(mesh.tets.size()) +
+                           " tets have non-positive volume");
+    mesh.boundary = extract_boundary_faces(mesh.tets);
+    InitResult r;
+    if (uv_source && !uv_source->face_uv.empty()) {
+        mesh.boundary_uv = transfer_boundary_uvs(*uv_source, mesh.X, mesh.boundary);
+        r.uv_method = "transferred";
+    } else {
+        mesh.boundary_uv = project_boundary_uvs(mesh.X, mesh.boundary);
+        r.uv_method = "box projection";
+    }
+    r.volume0 = particle_rest_volumes(mesh);
+    r.quality = measure_quality(mesh);
+    r.mesh = std::move(mesh);
+    return r;
+}
+
+InitResult build_init(const InitParams& params, const MesherOptions& mesher) {
+    WallTimer timer;
+    InitResult r;
+    switch (params.type) {
+        case SourceType::Box:
+            r = finish_tet_mesh(make_box_tets(params.box, params.seed), nullptr);
+            break;
+        case SourceType::Heightfield:
+            r = finish_tet_mesh(make_heightfield_tets(params.heightfield), nullptr);
+            break;
+        case SourceType::Mesh: {
+            if (params.mesh.path.empty())
+                throw InputError("/source/mesh/path: missing: a mesh source needs a surface file");
+            const InputSurface surface = load_placed_surface(params.mesh);
+            const Real surface_volume = check_input_surface(surface, params.mesh.path);
+            Vec3 lo = surface.positions[0], hi = lo;
+            for (const Vec3& x : surface.positions) lo = lo.cwiseMin(x), hi = hi.cwiseMax(x);
+            if (mesher.edge_length > (hi - lo).maxCoeff())
+                throw InputError("/init/edge_length = " + num(mesher.edge_length) + " m: larger than " +
+                                 params.mesh.path + " itself (largest extent " + num((hi - lo).maxCoeff()) +
+                                 " m after scaling); expected a fraction of it");
+            // a quality Mesh_3 mesh has about one vertex per 0.55 L^3 (see default_edge_length)
+            const double expected = surface_volume / (0.55 * std::pow(mesher.edge_length, 3));
+            if (expected > kMaxInitParticles)
+                throw InputError("/init/edge_length = " + num(mesher.edge_length) + " m: would make ~" +
+                                 num(expected) + " particles from " + params.mesh.path + " (volume " +
+                                 num(surface_volume) + " m^3); expected at most " + num(kMaxInitParticles) +
+                                 ": raise the edge length (or /sim/h when it is derived)");
+            log::info("input surface " + params.mesh.path + ": " + std::to_string(surface.positions.size()) +
+                      " vertices, " + std::to_string(surface.faces.size()) + " triangles, volume " +
+                      num(surface_volume) + " m^3");
+            WallTimer mesh_timer;
+            TetMesh tets = tetrahedralize_surface(surface, mesher);
+            log::info("CGAL Mesh_3 (" + std::string(mesher.parallel ? "parallel" : "sequential") +
+                      ", edge length " + num(mesher.edge_length) + " m): " + std::to_string(tets.tets.size()) +
+                      " tets in " + num(mesh_timer.seconds()) + " s");
+            r = finish_tet_mesh(std::move(tets), &surface);
+            r.surface_volume = surface_volume;
+            r.edge_length = mesher.edge_length;
+            break;
+        }
+    }
+    const MeshQuality& q = r.quality;
+    std::ostringstream msg;
+    msg << source_type_name(params.type) << ": " << q.particles << " particles, " << q.tets << " tets, "
+        << q.boundary_faces << " boundary faces (UVs: " << r.uv_method << "), dihedral angles "
+        << q.min_dihedral_deg << " to " << q.max_dihedral_deg << " deg, mean edge " << q.mean_edge_length
+        << " m, volume " << q.tet_volume << " m^3";
+    if (r.surface_volume > 0)
+        msg << " (" << 100 * (q.tet_volume / r.surface_volume - 1) << " % vs the input surface)";
+    msg << ", built in " << timer.seconds() << " s";
+    log::info(msg.str());
+    return r;
+}
+
+InitResult build_init(const InitParams& params, Real h) {
+    if (!(h > 0)) throw InputError("/sim/h = " + num(h) + ": must be > 0 [m]");
+    return build_init(params, mesher_options(params, h));
+}
+
+}  // namespace mudcrack

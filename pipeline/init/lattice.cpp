@@ -1,0 +1,171 @@
+#include "pipeline/init/lattice.h"
+
+#include <algorithm>
+#include <cmath>
+#include <random>
+#include <sstream>
+
+#include "pipeline/init/tet_mesh_ops.h"
+#include "sim/core/error.h"
+
+namespace mudcrack {
+namespace {
+
+/// A uniform double in [0, 1) from mt19937's raw output (the standard fixes mt19937's sequence
+/// but not uniform_real_distribution's, so this keeps jitter identical across compilers).
+Real uniform01(std::mt19937& rng) { return static_cast<Real>(rng()) / 4294967296.0; }
+
+/// A uniform point in the unit ball (rejection from the cube).
+Vec3 uniform_in_ball(std::mt19937& rng) {
+    for (;;) {
+        const Vec3 p(2 * uniform01(rng) - 1, 2 * uniform01(rng) - 1, 2 * uniform01(rng) - 1);
+        if (p.squaredNorm() <= 1) return p;
+    }
+}
+
+/// For each vertex, the tets that use it (CSR: tets of v are ids[offset[v] .. offset[v+1])).
+struct VertexTets {
+    std::vector<int32_t> offset, ids;
+};
+
+VertexTets vertex_tets(size_t n_vertices, const std::vector<Tet>& tets) {
+    VertexTets vt;
+    vt.offset.assign(n_vertices + 1, 0);
+    for (const Tet& t : tets)
+        for (int32_t v : t) ++vt.offset[v + 1];
+    for (size_t v = 0; v < n_vertices; ++v) vt.offset[v + 1] += vt.offset[v];
+    vt.ids.resize(vt.offset.back());
+    std::vector<int32_t> fill(vt.offset.begin(), vt.offset.end() - 1);
+    for (size_t t = 0; t < tets.size(); ++t)
+        for (int32_t v : tets[t]) vt.ids[fill[v]++] = static_cast<int32_t>(t);
+    return vt;
+}
+
+std::string vec_text(const Vec3& v) {
+    std::ostringstream s;
+    s << "[" << v.x() << ", " << v.y() << ", " << v.z() << "]";
+    return s.str();
+}
+
+}  // namespace
+
+int lattice_cells(Real extent, Real spacing) {
+    return std::max(1, static_cast<int>(std::lround(extent / spacing)));
+}
+
+std::vector<Tet> kuhn_tets(int nx, int ny, int nz) {
+    // the 6 monotone paths from corner (0,0,0) to (1,1,1), one per axis permutation; a tet's
+    // orientation is the permutation's sign, so odd ones swap their last two corners
+    static constexpr int kPerm[6][3] = {{0, 1, 2}, {1, 2, 0}, {2, 0, 1},   // even
+                                        {0, 2, 1}, {2, 1, 0}, {1, 0, 2}};  // odd
+    std::vector<Tet> tets;
+    tets.reserve(static_cast<size_t>(6) * nx * ny * nz);
+    for (int k = 0; k < nz; ++k)
+        for (int j = 0; j < ny; ++j)
+            for (int i = 0; i < nx; ++i)
+                for (int p = 0; p < 6; ++p) {
+                    int c[3] = {i, j, k};
+                    Tet t;
+                    t[0] = lattice_index(c[0], c[1], c[2], nx, ny);
+                    for (int s = 0; s < 3; ++s) {
+                        ++c[kPerm[p][s]];
+                        t[s + 1] = lattice_index(c[0], c[1], c[2], nx, ny);
+                    }
+                    if (p >= 3) std::swap(t[2], t[3]);
+                    tets.push_back(t);
+                }
+    return tets;
+}
+
+TetMesh make_box_tets(const BoxSource& box, unsigned seed) {
+    const Vec3 extent = box.max - box.min;
+    if (!(extent.minCoeff() > 0))
+        throw InputError("/source/box: min = " + vec_text(box.min) + ", max = " + vec_text(box.max) +
+                         ": max must exceed min on every axis");
+    if (!(box.spacing > 0))
+        throw InputError("/source/box/spacing = " + std::to_string(box.spacing) + ": must be > 0 [m]");
+    const int n[3] = {lattice_cells(extent.x(), box.spacing), lattice_cells(extent.y(), box.spacing),
+                      lattice_cells(extent.z(), box.spacing)};
+    const double points = double(n[0] + 1) * (n[1] + 1) * (n[2] + 1);
+    if (points > kMaxInitParticles)
+        throw InputError("/source/box/spacing = " + std::to_string(box.spacing) + ": gives " +
+                         std::to_string(points) + " particles; expected at most " +
+                         std::to_string(kMaxInitParticles));
+    const Vec3 step(extent.x() / n[0], extent.y() / n[1], extent.z() / n[2]);
+
+    TetMesh mesh;
+    mesh.X.resize(static_cast<size_t>(points));
+    for (int k = 0; k <= n[2]; ++k)
+        for (int j = 0; j <= n[1]; ++j)
+            for (int i = 0; i <= n[0]; ++i)
+                mesh.X[lattice_index(i, j, k, n[0], n[1])] =
+                    box.min + Vec3(i * step.x(), j * step.y(), k * step.z());
+    // the far faces sit exactly on max, not on min + n * step (which may round differently)
+    for (int k = 0; k <= n[2]; ++k)
+        for (int j = 0; j <= n[1]; ++j)
+            for (int i = 0; i <= n[0]; ++i) {
+                Vec3& x = mesh.X[lattice_index(i, j, k, n[0], n[1])];
+                if (i == n[0]) x.x() = box.max.x();
+                if (j == n[1]) x.y() = box.max.y();
+                if (k == n[2]) x.z() = box.max.z();
+            }
+    mesh.tets = kuhn_tets(n[0], n[1], n[2]);
+
+    if (box.lattice == Lattice::Jittered && box.jitter > 0) {
+        // move interior points only, so the slab's faces stay flat and its volume exact; a
+        // move that would squash an incident tet below kMinFraction of its volume is re-drawn
+        constexpr Real kMinFraction = 0.2;
+        constexpr int kTries = 8;
+        const Real radius = box.jitter * step.minCoeff();
+        const Real min_volume = kMinFraction * step.prod() / 6;  // every Kuhn tet is a sixth
+        const VertexTets vt = vertex_tets(mesh.X.size(), mesh.tets);
+        std::mt19937 rng(seed);
+        for (int k = 1; k < n[2]; ++k)
+            for (int j = 1; j < n[1]; ++j)
+                for (int i = 1; i < n[0]; ++i) {
+                    const int32_t v = lattice_index(i, j, k, n[0], n[1]);
+                    const Vec3 rest = mesh.X[v];
+                    for (int attempt = 0; attempt < kTries; ++attempt) {
+                        mesh.X[v] = rest + radius * uniform_in_ball(rng);
+                        bool is_ok = true;
+                        for (int32_t e = vt.offset[v]; e < vt.offset[v + 1] && is_ok; ++e) {
+                            const Tet& t = mesh.tets[vt.ids[e]];
+                            is_ok = signed_tet_volume(mesh.X[t[0]], mesh.X[t[1]], mesh.X[t[2]],
+                                                      mesh.X[t[3]]) > min_volume;
+                        }
+                        if (is_ok) break;
+                        mesh.X[v] = rest;
+                    }
+                }
+    }
+    return mesh;
+}
+
+TetMesh make_column_lattice_tets(Real x0, Real z0, Real sx, Real sz, int nx, int ny, int nz,
+                                 const std::vector<Real>& top) {
+    TetMesh mesh;
+    mesh.X.resize(static_cast<size_t>(nx + 1) * (ny + 1) * (nz + 1));
+    for (int k = 0; k <= nz; ++k)
+        for (int i = 0; i <= nx; ++i) {
+            const Real x = x0 + sx * i / nx, z = z0 + sz * k / nz;
+            const Real h = top[i + (nx + 1) * k];
+            if (!(h > 0)) {
+                std::ostringstream msg;
+                msg << "heightfield column at (x, z) = (" << x << ", " << z << ") has top y = " << h
+                    << ": expected > 0";
+                throw RuntimeError(msg.str());
+            }
+            for (int j = 0; j <= ny; ++j)
+                mesh.X[lattice_index(i, j, k, nx, ny)] = Vec3(x, h * j / ny, z);
+        }
+    mesh.tets = kuhn_tets(nx, ny, nz);
+    // stretching columns vertically keeps Kuhn tets positive for any positive heights; check
+    // anyway, since a wrong sign here would silently produce negative particle volumes
+    const int64_t bad = count_non_positive_tets(mesh);
+    if (bad > 0)
+        throw RuntimeError("heightfield lattice: " + std::to_string(bad) +
+                           " tets are not positively oriented");
+    return mesh;
+}
+
+}  // namespace mudcrack

@@ -1,0 +1,213 @@
+// The mesh source: input surface checks (CGAL PMP), Mesh_3 tetrahedralization, UV transfer,
+// and the bunny at default sizing.
+#include <gtest/gtest.h>
+#include <unistd.h>
+
+#include <filesystem>
+#include <fstream>
+
+#include "init_test_util.h"
+#include "pipeline/init/boundary_uv.h"
+#include "pipeline/init/cgal_mesher.h"
+#include "pipeline/init/init_builder.h"
+#include "pipeline/init/surface_check.h"
+#include "sim/core/error.h"
+#include "sim/model.h"
+
+namespace mudcrack {
+namespace {
+
+namespace fs = std::filesystem;
+
+/// Expects check_input_surface to refuse `s`, with a message containing every needle.
+void expect_refused(const InputSurface& s, const std::vector<std::string>& needles) {
+    try {
+        check_input_surface(s, "bad.off");
+        ADD_FAILURE() << "expected InputError";
+    } catch (const InputError& e) {
+        const std::string msg = e.what();
+        for (const std::string& n : needles)
+            EXPECT_NE(msg.find(n), std::string::npos) << "message: " << msg << "\nmissing: " << n;
+    }
+}
+
+/// Appends `b` to `a`, welding vertices at identical positions.
+InputSurface merged(const InputSurface& a, const InputSurface& b) {
+    InputSurface s = a;
+    std::vector<int32_t> id(b.positions.size());
+    for (size_t v = 0; v < b.positions.size(); ++v) {
+        const auto it = std::find(s.positions.begin(), s.positions.end(), b.positions[v]);
+        id[v] = static_cast<int32_t>(it - s.positions.begin());
+        if (it == s.positions.end()) s.positions.push_back(b.positions[v]);
+    }
+    for (const Tri& f : b.faces) s.faces.push_back({id[f[0]], id[f[1]], id[f[2]]});
+    return s;
+}
+
+InputSurface shifted(InputSurface s, const Vec3& d) {
+    for (Vec3& p : s.positions) p += d;
+    return s;
+}
+
+TEST(InitSurfaceCheck, ClosedCubeAndSpherePassWithTheirVolume) {
+    EXPECT_NEAR(check_input_surface(test::unit_cube(), "cube"), 1.0, tol::kRoundoff);
+    const InputSurface sphere = test::icosphere(0.5, 3);
+    EXPECT_NEAR(check_input_surface(sphere, "sphere"), enclosed_volume(sphere), tol::kRoundoff);
+    EXPECT_NEAR(enclosed_volume(sphere), 4.0 / 3 * M_PI * 0.125, 0.02 * 4.0 / 3 * M_PI * 0.125);
+}
+
+TEST(InitSurfaceCheck, OpenMeshNamesItsBorderEdgeCount) {
+    InputSurface s = test::unit_cube();
+    s.faces.erase(s.faces.begin(), s.faces.begin() + 2);  // the z = 0 side: a square hole
+    expect_refused(s, {"bad.off", "4 border edges", "not closed", "first at ("});
+}
+
+TEST(InitSurfaceCheck, OneFlippedFaceIsInconsistentOrientation) {
+    InputSurface s = test::unit_cube();
+    std::swap(s.faces[5][1], s.faces[5][2]);
+    expect_refused(s, {"bad.off", "3 edges whose two faces have opposite orientations"});
+}
+
+TEST(InitSurfaceCheck, InsideOutMeshHasNegativeVolume) {
+    InputSurface s = test::unit_cube();
+    for (Tri& f : s.faces) std::swap(f[1], f[2]);
+    expect_refused(s, {"bad.off", "enclosed volume = -1", "inside out"});
+}
+
+TEST(InitSurfaceCheck, OverlappingShellsSelfIntersect) {
+    const InputSurface s = merged(test::unit_cube(), shifted(test::unit_cube(), Vec3(0.5, 0.3, 0.2)));
+    expect_refused(s, {"bad.off", "pairs of self-intersecting faces", "near ("});
+}
+
+TEST(InitSurfaceCheck, CubesTouchingAtAnEdgeOrAVertexAreNonManifold) {
+    expect_refused(merged(test::unit_cube(), shifted(test::unit_cube(), Vec3(1, 1, 0))),
+                   {"bad.off", "non-manifold edges (shared by more than two faces)"});
+    expect_refused(merged(test::unit_cube(), shifted(test::unit_cube(), Vec3(1, 1, 1))),
+                   {"bad.off", "1 non-manifold vertices", "(1, 1, 1)"});
+}
+
+TEST(InitMesher, SphereIsFilledWithPositiveTetsAndAClosedBoundary) {
+    const InputSurface sphere = test::icosphere(0.5, 3);
+    MesherOptions o;
+    o.edge_length = 0.1;
+    const InitResult r = finish_tet_mesh(tetrahedralize_surface(sphere, o), &sphere);
+    EXPECT_GT(r.quality.particles, 200);
+    test::expect_all_tets_positive(r.mesh);
+    test::expect_no_unused_vertices(r.mesh);
+    test::expect_volume_conserved(r.mesh, r.volume0);
+    test::expect_closed_outward_boundary(r.mesh);
+    test::expect_finite_boundary_uvs(r.mesh);
+    EXPECT_EQ(r.uv_method, "box projection");
+    EXPECT_NEAR(r.quality.tet_volume / enclosed_volume(sphere), 1.0, 0.03);
+    // the boundary vertices lie on the input sphere (within the facet distance)
+    for (const Tri& f : r.mesh.boundary)
+        for (int32_t v : f) EXPECT_NEAR(r.mesh.X[v].norm(), 0.5, 0.01);
+    EXPECT_NEAR(r.quality.mean_edge_length / o.edge_length, 1.0, 0.25);
+}
+
+TEST(InitMesher, SameSeedGivesTheSameMesh) {
+    const InputSurface sphere = test::icosphere(0.5, 2);
+    MesherOptions o;
+    o.edge_length = 0.12;
+    const TetMesh a = tetrahedralize_surface(sphere, o), b = tetrahedralize_surface(sphere, o);
+    EXPECT_EQ(a.X, b.X);
+    EXPECT_EQ(a.tets, b.tets);
+}
+
+TEST(InitMesher, CubeKeepsItsSharpCornersAndVolume) {
+    MesherOptions o;
+    o.edge_length = 0.2;
+    const InitResult r = finish_tet_mesh(tetrahedralize_surface(test::unit_cube(), o), nullptr);
+    EXPECT_NEAR(r.quality.tet_volume, 1.0, 1e-6);
+    EXPECT_NEAR(r.quality.bbox_min.norm(), 0.0, 1e-9);
+    EXPECT_NEAR((r.quality.bbox_max - Vec3(1, 1, 1)).norm(), 0.0, 1e-9);
+    test::expect_closed_outward_boundary(r.mesh);
+}
+
+TEST(InitMesher, UVsAreTransferredFromTheInputSurface) {
+    // UVs that are a linear function of position are reproduced exactly at the closest point,
+    // so each corner's UV must match the function at the corner up to the facet distance
+    InputSurface sphere = test::icosphere(0.5, 3);
+    auto uv_of = [](const Vec3& p) { return Vec2(p.x() + 0.5, 0.25 * p.z() + 0.5); };
+    for (const Tri& f : sphere.faces)
+        sphere.face_uv.push_back({uv_of(sphere.positions[f[0]]), uv_of(sphere.positions[f[1]]), uv_of(sphere.positions[f[2]])});
+    MesherOptions o;
+    o.edge_length = 0.1;
+    const InitResult r = finish_tet_mesh(tetrahedralize_surface(sphere, o), &sphere);
+    EXPECT_EQ(r.uv_method, "transferred");
+    test::expect_finite_boundary_uvs(r.mesh);
+    for (size_t f = 0; f < r.mesh.boundary.size(); ++f)
+        for (int c = 0; c < 3; ++c)
+            EXPECT_LT((r.mesh.boundary_uv[f][c] - uv_of(r.mesh.X[r.mesh.boundary[f][c]])).norm(), 0.01)
+                << "face " << f << " corner " << c;
+}
+
+/// The unit cube as an OFF file in the temp folder (removed by the caller).
+fs::path write_cube_off(const std::string& stem) {
+    const fs::path file = fs::temp_directory_path() / ("mudcrack_init_" + stem + "_" + std::to_string(::getpid()) + ".off");
+    const InputSurface cube = test::unit_cube();
+    std::ofstream os(file);
+    os << "OFF\n" << cube.positions.size() << " " << cube.faces.size() << " 0\n";
+    for (const Vec3& p : cube.positions) os << p.x() << " " << p.y() << " " << p.z() << "\n";
+    for (const Tri& f : cube.faces) os << "3 " << f[0] << " " << f[1] << " " << f[2] << "\n";
+    return file;
+}
+
+TEST(InitMeshSource, EdgeLengthFarTooSmallOrTooLargeIsAnInputError) {
+    const fs::path file = write_cube_off("sizing");
+    InitParams p;
+    p.type = SourceType::Mesh;
+    p.mesh.path = file.string();
+    for (Real edge : {1e-4, 5.0}) {
+        p.edge_length = edge;
+        try {
+            build_init(p, 0.05);
+            ADD_FAILURE() << "expected InputError for edge_length " << edge;
+        } catch (const InputError& e) {
+            EXPECT_NE(std::string(e.what()).find("/init/edge_length"), std::string::npos) << e.what();
+        }
+    }
+    fs::remove(file);
+}
+
+TEST(InitMeshSource, LoadedSurfaceIsScaledTranslatedAndSetOnTheGround) {
+    const fs::path file = write_cube_off("cube");
+    MeshSource src;
+    src.path = file.string();
+    src.scale = 2;
+    src.translate = Vec3(1, 5, 0);
+    src.fit_to_ground = true;
+    const InputSurface s = load_placed_surface(src);
+    fs::remove(file);
+    Vec3 lo = s.positions[0], hi = lo;
+    for (const Vec3& p : s.positions) lo = lo.cwiseMin(p), hi = hi.cwiseMax(p);
+    EXPECT_NEAR((lo - Vec3(1, 0, 0)).norm(), 0, tol::kRoundoff);
+    EXPECT_NEAR((hi - Vec3(3, 2, 2)).norm(), 0, tol::kRoundoff);
+    EXPECT_NEAR(check_input_surface(s, src.path), 8.0, 1e-9);
+}
+
+TEST(InitMeshSource, BunnyAtDefaultSizingKeepsItsVolumeWithinTwoPercent) {
+    const fs::path bunny = fs::path(MUDCRACK_SOURCE_DIR) / "shots/assets/bunny00.off";
+    ASSERT_TRUE(fs::exists(bunny)) << bunny << " is missing: run `make assets` in " << MUDCRACK_SOURCE_DIR
+                                   << " (extracts it from Debian's libcgal-demo)";
+    InitParams p;
+    p.type = SourceType::Mesh;
+    p.mesh.path = bunny.string();
+    p.mesh.scale = 1;      // ~1 m tall
+    p.edge_length = 0;     // default: 0.6 h
+    const Real h = SimModel{}.h;
+    const InitResult r = build_init(p, h);
+    EXPECT_DOUBLE_EQ(r.edge_length, default_edge_length(h));
+    ASSERT_GT(r.surface_volume, 0);
+    EXPECT_NEAR(r.quality.tet_volume / r.surface_volume, 1.0, 0.02)
+        << "tet volume " << r.quality.tet_volume << " vs surface " << r.surface_volume;
+    test::expect_all_tets_positive(r.mesh);
+    test::expect_volume_conserved(r.mesh, r.volume0);
+    test::expect_closed_outward_boundary(r.mesh);
+    test::expect_finite_boundary_uvs(r.mesh);
+    EXPECT_NEAR(r.quality.bbox_min.y(), 0.0, 0.01) << "fit_to_ground";
+    EXPECT_GT(r.quality.min_dihedral_deg, 0.0);
+}
+
+}  // namespace
+}  // namespace mudcrack
