@@ -14,9 +14,11 @@ namespace mudcrack {
 
 struct SimWorkspace;  // grid and scratch, rebuilt every step; never serialized
 
-/// Mutable simulation state. Particle arrays are SoA, (n_particles), kept sorted by grid cell for
-/// memory coherence; `id` maps a slot to its particle id. Moisture arrays are empty when the
-/// model has no moisture section.
+/// Mutable simulation state. Particle arrays are SoA, (n_particles), periodically reordered by
+/// grid block for memory coherence; `id` maps a slot to its particle id (ids are 0..n-1). The
+/// step processes particles in (grid block, id) order whatever the slot order, so a state saved
+/// and restored in any slot order (e.g. by id) continues bit for bit. Moisture arrays are empty
+/// when the model has no moisture section; alpha is empty without plasticity.
 struct SimState {
     double time = 0;               // simulated time [s]
     int64_t step_count = 0;        // substeps taken since t = 0
@@ -31,6 +33,8 @@ struct SimState {
     std::vector<Real> mass;        // [kg]
     std::vector<Real> theta;       // water content in [0, eta] (moisture only)
     std::vector<Real> Jw;          // pore determinant 1 - eta (1 - s) (moisture only)
+    Vec3 domain_min = Vec3::Zero(); // simulation box, fixed at t = 0 (derived once when the
+    Vec3 domain_max = Vec3::Zero(); //   model's domain is auto) [m]; part of the checkpoint
     std::shared_ptr<SimWorkspace> workspace;  // scratch; recreated on demand
 
     size_t size() const { return x.size(); }

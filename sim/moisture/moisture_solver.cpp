@@ -1,0 +1,319 @@
+#include "sim/moisture/moisture_solver.h"
+
+#include <algorithm>
+#include <cmath>
+
+#include "sim/core/parallel.h"
+#include "sim/mpm/bspline.h"
+
+namespace mudcrack {
+
+using mpm::kBlockNodes;
+using mpm::kBlockWidth;
+using mpm::kWindowNodes;
+using mpm::SparseGrid;
+
+namespace {
+
+template <class T>
+int64_t capacity_bytes(const std::vector<T>& v) {
+    return static_cast<int64_t>(v.capacity() * sizeof(T));
+}
+
+int64_t node_count(const SparseGrid& grid) { return static_cast<int64_t>(grid.n_blocks()) * kBlockNodes; }
+
+void resize_zero(std::vector<Real>& v, int64_t n) {
+    v.resize(n);
+    parallel_chunks(n, [&](int, int64_t b, int64_t e) { std::fill(v.begin() + b, v.begin() + e, Real(0)); });
+}
+
+// sum over nodes of fn(node), summed per block then over blocks in block order: the same bits for
+// any thread count
+template <class Fn>
+Real block_sum(const SparseGrid& grid, std::vector<Real>& partial, Fn&& fn) {
+    const int64_t nb = static_cast<int64_t>(grid.n_blocks());
+    partial.resize(nb);
+    parallel_for(nb, [&](int64_t b) {
+        Real acc = 0;
+        const int64_t base = b * kBlockNodes;
+        for (int k = 0; k < kBlockNodes; ++k) acc += fn(base + k);
+        partial[b] = acc;
+    });
+    Real total = 0;
+    for (Real v : partial) total += v;
+    return total;
+}
+
+// face-adjacent block slots of every allocated block (-1 where none is allocated)
+void build_face_neighbors(const SparseGrid& grid, MoistureGrid& mg) {
+    const int64_t nb = static_cast<int64_t>(grid.n_blocks());
+    mg.block_face_neighbors.resize(nb);
+    parallel_for(nb, [&](int64_t b) {
+        const Vec3i c = grid.geo.block_coord(grid.block_keys[b]);
+        for (int d = 0; d < 3; ++d)
+            for (int side = 0; side < 2; ++side) {
+                Vec3i q = c;
+                q[d] += side ? 1 : -1;
+                int32_t slot = -1;
+                if (q[d] >= 0 && q[d] < grid.geo.blocks[d]) slot = grid.find_block(grid.geo.block_key(q.x(), q.y(), q.z()));
+                mg.block_face_neighbors[b][2 * d + side] = slot;
+            }
+    });
+}
+
+// surface nodes: mass > 0 and an empty face neighbour that is air (not sealed by a collider)
+void mark_surface_nodes(const SparseGrid& grid, const MoistureSeal& seal, MoistureGrid& mg) {
+    const mpm::GridGeometry& geo = grid.geo;
+    const int64_t nb = static_cast<int64_t>(grid.n_blocks());
+    mg.surface.resize(nb * kBlockNodes);
+    const Real* nodes = grid.nodes.data();
+    auto mass_at = [&](int32_t slot, int local) {
+        return slot < 0 ? Real(0) : nodes[(static_cast<int64_t>(slot) * kBlockNodes + local) * mpm::kNodeFields];
+    };
+    auto is_sealed = [&](const Vec3i& g) {
+        if (!seal.seal_colliders) return false;
+        for (int d = 0; d < 3; ++d)
+            if (g[d] < geo.padding || g[d] > geo.cells[d] - geo.padding) return true;
+        return seal.has_ground && geo.origin.y() + geo.h * g.y() <= seal.ground_height;
+    };
+    parallel_for(nb, [&](int64_t b) {
+        const Vec3i corner = geo.block_coord(grid.block_keys[b]) * kBlockWidth;
+        for (int a = 0; a < kBlockWidth; ++a)
+            for (int bb = 0; bb < kBlockWidth; ++bb)
+                for (int c = 0; c < kBlockWidth; ++c) {
+                    const int local = mpm::block_node_index(a, bb, c);
+                    Real flag = 0;
+                    if (mass_at(static_cast<int32_t>(b), local) > 0) {
+                        const int l[3] = {a, bb, c};
+                        for (int d = 0; d < 3 && flag == 0; ++d)
+                            for (int side = 0; side < 2 && flag == 0; ++side) {
+                                int q[3] = {l[0], l[1], l[2]};
+                                q[d] += side ? 1 : -1;
+                                int32_t slot = static_cast<int32_t>(b);
+                                if (q[d] < 0 || q[d] >= kBlockWidth) {
+                                    slot = mg.block_face_neighbors[b][2 * d + side];
+                                    q[d] = (q[d] + kBlockWidth) % kBlockWidth;
+                                }
+                                if (mass_at(slot, mpm::block_node_index(q[0], q[1], q[2])) > 0) continue;
+                                Vec3i g = corner + Vec3i(l[0], l[1], l[2]);
+                                g[d] += side ? 1 : -1;
+                                if (!is_sealed(g)) flag = 1;
+                            }
+                    }
+                    mg.surface[b * kBlockNodes + local] = flag;
+                }
+    });
+}
+
+// One gather/scatter pass over the particles (physics.md 4.5): y = L x (+ R x with the implicit
+// Robin term). The first pass of a solve also finds the boundary particles (a surface node in
+// their stencil; the containing-cell variant of physics.md 4.4 misses flat faces: with 2
+// particles per cell the last massive node lies 1.25 h above the top layer, outside its cell)
+// and scatters their evaporation: r into mg.rhs, and lambda S w^2 into mg.diag when implicit.
+template <bool kFirst>
+void particle_pass(const MoistureParams& mp, const SparseGrid& grid, const MoistureParticles& pp, MoistureGrid& mg,
+                   const Real* x, Real* y, std::vector<std::vector<Real>>& windows) {
+    const int64_t n_nodes = node_count(grid);
+    parallel_chunks(n_nodes, [&](int, int64_t b, int64_t e) { std::fill(y + b, y + e, Real(0)); });
+    const mpm::GridGeometry& geo = grid.geo;
+    const Real D_scale = mp.D * geo.inv_h * geo.inv_h;
+    const bool evaporates = mp.lambda > 0;
+    const bool implicit_robin = mp.implicit_robin && evaporates;
+    mpm::for_each_pblock_colored(grid, [&](int t, int32_t pb) {
+        Real* xw = windows[t].data();
+        Real* yw = xw + kWindowNodes;
+        Real* sw = yw + kWindowNodes;   // first pass: surface flags
+        Real* rw = sw + kWindowNodes;   // first pass: evaporation r
+        Real* dw = rw + kWindowNodes;   // first pass: Robin diagonal
+        mpm::gather_window<1, 1, 1>(grid, pb, x, 0, xw);
+        std::fill(yw, yw + kWindowNodes, Real(0));
+        bool any_boundary = false;
+        if constexpr (kFirst) {
+            mpm::gather_window<1, 1, 1>(grid, pb, mg.surface.data(), 0, sw);
+            std::fill(rw, rw + 2 * kWindowNodes, Real(0));
+        }
+        const Vec3i origin = geo.block_coord(grid.pblock_key[pb]) * kBlockWidth;
+        for (int32_t i = grid.pblock_begin[pb]; i < grid.pblock_begin[pb + 1]; ++i) {
+            const int32_t p = grid.order[i];
+            const mpm::Stencil st = mpm::make_stencil(geo.to_grid(pp.x[p]));
+            const mpm::AxisWeights &ax = st.axis[0], &ay = st.axis[1], &az = st.axis[2];
+            const int o0 = ax.base - origin.x(), o1 = ay.base - origin.y(), o2 = az.base - origin.z();
+            const Real V = pp.V0[p] * pp.J[p];
+
+            bool is_boundary = false;
+            if constexpr (kFirst) {
+                if (evaporates) {
+                    for (int a = 0; a < 3 && !is_boundary; ++a)
+                        for (int b = 0; b < 3 && !is_boundary; ++b) {
+                            const Real* row = sw + mpm::window_index(o0 + a, o1 + b, o2);
+                            is_boundary = row[0] + row[1] + row[2] > 0;
+                        }
+                }
+                mg.particle_is_boundary[p] = is_boundary;
+                if (is_boundary) {
+                    any_boundary = true;
+                    const Real lambda_S = mp.lambda * particle_area(V);
+                    // explicit: r_i = -S lambda (theta_p - theta_0) w_ip; implicit: r_0,i =
+                    // S lambda theta_0 w_ip, and S lambda w_ip^2 on the diagonal
+                    const Real source =
+                        mp.implicit_robin ? lambda_S * mp.theta0 : -lambda_S * (pp.theta[p] - mp.theta0);
+                    for (int a = 0; a < 3; ++a)
+                        for (int b = 0; b < 3; ++b) {
+                            const int n = mpm::window_index(o0 + a, o1 + b, o2);
+                            const Real wab = ax.w[a] * ay.w[b];
+                            for (int c = 0; c < 3; ++c) {
+                                const Real w = wab * az.w[c];
+                                rw[n + c] += source * w;
+                                dw[n + c] += lambda_S * w * w;
+                            }
+                        }
+                }
+            } else {
+                is_boundary = implicit_robin && mg.particle_is_boundary[p];
+            }
+
+            // gather g_p = sum_j x_j grad w_jp (in units of 1/h) and s_p = sum_j w_jp x_j,
+            // factorised along z
+            Real gx = 0, gy = 0, gz = 0, s = 0;
+            for (int a = 0; a < 3; ++a)
+                for (int b = 0; b < 3; ++b) {
+                    const Real* row = xw + mpm::window_index(o0 + a, o1 + b, o2);
+                    const Real tw = az.w[0] * row[0] + az.w[1] * row[1] + az.w[2] * row[2];
+                    const Real td = az.dw[0] * row[0] + az.dw[1] * row[1] + az.dw[2] * row[2];
+                    const Real wab = ax.w[a] * ay.w[b];
+                    gx += ax.dw[a] * ay.w[b] * tw;
+                    gy += ax.w[a] * ay.dw[b] * tw;
+                    gz += wab * td;
+                    s += wab * tw;
+                }
+            // scatter V D grad w_ip . g_p (the 1/h of both gradients in D_scale) and the
+            // implicit Robin term lambda S w_ip s_p
+            const Real scale = V * D_scale;
+            gx *= scale;
+            gy *= scale;
+            gz *= scale;
+            const Real robin = (implicit_robin && is_boundary) ? mp.lambda * particle_area(V) * s : 0;
+            for (int a = 0; a < 3; ++a)
+                for (int b = 0; b < 3; ++b) {
+                    Real* row = yw + mpm::window_index(o0 + a, o1 + b, o2);
+                    const Real wab = ax.w[a] * ay.w[b];
+                    const Real cw = gx * ax.dw[a] * ay.w[b] + gy * ax.w[a] * ay.dw[b] + robin * wab;
+                    const Real cd = gz * wab;
+                    row[0] += cw * az.w[0] + cd * az.dw[0];
+                    row[1] += cw * az.w[1] + cd * az.dw[1];
+                    row[2] += cw * az.w[2] + cd * az.dw[2];
+                }
+        }
+        mpm::flush_window<1, 1>(grid, pb, yw, y);
+        if constexpr (kFirst) {
+            if (any_boundary) {
+                mpm::flush_window<1, 1>(grid, pb, rw, mg.rhs.data());
+                if (implicit_robin) mpm::flush_window<1, 1>(grid, pb, dw, mg.diag.data());
+            }
+        }
+    });
+}
+
+}  // namespace
+
+Real particle_area(Real volume) {
+    constexpr Real kPi = 3.14159265358979323846;
+    const Real R = std::cbrt(3 * volume / (4 * kPi));
+    return kPi * R * R;
+}
+
+int64_t MoistureGrid::memory_bytes() const {
+    return capacity_bytes(W) + capacity_bytes(theta) + capacity_bytes(diag) + capacity_bytes(rhs) +
+           capacity_bytes(x) + capacity_bytes(r) + capacity_bytes(p) + capacity_bytes(Ap) +
+           capacity_bytes(surface) + capacity_bytes(particle_is_boundary) + capacity_bytes(block_partial) +
+           capacity_bytes(block_face_neighbors);
+}
+
+void begin_moisture_p2g(MoistureGrid& mg, const SparseGrid& grid) {
+    const int64_t n = node_count(grid);
+    resize_zero(mg.W, n);
+    resize_zero(mg.theta, n);
+    resize_zero(mg.diag, n);
+}
+
+MoistureSolveStats solve_moisture(const MoistureParams& mp, const MoistureSeal& seal, const SparseGrid& grid,
+                                  const MoistureParticles& pp, Real dt, MoistureGrid& mg,
+                                  std::vector<std::vector<Real>>& windows) {
+    const mpm::GridGeometry& geo = grid.geo;
+    const int64_t n_nodes = node_count(grid);
+    const Real inv_dt = 1 / dt;
+    const size_t n_particles = grid.order.size();
+
+    // nodal theta^n = (V theta)_i / W_i and the Jacobi diagonal M_ii + sum_p V D |grad w|^2
+    parallel_for(n_nodes, [&](int64_t i) {
+        if (mg.W[i] > 0) {
+            mg.theta[i] /= mg.W[i];
+            mg.diag[i] = mg.W[i] * inv_dt + mp.D * geo.inv_h * geo.inv_h * mg.diag[i];
+        } else {
+            mg.theta[i] = 0;
+            mg.diag[i] = 0;
+        }
+    });
+
+    // surface nodes (physics.md 4.4)
+    build_face_neighbors(grid, mg);
+    mark_surface_nodes(grid, seal, mg);
+    resize_zero(mg.rhs, n_nodes);
+    mg.particle_is_boundary.resize(n_particles);
+    mg.x.resize(n_nodes);
+    mg.r.resize(n_nodes);
+    mg.p.resize(n_nodes);
+    mg.Ap.resize(n_nodes);
+
+    // x0 = theta^n; the first particle pass gives L x0 in Ap, the boundary particles and r in rhs
+    parallel_for(n_nodes, [&](int64_t i) { mg.x[i] = mg.theta[i]; });
+    particle_pass<true>(mp, grid, pp, mg, mg.x.data(), mg.Ap.data(), windows);
+
+    // rhs = M theta^n + r; residual b - (M + L) x0 = r - L theta^n (the M terms cancel exactly)
+    auto inv_diag = [&](int64_t i) { return mg.diag[i] > 0 ? 1 / mg.diag[i] : Real(0); };
+    parallel_for(n_nodes, [&](int64_t i) {
+        if (mg.W[i] > 0) {
+            mg.r[i] = mg.rhs[i] - mg.Ap[i];
+            mg.rhs[i] += mg.W[i] * inv_dt * mg.theta[i];
+        } else {
+            mg.r[i] = mg.rhs[i] = 0;
+        }
+        mg.p[i] = mg.r[i] * inv_diag(i);
+    });
+
+    // Jacobi-preconditioned conjugate gradients
+    MoistureSolveStats stats;
+    const Real b_norm = std::sqrt(block_sum(grid, mg.block_partial, [&](int64_t i) { return mg.rhs[i] * mg.rhs[i]; }));
+    if (b_norm > 0) {
+        Real rz = block_sum(grid, mg.block_partial, [&](int64_t i) { return mg.r[i] * mg.p[i]; });
+        Real r_norm = std::sqrt(block_sum(grid, mg.block_partial, [&](int64_t i) { return mg.r[i] * mg.r[i]; }));
+        const Real target = mp.cg_tolerance * b_norm;
+        while (r_norm > target && stats.iterations < mp.cg_max_iterations) {
+            // Ap = (M + L [+ R]) p
+            particle_pass<false>(mp, grid, pp, mg, mg.p.data(), mg.Ap.data(), windows);
+            ++stats.iterations;
+            const Real pAp = block_sum(grid, mg.block_partial, [&](int64_t i) {
+                mg.Ap[i] += mg.W[i] * inv_dt * mg.p[i];
+                return mg.p[i] * mg.Ap[i];
+            });
+            if (!(pAp > 0)) break;  // converged to round-off (or lost positivity): keep x
+            const Real step = rz / pAp;
+            parallel_for(n_nodes, [&](int64_t i) {
+                mg.x[i] += step * mg.p[i];
+                mg.r[i] -= step * mg.Ap[i];
+            });
+            r_norm = std::sqrt(block_sum(grid, mg.block_partial, [&](int64_t i) { return mg.r[i] * mg.r[i]; }));
+            const Real rz_new = block_sum(grid, mg.block_partial, [&](int64_t i) { return mg.r[i] * mg.r[i] * inv_diag(i); });
+            const Real beta = rz_new / rz;
+            rz = rz_new;
+            parallel_for(n_nodes, [&](int64_t i) { mg.p[i] = mg.r[i] * inv_diag(i) + beta * mg.p[i]; });
+        }
+        stats.residual = r_norm / b_norm;
+    }
+
+    // increment theta^{n+1} - theta^n for the FLIP G2P
+    parallel_for(n_nodes, [&](int64_t i) { mg.x[i] = mg.W[i] > 0 ? mg.x[i] - mg.theta[i] : Real(0); });
+    return stats;
+}
+
+}  // namespace mudcrack

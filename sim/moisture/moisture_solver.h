@@ -1,0 +1,70 @@
+#pragma once
+/// The implicit moisture diffusion on the MPM grid (Tu et al. 2023 Section 5.2; physics.md 4):
+///   (M + L) theta^{n+1} = M theta^n + r,   M_ii = W_i/dt,  W_i = sum_p V_p w_ip,
+///   L_ij = sum_p V_p D grad w_ip . grad w_jp,   r_i = -sum_{p boundary} S_p lambda (theta_p - theta_0) w_ip
+/// (the minus sign of r is required, physics.md 4.2), solved matrix-free with Jacobi-preconditioned
+/// CG from theta^n. Node fields live on the sparse grid's allocated blocks; they exist only when
+/// the model has moisture.
+#include <cstdint>
+#include <vector>
+
+#include "sim/core/types.h"
+#include "sim/model.h"
+#include "sim/mpm/sparse_grid.h"
+
+namespace mudcrack {
+
+/// Moisture node fields, (n_blocks * 64) each, and per-particle boundary flags.
+struct MoistureGrid {
+    std::vector<Real> W;        // sum_p V_p w_ip [m^3]
+    std::vector<Real> theta;    // (V theta)_i after the P2G, then theta_i^n
+    std::vector<Real> diag;     // sum_p V_p |grad w_ip|^2 after the P2G, then the Jacobi diagonal
+    std::vector<Real> rhs;      // M theta^n + r
+    std::vector<Real> x;        // CG iterate; after the solve: theta^{n+1} - theta^n
+    std::vector<Real> r, p, Ap; // CG residual, direction, operator times direction
+    std::vector<Real> surface;  // 1 at surface nodes (physics.md 4.4), else 0
+    std::vector<uint8_t> particle_is_boundary;  // per slot: evaporates this step
+    std::vector<Real> block_partial;            // per-block partial sums (deterministic dots)
+    std::vector<std::array<int32_t, 6>> block_face_neighbors;  // slots of the 6 face-adjacent blocks or -1
+
+    int64_t memory_bytes() const;
+};
+
+/// Which empty neighbours of a surface node are walls rather than air (physics.md 4.4 item 3).
+struct MoistureSeal {
+    bool seal_colliders = true;   // faces against the ground / domain walls do not evaporate
+    bool has_ground = false;
+    Real ground_height = 0;       // [m]
+};
+
+/// The particles as the moisture solve reads them, in slot order.
+struct MoistureParticles {
+    const Vec3* x = nullptr;      // positions x^n [m]
+    const Real* V0 = nullptr;     // rest volumes [m^3]
+    const Real* J = nullptr;      // total volume ratio: V^n = V0 J
+    const Real* theta = nullptr;  // water content theta^n
+};
+
+struct MoistureSolveStats {
+    int iterations = 0;      // CG iterations (operator applications after the initial residual)
+    Real residual = 0;       // final ||b - A x|| / ||b||
+};
+
+/// Resizes and zeroes the node fields the P2G accumulates (W, theta, diag) for the current grid.
+void begin_moisture_p2g(MoistureGrid& mg, const mpm::SparseGrid& grid);
+
+/// Solves one implicit moisture step of length dt after the P2G filled W, (V theta) and
+/// sum V |grad w|^2, and the mechanics grid holds the nodal masses (for the surface test).
+/// On return mg.x holds theta^{n+1} - theta^n per node (zero off the material) and
+/// mg.particle_is_boundary flags the evaporating particles.
+/// @param dt moisture time step [s] (k dt when solving every k MPM steps)
+/// @param windows per-thread scratch, at least 2 * 216 values each
+MoistureSolveStats solve_moisture(const MoistureParams& params, const MoistureSeal& seal,
+                                  const mpm::SparseGrid& grid, const MoistureParticles& particles,
+                                  Real dt, MoistureGrid& mg, std::vector<std::vector<Real>>& windows);
+
+/// Equivalent-sphere cross-section S = pi R^2, R = (3 V / (4 pi))^(1/3) of a particle of
+/// volume V (physics.md 4.4) [m^2].
+Real particle_area(Real volume);
+
+}  // namespace mudcrack

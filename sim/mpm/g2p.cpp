@@ -1,0 +1,183 @@
+// G2P and the per-particle update of physics.md 7 steps 4-8.
+#include <algorithm>
+#include <cmath>
+
+#include "sim/material/nacc.h"
+#include "sim/material/neo_hookean.h"
+#include "sim/moisture/pore.h"
+#include "sim/mpm/bspline.h"
+#include "sim/mpm/transfer.h"
+
+namespace mudcrack::mpm {
+
+namespace {
+
+// window layout per node: velocity x y z, then theta^{n+1} - theta^n
+constexpr int kStride = 4;
+
+// relative margin that keeps the SVD-free inside test on the safe side of the kernel's own test
+constexpr Real kInsideMargin = 1e-9;
+
+// The NACC inside test (physics.md 2.1, case 3a) without an SVD: J = det Fe, and ||dev b_hat|| is
+// the rotation-invariant ||dev(Fe Fe^T)||. True only when the state is inside with a relative
+// margin, so the return map (which would return Fe unchanged) can be skipped; near the surface
+// and at the tips the full kernel decides.
+inline bool clearly_inside_yield_surface(const Mat3& Fe, Real alpha, Real beta, const NaccParams& nacc,
+                                         const LameParams& lame) {
+    const Real J = Fe.determinant();
+    if (!(J > 0)) return false;
+    const Real p0 = nacc_p0(alpha, nacc.xi, lame.kappa);
+    const Real p = -lame.kappa / 2 * (J * J - 1);
+    if (!(p < p0 && p > -beta * p0)) return false;
+    const Mat3 b = Fe * Fe.transpose();
+    const Real mean_b = b.trace() / 3;
+    const Real dev_b2 = b.squaredNorm() - 3 * mean_b * mean_b;  // ||b - mean_b I||^2
+    const Real shear = lame.mu * cbrt_inv_sq(J);
+    const Real s2 = shear * shear * std::max(dev_b2, Real(0));
+    const Real a = Real(1.5) * (1 + 2 * beta);
+    const Real y_s = a * s2;
+    const Real y_p = nacc.M * nacc.M * (p + beta * p0) * (p - p0);  // < 0 between the tips
+    return y_s + y_p < -kInsideMargin * (y_s - y_p);
+}
+
+template <bool kTheta, bool kPore, bool kNacc>
+G2PResult g2p_impl(const SimModel& model, SimState& state, const SparseGrid& grid, const Real* dtheta, Real dt,
+                   std::vector<std::vector<Real>>& windows) {
+    const GridGeometry& geo = grid.geo;
+    const Real h = geo.h;
+    const Real c_scale = kInertiaInvScale * geo.inv_h * geo.inv_h;
+    const LameParams lame = lame_params(model.elastic);
+    const NaccParams nacc = kNacc ? *model.nacc : NaccParams{};
+    const MoistureParams moist = kPore ? *model.moisture : MoistureParams{};
+    const Real rho_s = model.elastic.density;
+    // without pores the soil counts as saturated: beta = beta1 (physics.md 2.3)
+    const Real beta_saturated = nacc.beta1;
+    // particles stay inside the box with a full stencil on the grid
+    const Vec3 lo = geo.origin + Vec3::Constant(h);
+    const Vec3 hi = geo.origin + (geo.cells.cast<Real>() - Vec3::Ones()) * h;
+
+    const int nt = thread_count();
+    std::vector<Real> max_speed2(nt, 0);
+    std::vector<int32_t> bad(nt, -1);
+
+    for_each_pblock(grid, [&](int t, int32_t pb) {
+        Real* win = windows[t].data();
+        // gather velocity (and the moisture increment) of the 6x6x6 window
+        gather_window<3, kNodeFields, kStride>(grid, pb, grid.nodes.data(), 1, win);
+        if constexpr (kTheta) {
+            const WindowMap& map = window_map();
+            const std::array<int32_t, 8>& nb = grid.pblock_neighbors[pb];
+            for (int n = 0; n < kWindowNodes; ++n)
+                win[n * kStride + 3] = dtheta[static_cast<int64_t>(nb[map.neighbor[n]]) * kBlockNodes + map.local[n]];
+        }
+        const Vec3i origin = geo.block_coord(grid.pblock_key[pb]) * kBlockWidth;
+        Real speed2 = max_speed2[t];
+        for (int32_t i = grid.pblock_begin[pb]; i < grid.pblock_begin[pb + 1]; ++i) {
+            const int32_t p = grid.order[i];
+            const Stencil st = make_stencil(geo.to_grid(state.x[p]));
+            const AxisWeights &ax = st.axis[0], &ay = st.axis[1], &az = st.axis[2];
+            const int o0 = ax.base - origin.x(), o1 = ay.base - origin.y(), o2 = az.base - origin.z();
+
+            // gather v_p, B_p = sum w v_i (x_i - x_p)^T / h and the theta increment
+            Vec3 vp = Vec3::Zero();
+            Mat3 B = Mat3::Zero();
+            Real dth = 0;
+            for (int a = 0; a < 3; ++a)
+                for (int b = 0; b < 3; ++b) {
+                    const Real wab = ax.w[a] * ay.w[b];
+                    const Real* row = win + window_index(o0 + a, o1 + b, o2) * kStride;
+                    const Vec3 dpos_ab(a - ax.fx, b - ay.fx, 0);
+                    for (int c = 0; c < 3; ++c) {
+                        const Real w = wab * az.w[c];
+                        const Real* node = row + c * kStride;
+                        const Vec3 wv(w * node[0], w * node[1], w * node[2]);
+                        vp += wv;
+                        B.col(0) += wv * dpos_ab.x();
+                        B.col(1) += wv * dpos_ab.y();
+                        B.col(2) += wv * (c - az.fx);
+                        if constexpr (kTheta) dth += w * node[3];
+                    }
+                }
+            // C_p = (4/h^2) sum w v_i (x_i - x_p)^T, with x_i - x_p = h ((a,b,c) - fx)
+            const Mat3 Cp = (c_scale * h) * B;
+
+            // kinematics: Fe_trial = (I + dt C) Fe, J *= det(I + dt C)
+            Mat3 dF = dt * Cp;
+            dF.diagonal().array() += 1;
+            Mat3 Fe_trial = dF * state.Fe[p];
+            state.J[p] *= dF.determinant();
+
+            // pore update (Eq. 6, 10, 11, 12): theta, Jw, Fe compensation, mass, cohesion
+            Real beta = beta_saturated;
+            Real alpha = kNacc ? state.alpha[p] : Real(0);
+            if constexpr (kPore) {
+                Real theta = state.theta[p];
+                if constexpr (kTheta) theta = std::clamp(theta + dth, Real(0), moist.eta);
+                state.theta[p] = theta;
+                const Real s = saturation_of(theta, moist.eta);
+                const PoreStep ps = pore_step(state.Jw[p], s, moist.eta, moist.max_log_jw_step);
+                if (ps.Fe_scale != 1) Fe_trial *= ps.Fe_scale;
+                state.Jw[p] = ps.Jw;
+                if constexpr (kNacc) {
+                    alpha += moist.eps * ps.log_ratio;
+                    beta = cohesion_of(nacc, s);
+                }
+                state.mass[p] = moist_mass(state.V0[p], rho_s, s, moist);
+            }
+
+            // plasticity: NACC return mapping, else pure elasticity
+            if constexpr (kNacc) {
+                if (clearly_inside_yield_surface(Fe_trial, alpha, beta, nacc, lame)) {
+                    state.Fe[p] = Fe_trial;  // what the return map returns inside (case 3a)
+                    state.alpha[p] = alpha;
+                } else {
+                    const NaccReturn r = nacc_return_map(Fe_trial, alpha, beta, nacc, lame);
+                    state.Fe[p] = r.Fe;
+                    state.alpha[p] = r.alpha;
+                }
+            } else {
+                state.Fe[p] = Fe_trial;
+            }
+
+            // advect, clamped into the domain box
+            Vec3 x = state.x[p] + dt * vp;
+            x = x.cwiseMax(lo).cwiseMin(hi);
+            state.x[p] = x;
+            state.v[p] = vp;
+            state.C[p] = Cp;
+
+            // finite-ness: a NaN or inf anywhere poisons the sum
+            Real check = x.sum() + vp.sum() + state.Fe[p].sum() + state.J[p];
+            if constexpr (kNacc) check += state.alpha[p];
+            if constexpr (kPore) check += state.theta[p];
+            if (!std::isfinite(check) && (bad[t] < 0 || p < bad[t])) bad[t] = p;
+            speed2 = std::max(speed2, vp.squaredNorm());
+        }
+        max_speed2[t] = speed2;
+    });
+
+    G2PResult result;
+    for (int t = 0; t < nt; ++t) {
+        result.max_speed = std::max(result.max_speed, std::sqrt(max_speed2[t]));
+        if (bad[t] >= 0 && (result.bad_slot < 0 || bad[t] < result.bad_slot)) result.bad_slot = bad[t];
+    }
+    return result;
+}
+
+template <bool kTheta, bool kPore>
+G2PResult dispatch_nacc(const SimModel& model, SimState& state, const SparseGrid& grid, const Real* dtheta,
+                        Real dt, std::vector<std::vector<Real>>& windows) {
+    if (model.nacc) return g2p_impl<kTheta, kPore, true>(model, state, grid, dtheta, dt, windows);
+    return g2p_impl<kTheta, kPore, false>(model, state, grid, dtheta, dt, windows);
+}
+
+}  // namespace
+
+G2PResult grid_to_particle(const SimModel& model, SimState& state, const SparseGrid& grid, const Real* dtheta,
+                           bool pore_update, Real dt, std::vector<std::vector<Real>>& windows) {
+    if (dtheta) return dispatch_nacc<true, true>(model, state, grid, dtheta, dt, windows);
+    if (pore_update) return dispatch_nacc<false, true>(model, state, grid, nullptr, dt, windows);
+    return dispatch_nacc<false, false>(model, state, grid, nullptr, dt, windows);
+}
+
+}  // namespace mudcrack::mpm

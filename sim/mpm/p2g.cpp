@@ -1,0 +1,106 @@
+// P2G: mass, APIC momentum with the fused MLS stress, and the moisture fields (physics.md 1.2, 4.3).
+#include <algorithm>
+
+#include "sim/material/neo_hookean.h"
+#include "sim/mpm/bspline.h"
+#include "sim/mpm/transfer.h"
+
+namespace mudcrack::mpm {
+
+namespace {
+
+// window layout per node: m, (m v) x y z, then with moisture W, (V theta), sum V |grad w|^2, pad
+template <bool kMoisture>
+void p2g_impl(const SimModel& model, const SimState& state, SparseGrid& grid, MoistureGrid* mg, Real dt,
+              std::vector<std::vector<Real>>& windows) {
+    constexpr int kStride = kMoisture ? 8 : 4;
+    const GridGeometry& geo = grid.geo;
+    const LameParams lame = lame_params(model.elastic);
+    const Real h = geo.h;
+    const Real stress_scale = dt * kInertiaInvScale * geo.inv_h * geo.inv_h;
+    const Vec3* x = state.x.data();
+    const Vec3* v = state.v.data();
+    const Mat3* C = state.C.data();
+    const Mat3* Fe = state.Fe.data();
+    const Real* mass = state.mass.data();
+    const Real* V0 = state.V0.data();
+    const Real* J = state.J.data();
+    const Real* theta = kMoisture ? state.theta.data() : nullptr;
+
+    for_each_pblock_colored(grid, [&](int t, int32_t pb) {
+        Real* win = windows[t].data();
+        std::fill(win, win + kWindowNodes * kStride, Real(0));
+        const Vec3i origin = geo.block_coord(grid.pblock_key[pb]) * kBlockWidth;
+        for (int32_t i = grid.pblock_begin[pb]; i < grid.pblock_begin[pb + 1]; ++i) {
+            const int32_t p = grid.order[i];
+            const Stencil st = make_stencil(geo.to_grid(x[p]));
+            const AxisWeights &ax = st.axis[0], &ay = st.axis[1], &az = st.axis[2];
+            const int o0 = ax.base - origin.x(), o1 = ay.base - origin.y(), o2 = az.base - origin.z();
+
+            // affine momentum with the stress folded in: A_p = m C - dt V0 (4/h^2) tau
+            const Real m = mass[p];
+            const Mat3 tau = neo_hookean_kirchhoff(Fe[p], lame);
+            const Mat3 Ah = h * (m * C[p] - (stress_scale * V0[p]) * tau);
+            // (mass, momentum) at node (a,b,c): w (m, m v + A h ((a,b,c) - fx)), as 4-vectors
+            // (mass first, with a zero affine part) so each node update is one SIMD add
+            const Vec3 q0 = m * v[p] - Ah * Vec3(ax.fx, ay.fx, az.fx);
+            const Real base[4] = {m, q0.x(), q0.y(), q0.z()};
+            const Real da[4] = {0, Ah(0, 0), Ah(1, 0), Ah(2, 0)};
+            const Real db[4] = {0, Ah(0, 1), Ah(1, 1), Ah(2, 1)};
+            const Real dc[4] = {0, Ah(0, 2), Ah(1, 2), Ah(2, 2)};
+            Real V = 0, Vtheta = 0;
+            if constexpr (kMoisture) {
+                V = V0[p] * J[p];
+                Vtheta = V * theta[p];
+            }
+
+            // scatter to the 3x3x3 stencil
+            for (int a = 0; a < 3; ++a) {
+                for (int b = 0; b < 3; ++b) {
+                    Real q[4];
+                    for (int k = 0; k < 4; ++k) q[k] = base[k] + Real(a) * da[k] + Real(b) * db[k];
+                    const Real wab = ax.w[a] * ay.w[b];
+                    Real* row = win + window_index(o0 + a, o1 + b, o2) * kStride;
+                    for (int c = 0; c < 3; ++c) {
+                        const Real w = wab * az.w[c];
+                        Real* node = row + c * kStride;
+                        for (int k = 0; k < 4; ++k) node[k] += w * (q[k] + Real(c) * dc[k]);
+                        if constexpr (kMoisture) {
+                            const Real gx = ax.dw[a] * ay.w[b] * az.w[c];
+                            const Real gy = ax.w[a] * ay.dw[b] * az.w[c];
+                            const Real gz = wab * az.dw[c];
+                            node[4] += w * V;
+                            node[5] += w * Vtheta;
+                            node[6] += V * (gx * gx + gy * gy + gz * gz);
+                        }
+                    }
+                }
+            }
+        }
+
+        // flush the window into the 8 blocks it overlaps
+        flush_window<kNodeFields, kStride>(grid, pb, win, grid.nodes.data());
+        if constexpr (kMoisture) {
+            const WindowMap& map = window_map();
+            const std::array<int32_t, 8>& nb = grid.pblock_neighbors[pb];
+            for (int n = 0; n < kWindowNodes; ++n) {
+                const int64_t node = static_cast<int64_t>(nb[map.neighbor[n]]) * kBlockNodes + map.local[n];
+                mg->W[node] += win[n * kStride + 4];
+                mg->theta[node] += win[n * kStride + 5];
+                mg->diag[node] += win[n * kStride + 6];
+            }
+        }
+    });
+}
+
+}  // namespace
+
+void particle_to_grid(const SimModel& model, const SimState& state, SparseGrid& grid, MoistureGrid* moisture,
+                      Real dt, std::vector<std::vector<Real>>& windows) {
+    if (moisture)
+        p2g_impl<true>(model, state, grid, moisture, dt, windows);
+    else
+        p2g_impl<false>(model, state, grid, nullptr, dt, windows);
+}
+
+}  // namespace mudcrack::mpm

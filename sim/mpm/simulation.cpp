@@ -1,0 +1,324 @@
+// The MPM driver: initial state, time step, the consolidated step of physics.md 7, cache views.
+#include "sim/mpm/simulation.h"
+
+#include <algorithm>
+#include <cmath>
+#include <sstream>
+
+#include "sim/core/check.h"
+#include "sim/core/error.h"
+#include "sim/core/parallel.h"
+#include "sim/moisture/pore.h"
+#include "sim/mpm/transfer.h"
+#include "sim/mpm/workspace.h"
+
+namespace mudcrack {
+
+namespace {
+
+// the state's arrays are physically reordered by grid block every this many steps; in between
+// the step reads them through the bin order (they stay nearly sorted)
+constexpr int64_t kResortInterval = 16;
+// auto domain: free cells kept below the lowest particle (or the ground) inside the wall band
+constexpr int kAutoDomainCellsBelow = 3;
+// auto domain: fraction of the particles' extent added above and around them
+constexpr Real kAutoDomainMargin = 0.5;
+
+template <class T>
+int64_t capacity_bytes(const std::vector<T>& v) {
+    return static_cast<int64_t>(v.capacity() * sizeof(T));
+}
+
+// reorders an array of Real-component elements (Real, Vec3, Mat3) so slot i takes slot order[i],
+// one component at a time through an n-Real buffer
+template <class T>
+void permute_components(std::vector<T>& a, const std::vector<int32_t>& order, std::vector<Real>& buf) {
+    if (a.empty()) return;
+    constexpr int kComp = static_cast<int>(sizeof(T) / sizeof(Real));
+    static_assert(kComp * sizeof(Real) == sizeof(T), "element must be made of Reals");
+    Real* data = reinterpret_cast<Real*>(a.data());
+    const int64_t n = static_cast<int64_t>(a.size());
+    for (int k = 0; k < kComp; ++k) {
+        parallel_for(n, [&](int64_t i) { buf[i] = data[static_cast<int64_t>(order[i]) * kComp + k]; });
+        parallel_for(n, [&](int64_t i) { data[i * kComp + k] = buf[i]; });
+    }
+}
+
+void permute_state(SimState& s, const std::vector<int32_t>& order, std::vector<Real>& buf) {
+    const int64_t n = static_cast<int64_t>(s.size());
+    buf.resize(n);
+    parallel_for(n, [&](int64_t i) { buf[i] = static_cast<Real>(s.id[order[i]]); });
+    parallel_for(n, [&](int64_t i) { s.id[i] = static_cast<int32_t>(buf[i]); });
+    permute_components(s.x, order, buf);
+    permute_components(s.v, order, buf);
+    permute_components(s.C, order, buf);
+    permute_components(s.Fe, order, buf);
+    permute_components(s.J, order, buf);
+    permute_components(s.alpha, order, buf);
+    permute_components(s.V0, order, buf);
+    permute_components(s.mass, order, buf);
+    permute_components(s.theta, order, buf);
+    permute_components(s.Jw, order, buf);
+}
+
+bool is_identity(const std::vector<int32_t>& order) {
+    for (size_t i = 0; i < order.size(); ++i)
+        if (order[i] != static_cast<int32_t>(i)) return false;
+    return true;
+}
+
+SimWorkspace& ensure_workspace(const SimModel& model, SimState& state) {
+    if (!state.workspace) state.workspace = std::make_shared<SimWorkspace>();
+    SimWorkspace& ws = *state.workspace;
+    ws.grid.geo = mpm::make_grid_geometry(state.domain_min, state.domain_max, model.h, model.domain.padding);
+    const int nt = std::max(1, thread_count());
+    ws.windows.resize(nt);
+    for (auto& w : ws.windows) w.resize(mpm::kWindowNodes * 8);
+    return ws;
+}
+
+// bins the particles and, every kResortInterval steps (and at t = 0), reorders the arrays by block
+void bin_and_sort(SimState& state, SimWorkspace& ws, bool force_sort) {
+    mpm::bin_particles(ws.grid, state.x, state.id);
+    if ((force_sort || state.step_count % kResortInterval == 0) && !is_identity(ws.grid.order)) {
+        permute_state(state, ws.grid.order, ws.permute_buffer);
+        for (size_t i = 0; i < ws.grid.order.size(); ++i) ws.grid.order[i] = static_cast<int32_t>(i);
+    }
+}
+
+std::string describe_non_finite(const SimState& s, size_t p, int64_t substep) {
+    auto finite3 = [](const auto& m) { return m.allFinite(); };
+    const char* what = nullptr;
+    if (!finite3(s.x[p]))
+        what = "position";
+    else if (!finite3(s.v[p]))
+        what = "velocity";
+    else if (!finite3(s.Fe[p]))
+        what = "elastic deformation gradient Fe";
+    else if (!std::isfinite(s.J[p]))
+        what = "volume ratio J";
+    else if (!s.alpha.empty() && !std::isfinite(s.alpha[p]))
+        what = "hardening state alpha";
+    else if (!s.theta.empty() && !std::isfinite(s.theta[p]))
+        what = "water content theta";
+    if (!what) return {};
+    std::ostringstream os;
+    os << "substep " << substep << ": particle " << s.id[p] << " has non-finite " << what << " (theta="
+       << (s.theta.empty() ? std::string("n/a") : std::to_string(s.theta[p])) << ", J=" << s.J[p]
+       << ", alpha=" << (s.alpha.empty() ? std::string("n/a") : std::to_string(s.alpha[p]))
+       << ", |v|=" << s.v[p].norm() << ")";
+    return os.str();
+}
+
+// the smallest particle id with a non-finite state, described; empty if all are finite
+std::string find_non_finite(const SimState& s, int64_t substep) {
+    size_t best = s.size();
+    for (size_t p = 0; p < s.size(); ++p) {
+        if (best < s.size() && s.id[p] >= s.id[best]) continue;
+        if (!describe_non_finite(s, p, substep).empty()) best = p;
+    }
+    return best < s.size() ? describe_non_finite(s, best, substep) : std::string();
+}
+
+}  // namespace
+
+SimState make_initial_state(const SimModel& model, const std::vector<Vec3>& X, const std::vector<Real>& V0) {
+    const size_t n = X.size();
+    if (n == 0) throw InputError("initial particles: the particle set is empty: need at least one particle");
+    if (V0.size() != n) {
+        std::ostringstream os;
+        os << "initial particles: " << V0.size() << " rest volumes for " << n << " positions: must match";
+        throw InputError(os.str());
+    }
+    if (!(model.h > 0) || !std::isfinite(model.h)) {
+        std::ostringstream os;
+        os << "grid spacing h = " << model.h << ": must be finite and > 0 [m]";
+        throw InputError(os.str());
+    }
+    for (size_t p = 0; p < n; ++p) {
+        if (!X[p].allFinite() || !(V0[p] > 0) || !std::isfinite(V0[p])) {
+            std::ostringstream os;
+            os << "initial particles: particle " << p << " has position (" << X[p].transpose() << ") and volume0 "
+               << V0[p] << ": need a finite position and a finite volume > 0";
+            throw InputError(os.str());
+        }
+    }
+
+    SimState s;
+    s.id.resize(n);
+    for (size_t p = 0; p < n; ++p) s.id[p] = static_cast<int32_t>(p);
+    s.x = X;
+    s.v.assign(n, model.initial_velocity);
+    s.C.assign(n, Mat3::Zero());
+    s.Fe.assign(n, Mat3::Identity());
+    s.J.assign(n, 1);
+    if (model.nacc) s.alpha.assign(n, model.nacc->alpha0);
+    s.V0 = V0;
+    s.mass.resize(n);
+    if (model.moisture) {
+        const MoistureParams& mp = *model.moisture;
+        const Real theta = std::clamp(mp.theta_init < 0 ? mp.eta : mp.theta_init, Real(0), mp.eta);
+        const Real sat = saturation_of(theta, mp.eta);
+        s.theta.assign(n, theta);
+        s.Jw.assign(n, pore_jw(sat, mp.eta));
+        for (size_t p = 0; p < n; ++p) s.mass[p] = moist_mass(V0[p], model.elastic.density, sat, mp);
+    } else {
+        for (size_t p = 0; p < n; ++p) s.mass[p] = V0[p] * model.elastic.density;
+    }
+
+    // the simulation box: given, or derived once from the particle bounds
+    Vec3 lo = X[0], hi = X[0];
+    for (const Vec3& x : X) {
+        lo = lo.cwiseMin(x);
+        hi = hi.cwiseMax(x);
+    }
+    const Real h = model.h;
+    const int pad = model.domain.padding;
+    if (model.domain.is_auto) {
+        const Vec3 extent = hi - lo;
+        for (int d = 0; d < 3; ++d) {
+            const Real margin = std::max(kAutoDomainMargin * extent[d], Real(kAutoDomainCellsBelow) * h) + (pad + 1) * h;
+            s.domain_min[d] = lo[d] - margin;
+            s.domain_max[d] = hi[d] + margin;
+        }
+        // below: a few free cells under the lowest particle, or under the ground it falls onto
+        Real bottom = lo.y();
+        if (model.ground) bottom = std::min(bottom, model.ground->height);
+        s.domain_min.y() = bottom - (kAutoDomainCellsBelow + pad + 1) * h;
+    } else {
+        s.domain_min = model.domain.min;
+        s.domain_max = model.domain.max;
+        const Vec3 inner_lo = s.domain_min + Vec3::Constant(h), inner_hi = s.domain_max - Vec3::Constant(h);
+        if (!((lo.array() >= inner_lo.array()).all() && (hi.array() <= inner_hi.array()).all())) {
+            std::ostringstream os;
+            os << "domain [" << s.domain_min.transpose() << "] - [" << s.domain_max.transpose()
+               << "]: the particles span [" << lo.transpose() << "] - [" << hi.transpose()
+               << "]: must lie at least one cell (h = " << h << ") inside the domain";
+            throw InputError(os.str());
+        }
+    }
+
+    // arrays sorted by grid block from the start
+    SimWorkspace& ws = ensure_workspace(model, s);
+    bin_and_sort(s, ws, true);
+    return s;
+}
+
+Real stable_dt(const SimModel& model, const SimState& state) {
+    if (model.time.dt_fixed > 0) return model.time.dt_fixed;
+    Real dt = model.time.dt_max;
+    // elastic wave bound; with moisture the lightest (dry) particles set the wave speed
+    Real rho = model.elastic.density;
+    if (model.moisture) rho = std::min(rho, model.elastic.density * (1 - model.moisture->eta));
+    const Real c_p = std::sqrt((model.elastic.lambda() + 2 * model.elastic.mu()) / rho);
+    if (c_p > 0) dt = std::min(dt, model.time.cfl_elastic * model.h / c_p);
+    // velocity bound
+    const Real max_v2 = parallel_reduce(
+        static_cast<int64_t>(state.size()), Real(0), [&](int64_t p) { return state.v[p].squaredNorm(); },
+        [](Real a, Real b) { return std::max(a, b); });
+    if (max_v2 > 0) dt = std::min(dt, model.time.cfl_velocity * model.h / std::sqrt(max_v2));
+    return dt;
+}
+
+StepStats step(const SimModel& model, SimState& state, Real dt) {
+    const int64_t substep = state.step_count + 1;
+    if (!(dt > 0) || !std::isfinite(dt)) {
+        std::ostringstream os;
+        os << "substep " << substep << ": time step dt = " << dt << ": must be finite and > 0";
+        throw RuntimeError(os.str());
+    }
+    SimWorkspace& ws = ensure_workspace(model, state);
+    StepStats stats;
+
+    // 1. bin particles into grid blocks (and every few steps reorder their arrays)
+    bin_and_sort(state, ws, false);
+
+    // which parts of the moisture model run this step
+    const bool has_pores = model.moisture && model.moisture->eta > 0;
+    const int interval = has_pores ? std::max(1, model.moisture->interval) : 1;
+    const bool solve_moisture_now = has_pores && state.step_count % interval == 0;
+
+    // 1. P2G (with the moisture fields on solve steps)
+    MoistureGrid* mg = nullptr;
+    if (solve_moisture_now) {
+        mg = &ws.moisture;
+        begin_moisture_p2g(*mg, ws.grid);
+    }
+    mpm::particle_to_grid(model, state, ws.grid, mg, dt, ws.windows);
+
+    // 2. grid velocity update, colliders and walls
+    mpm::update_grid_velocity(model, ws.grid, dt);
+
+    // 3. implicit moisture diffusion with evaporation, dt_m = k dt
+    if (solve_moisture_now) {
+        MoistureSeal seal;
+        seal.seal_colliders = model.moisture->seal_colliders;
+        seal.has_ground = model.ground.has_value();
+        if (seal.has_ground) seal.ground_height = model.ground->height;
+        const MoistureParticles mp{state.x.data(), state.V0.data(), state.J.data(), state.theta.data()};
+        const MoistureSolveStats ms = solve_moisture(*model.moisture, seal, ws.grid, mp, interval * dt, *mg, ws.windows);
+        stats.cg_iterations = ms.iterations;
+        stats.cg_residual = ms.residual;
+    }
+
+    // 4-8. G2P, kinematics, pore update, return mapping, advection, finite-ness
+    const mpm::G2PResult g2p = mpm::grid_to_particle(model, state, ws.grid, mg ? mg->x.data() : nullptr,
+                                                     has_pores, dt, ws.windows);
+    state.time += dt;
+    state.step_count = substep;
+    if (g2p.bad_slot >= 0) {
+        std::string msg = find_non_finite(state, substep);
+        if (msg.empty()) {
+            std::ostringstream os;
+            os << "substep " << substep << ": particle " << state.id[g2p.bad_slot]
+               << " has a non-finite state sum (overflow)";
+            msg = os.str();
+        }
+        throw RuntimeError(msg);
+    }
+
+    stats.active_nodes = 0;
+    const int64_t n_nodes = static_cast<int64_t>(ws.grid.n_blocks()) * mpm::kBlockNodes;
+    for (int64_t i = 0; i < n_nodes; ++i) stats.active_nodes += ws.grid.nodes[i * mpm::kNodeFields] > 0;
+    stats.allocated_nodes = n_nodes;
+    stats.max_speed = g2p.max_speed;
+    return stats;
+}
+
+ParticleFrame state_to_frame(const SimModel& model, const SimState& state, const CacheAttributes& attrs) {
+    const size_t n = state.size();
+    ParticleFrame f;
+    f.time = state.time;
+    f.P.resize(n);
+    if (attrs.velocity) f.v.resize(n);
+    if (attrs.theta) f.theta.resize(n);
+    if (attrs.saturation) f.saturation.resize(n);
+    if (attrs.alpha) f.alpha.resize(n);
+    if (attrs.Jw) f.Jw.resize(n);
+    if (attrs.Fe) f.Fe.resize(n);
+    const Real eta = model.moisture ? model.moisture->eta : 0;
+    const bool has_theta = !state.theta.empty();
+    for (size_t p = 0; p < n; ++p) {
+        const int32_t id = state.id[p];
+        MC_CHECK(id >= 0 && static_cast<size_t>(id) < n);
+        f.P[id] = state.x[p].cast<float>();
+        if (attrs.velocity) f.v[id] = state.v[p].cast<float>();
+        // without moisture the soil counts as saturated (theta = eta = 0, s = 1, Jw = 1)
+        if (attrs.theta) f.theta[id] = has_theta ? static_cast<float>(state.theta[p]) : 0.f;
+        if (attrs.saturation) f.saturation[id] = has_theta ? static_cast<float>(saturation_of(state.theta[p], eta)) : 1.f;
+        if (attrs.alpha) f.alpha[id] = state.alpha.empty() ? 0.f : static_cast<float>(state.alpha[p]);
+        if (attrs.Jw) f.Jw[id] = has_theta ? static_cast<float>(state.Jw[p]) : 1.f;
+        if (attrs.Fe) f.Fe[id] = state.Fe[p].cast<float>();
+    }
+    return f;
+}
+
+int64_t state_memory_bytes(const SimState& s) {
+    int64_t total = capacity_bytes(s.id) + capacity_bytes(s.x) + capacity_bytes(s.v) + capacity_bytes(s.C) +
+                    capacity_bytes(s.Fe) + capacity_bytes(s.J) + capacity_bytes(s.alpha) + capacity_bytes(s.V0) +
+                    capacity_bytes(s.mass) + capacity_bytes(s.theta) + capacity_bytes(s.Jw);
+    if (s.workspace) total += s.workspace->memory_bytes();
+    return total;
+}
+
+}  // namespace mudcrack

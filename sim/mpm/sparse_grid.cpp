@@ -1,0 +1,193 @@
+#include "sim/mpm/sparse_grid.h"
+
+#include <algorithm>
+#include <cmath>
+#include <sstream>
+
+#include "sim/core/error.h"
+
+namespace mudcrack::mpm {
+
+GridGeometry make_grid_geometry(const Vec3& domain_min, const Vec3& domain_max, Real h,
+                                int padding) {
+    GridGeometry g;
+    g.origin = domain_min;
+    g.h = h;
+    g.inv_h = 1 / h;
+    g.padding = padding;
+    double total_blocks = 1;
+    for (int d = 0; d < 3; ++d) {
+        const Real extent = domain_max[d] - domain_min[d];
+        if (!(extent > 4 * h)) {
+            std::ostringstream os;
+            os << "simulation domain axis " << d << " spans " << extent << " m: must be > 4 h = "
+               << 4 * h << " m";
+            throw InputError(os.str());
+        }
+        g.cells[d] = static_cast<int>(std::ceil(extent / h - 1e-9));
+        // nodes 0..cells live in blocks 0..cells/4; one spare layer so pblock + 1 always exists
+        g.blocks[d] = g.cells[d] / kBlockWidth + 2;
+        total_blocks *= g.blocks[d];
+    }
+    if (total_blocks >= 4.0e9) {
+        std::ostringstream os;
+        os << "simulation domain of " << g.cells.transpose() << " cells at h = " << h
+           << " m needs " << total_blocks << " grid blocks: must be < 4e9 (enlarge h or shrink the domain)";
+        throw InputError(os.str());
+    }
+    return g;
+}
+
+const WindowMap& window_map() {
+    static const WindowMap map = [] {
+        WindowMap m{};
+        for (int a = 0; a < kWindowWidth; ++a)
+            for (int b = 0; b < kWindowWidth; ++b)
+                for (int c = 0; c < kWindowWidth; ++c) {
+                    const int n = window_index(a, b, c);
+                    m.neighbor[n] = static_cast<uint8_t>(((a >> 2) * 2 + (b >> 2)) * 2 + (c >> 2));
+                    m.local[n] = static_cast<uint8_t>(block_node_index(a & 3, b & 3, c & 3));
+                }
+        return m;
+    }();
+    return map;
+}
+
+int32_t SparseGrid::find_block(uint32_t key) const {
+    const auto it = std::lower_bound(block_keys.begin(), block_keys.end(), key);
+    if (it == block_keys.end() || *it != key) return -1;
+    return static_cast<int32_t>(it - block_keys.begin());
+}
+
+int64_t SparseGrid::memory_bytes() const {
+    auto bytes = [](const auto& v) {
+        return static_cast<int64_t>(v.capacity() * sizeof(typename std::decay_t<decltype(v)>::value_type));
+    };
+    int64_t total = bytes(particle_key) + bytes(order) + bytes(pblock_key) + bytes(pblock_begin) +
+                    bytes(pblock_neighbors) + bytes(block_keys) + bytes(nodes) +
+                    bytes(sort_key_tmp) + bytes(sort_idx_tmp) + bytes(radix_count) + bytes(neighbor_keys_tmp);
+    for (const auto& c : color_pblocks) total += bytes(c);
+    for (const auto& c : color_prefix) total += bytes(c);
+    return total;
+}
+
+namespace {
+
+// one stable counting-sort pass of the slots in `idx` by bits [shift, shift + 11) of key[slot]
+void radix_pass(const uint32_t* key, int shift, std::vector<int32_t>& idx, std::vector<int32_t>& idx_tmp,
+                std::vector<uint32_t>& count) {
+    constexpr int kDigitBits = 11;
+    constexpr uint32_t kBuckets = 1u << kDigitBits;
+    const size_t n = idx.size();
+    idx_tmp.resize(n);
+    count.assign(kBuckets, 0u);
+    for (size_t i = 0; i < n; ++i) ++count[(key[idx[i]] >> shift) & (kBuckets - 1)];
+    uint32_t sum = 0;
+    for (uint32_t& c : count) {
+        const uint32_t here = c;
+        c = sum;
+        sum += here;
+    }
+    for (size_t i = 0; i < n; ++i) idx_tmp[count[(key[idx[i]] >> shift) & (kBuckets - 1)]++] = idx[i];
+    idx.swap(idx_tmp);
+}
+
+int bits_for(uint64_t count) {
+    int bits = 1;
+    while ((uint64_t(1) << bits) < count) ++bits;
+    return bits;
+}
+
+}  // namespace
+
+void bin_particles(SparseGrid& grid, const std::vector<Vec3>& x, const std::vector<int32_t>& id) {
+    const GridGeometry& geo = grid.geo;
+    const int64_t n = static_cast<int64_t>(x.size());
+
+    // block key of every particle's stencil base node
+    grid.particle_key.resize(n);
+    grid.order.resize(n);
+    parallel_for(n, [&](int64_t p) {
+        const Vec3 xg = geo.to_grid(x[p]);
+        int b[3];
+        for (int d = 0; d < 3; ++d)
+            b[d] = static_cast<int>(std::floor(xg[d] - Real(0.5))) >> 2;
+        grid.particle_key[p] = geo.block_key(b[0], b[1], b[2]);
+        grid.order[p] = static_cast<int32_t>(p);
+    });
+
+    // order slots by (block, particle id): canonical, so the scatter order (and every bit of the
+    // result) does not depend on how the arrays happen to be ordered, e.g. after a resume.
+    // Skipped when the slots are already in that order (right after the arrays were permuted).
+    bool sorted = true;
+    for (int64_t p = 1; p < n && sorted; ++p)
+        sorted = grid.particle_key[p - 1] < grid.particle_key[p] ||
+                 (grid.particle_key[p - 1] == grid.particle_key[p] && id[p - 1] < id[p]);
+    if (!sorted) {
+        const uint32_t* id_key = reinterpret_cast<const uint32_t*>(id.data());
+        const int id_bits = bits_for(static_cast<uint64_t>(n));
+        const int block_bits =
+            bits_for(static_cast<uint64_t>(geo.blocks.x()) * geo.blocks.y() * geo.blocks.z());
+        for (int shift = 0; shift < id_bits; shift += 11) radix_pass(id_key, shift, grid.order, grid.sort_idx_tmp, grid.radix_count);
+        for (int shift = 0; shift < block_bits; shift += 11)
+            radix_pass(grid.particle_key.data(), shift, grid.order, grid.sort_idx_tmp, grid.radix_count);
+    }
+    std::vector<uint32_t>& sorted_key = grid.sort_key_tmp;
+    sorted_key.resize(n);
+    parallel_for(n, [&](int64_t i) { sorted_key[i] = grid.particle_key[grid.order[i]]; });
+
+    // particle blocks: runs of equal keys
+    grid.pblock_key.clear();
+    grid.pblock_begin.clear();
+    for (int64_t i = 0; i < n; ++i) {
+        if (i == 0 || sorted_key[i] != sorted_key[i - 1]) {
+            grid.pblock_key.push_back(sorted_key[i]);
+            grid.pblock_begin.push_back(static_cast<int32_t>(i));
+        }
+    }
+    grid.pblock_begin.push_back(static_cast<int32_t>(n));
+    const size_t npb = grid.pblock_key.size();
+
+    // allocated blocks: every particle block and its +1 neighbours
+    std::vector<uint32_t>& keys = grid.neighbor_keys_tmp;
+    keys.clear();
+    keys.reserve(npb * 8);
+    for (uint32_t k : grid.pblock_key) {
+        const Vec3i b = geo.block_coord(k);
+        for (int dx = 0; dx < 2; ++dx)
+            for (int dy = 0; dy < 2; ++dy)
+                for (int dz = 0; dz < 2; ++dz) keys.push_back(geo.block_key(b.x() + dx, b.y() + dy, b.z() + dz));
+    }
+    std::sort(keys.begin(), keys.end());
+    keys.erase(std::unique(keys.begin(), keys.end()), keys.end());
+    grid.block_keys.assign(keys.begin(), keys.end());
+
+    // neighbour slots and colours of the particle blocks
+    grid.pblock_neighbors.resize(npb);
+    for (auto& c : grid.color_pblocks) c.clear();
+    for (size_t i = 0; i < npb; ++i) {
+        const Vec3i b = geo.block_coord(grid.pblock_key[i]);
+        for (int dx = 0; dx < 2; ++dx)
+            for (int dy = 0; dy < 2; ++dy)
+                for (int dz = 0; dz < 2; ++dz)
+                    grid.pblock_neighbors[i][(dx * 2 + dy) * 2 + dz] =
+                        grid.find_block(geo.block_key(b.x() + dx, b.y() + dy, b.z() + dz));
+        const int color = (b.x() & 1) | ((b.y() & 1) << 1) | ((b.z() & 1) << 2);
+        grid.color_pblocks[color].push_back(static_cast<int32_t>(i));
+    }
+    for (int c = 0; c < 8; ++c) {
+        std::vector<int32_t>& prefix = grid.color_prefix[c];
+        prefix.assign(1, 0);
+        for (int32_t pb : grid.color_pblocks[c])
+            prefix.push_back(prefix.back() + grid.pblock_begin[pb + 1] - grid.pblock_begin[pb]);
+    }
+
+    // zeroed node fields
+    const int64_t n_values = static_cast<int64_t>(grid.n_blocks()) * kBlockNodes * kNodeFields;
+    grid.nodes.resize(n_values);
+    parallel_chunks(n_values, [&](int, int64_t b, int64_t e) {
+        std::fill(grid.nodes.begin() + b, grid.nodes.begin() + e, Real(0));
+    });
+}
+
+}  // namespace mudcrack::mpm

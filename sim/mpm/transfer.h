@@ -1,0 +1,42 @@
+#pragma once
+/// The three grid passes of one MLS-MPM step (physics.md 1.2-1.4 and 7): P2G with the fused MLS
+/// stress, the grid velocity update with colliders, and G2P with the per-particle constitutive
+/// update (kinematics, pore update, return mapping, advection, finite-ness check).
+#include <cstdint>
+#include <vector>
+
+#include "sim/core/types.h"
+#include "sim/model.h"
+#include "sim/mpm/simulation.h"
+#include "sim/mpm/sparse_grid.h"
+#include "sim/moisture/moisture_solver.h"
+
+namespace mudcrack::mpm {
+
+/// Scatters mass and APIC momentum with the MLS stress term
+/// A_p = m_p C_p - dt V0_p (4/h^2) tau_p (physics.md 1.2) into grid.nodes, which
+/// bin_particles zeroed. With `moisture` non-null also W_i, (V theta)_i and
+/// sum_p V_p |grad w_ip|^2 (physics.md 7 step 1); those fields must be zeroed (begin_moisture_p2g).
+/// @param dt time step [s]  @param windows per-thread scratch of 8 * 216 values
+void particle_to_grid(const SimModel& model, const SimState& state, SparseGrid& grid, MoistureGrid* moisture,
+                      Real dt, std::vector<std::vector<Real>>& windows);
+
+/// Grid update v_i = (m v)_i / m_i + dt g, then the ground collider and the domain walls
+/// (physics.md 1.3). Nodes without mass get v = 0.
+void update_grid_velocity(const SimModel& model, SparseGrid& grid, Real dt);
+
+/// What G2P found.
+struct G2PResult {
+    Real max_speed = 0;        // max |v_p| after the step [m/s]
+    int32_t bad_slot = -1;     // a slot whose state is not finite, or -1
+};
+
+/// G2P and the particle update of physics.md 7 steps 4-8: v, C, theta (FLIP increment from
+/// dtheta, if non-null), Fe_trial = (I + dt C) Fe, J *= det(I + dt C), the pore update when
+/// `pore_update`, the NACC return mapping (when the model has plasticity), x += dt v clamped into
+/// the domain box. Checks every particle for a finite state.
+/// @param dtheta node field theta^{n+1} - theta^n, or null when moisture was not solved this step
+G2PResult grid_to_particle(const SimModel& model, SimState& state, const SparseGrid& grid, const Real* dtheta,
+                           bool pore_update, Real dt, std::vector<std::vector<Real>>& windows);
+
+}  // namespace mudcrack::mpm

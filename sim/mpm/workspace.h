@@ -1,0 +1,26 @@
+#pragma once
+/// The step's scratch (never serialized): the sparse grid, the moisture node fields (empty
+/// without moisture), per-thread scatter windows and the particle-permutation buffer.
+#include <cstdint>
+#include <vector>
+
+#include "sim/moisture/moisture_solver.h"
+#include "sim/mpm/sparse_grid.h"
+
+namespace mudcrack {
+
+struct SimWorkspace {
+    mpm::SparseGrid grid;
+    MoistureGrid moisture;                      // allocated only when a moisture solve runs
+    std::vector<std::vector<Real>> windows;     // per thread, 8 values per window node
+    std::vector<Real> permute_buffer;           // one attribute's values while reordering slots
+
+    int64_t memory_bytes() const {
+        int64_t total = grid.memory_bytes() + moisture.memory_bytes() +
+                        static_cast<int64_t>(permute_buffer.capacity() * sizeof(Real));
+        for (const auto& w : windows) total += static_cast<int64_t>(w.capacity() * sizeof(Real));
+        return total;
+    }
+};
+
+}  // namespace mudcrack

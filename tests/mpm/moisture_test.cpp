@@ -1,0 +1,374 @@
+// Moisture: conservation, 1D diffusion against erf with its convergence order, CG against a
+// direct solve, drying shrinkage, eta = 0 equals no moisture, evaporation only at air faces.
+#include <gtest/gtest.h>
+
+#include <Eigen/Dense>
+#include <Eigen/SparseCholesky>
+#include <cmath>
+#include <cstring>
+#include <map>
+#include <random>
+
+#include "mpm_test_util.h"
+#include "sim/core/parallel.h"
+#include "sim/moisture/pore.h"
+#include "sim/mpm/bspline.h"
+#include "sim/mpm/simulation.h"
+#include "tolerance.h"
+
+namespace mudcrack {
+namespace {
+
+using test::make_lattice;
+using test::plain_model;
+
+const bool kOneThread = (set_thread_count(1), true);
+
+// tolerance of the 1 % volume check of a fully dried block
+constexpr Real kDriedVolumeTolerance = 0.01;
+
+// a model whose mechanics stay still: tiny stiffness, no gravity, so only theta evolves
+SimModel still_model(Real h) {
+    SimModel m = plain_model(h);
+    m.elastic.youngs_modulus = 1e-9;
+    m.moisture = MoistureParams{};
+    m.moisture->eta = 0.5;
+    m.moisture->lambda = 0;
+    m.moisture->cg_tolerance = 1e-14;
+    m.moisture->cg_max_iterations = 500;
+    return m;
+}
+
+// sets theta per particle and the matching Jw and mass
+template <class Fn>
+void set_theta(const SimModel& model, SimState& s, Fn&& theta_of_x) {
+    const MoistureParams& mp = *model.moisture;
+    for (size_t p = 0; p < s.size(); ++p) {
+        s.theta[p] = theta_of_x(s.x[p]);
+        const Real sat = saturation_of(s.theta[p], mp.eta);
+        s.Jw[p] = pore_jw(sat, mp.eta);
+        s.mass[p] = moist_mass(s.V0[p], model.elastic.density, sat, mp);
+    }
+}
+
+TEST(Moisture, WaterIsConservedWithoutEvaporation) {
+    SimModel model = still_model(0.1);
+    model.moisture->D = 0.5;  // D dt/h^2 = 0.05
+    const test::Lattice l = make_lattice(Vec3::Zero(), Vec3i(10, 6, 8), 0.05);
+    SimState s = make_initial_state(model, l.X, l.V0);
+    std::mt19937 rng(11);
+    std::uniform_real_distribution<Real> u(-0.02, 0.02);
+    // a smooth wave the grid resolves plus particle noise
+    set_theta(model, s, [&](const Vec3& x) { return 0.25 + 0.1 * std::sin(2 * M_PI * x.x() / 0.5) + u(rng); });
+    auto spread = [&] {  // standard deviation of theta
+        Real mean = 0, var = 0;
+        for (Real t : s.theta) mean += t / s.size();
+        for (Real t : s.theta) var += (t - mean) * (t - mean) / s.size();
+        return std::sqrt(var);
+    };
+    const Real spread0 = spread();
+    for (int i = 0; i < 10; ++i) {
+        Real before = 0;
+        std::vector<Real> V(s.size());
+        for (size_t p = 0; p < s.size(); ++p) {
+            V[p] = s.V0[p] * s.J[p];
+            before += V[p] * s.theta[p];
+        }
+        const StepStats st = step(model, s, 1e-3);
+        Real after = 0;
+        for (size_t p = 0; p < s.size(); ++p) after += V[p] * s.theta[p];
+        EXPECT_NEAR(after, before, tol::kRoundoffLoose * before) << "step " << i;
+        EXPECT_GT(st.cg_iterations, 0);
+        EXPECT_LE(st.cg_residual, 1e-13);
+    }
+    // and it did diffuse (the FLIP increment smooths only what the grid resolves)
+    std::printf("theta spread %.4f -> %.4f\n", spread0, spread());
+    EXPECT_LT(spread(), 0.9 * spread0);
+}
+
+// L2 error of theta along a thin insulated bar against eta/2 erfc(x / (2 sqrt(D t)))
+Real diffusion_error(Real h) {
+    const Real D = 0.01, t0 = 0.25, t1 = 0.5, L = 1.0;
+    SimModel model = still_model(h);
+    model.moisture->D = D;
+    const Real eta = model.moisture->eta;
+    const int n_along = static_cast<int>(std::lround(2 * L / h)) * 2;
+    const test::Lattice l = make_lattice(Vec3(-L, 0, 0), Vec3i(n_along, 4, 4), h / 2);
+    SimState s = make_initial_state(model, l.X, l.V0);
+    auto exact = [&](Real x, Real t) { return eta / 2 * std::erfc(x / (2 * std::sqrt(D * t))); };
+    set_theta(model, s, [&](const Vec3& x) { return exact(x.x(), t0); });
+    // dt proportional to h^2 (backward Euler is first order in time)
+    const int steps = static_cast<int>(std::lround((t1 - t0) / (0.4 * h * h / D)));
+    const Real dt = (t1 - t0) / steps;
+    for (int i = 0; i < steps; ++i) step(model, s, dt);
+    Real err2 = 0;
+    for (size_t p = 0; p < s.size(); ++p) err2 += std::pow(s.theta[p] - exact(s.x[p].x(), t1), 2);
+    return std::sqrt(err2 / s.size());
+}
+
+TEST(Moisture, DiffusionMatchesErfAndConvergesAtSecondOrder) {
+    const Real e1 = diffusion_error(0.04), e2 = diffusion_error(0.02), e3 = diffusion_error(0.01);
+    const Real order12 = std::log2(e1 / e2), order23 = std::log2(e2 / e3);
+    std::printf("erf diffusion: L2 error %.3e %.3e %.3e, orders %.2f %.2f\n", e1, e2, e3, order12, order23);
+    EXPECT_LT(e3, 1e-3);  // eta/2 = 0.25: 0.4 % of the jump
+    // quadratic B-splines with lumped mass and dt ~ h^2: second order
+    EXPECT_GT(order12, 1.7);
+    EXPECT_GT(order23, 1.7);
+}
+
+TEST(Moisture, ConjugateGradientsMatchAnEigenDirectSolve) {
+    SimModel model = still_model(0.1);
+    model.moisture->D = 1.0;  // D dt/h^2 = 1: L matters
+    const Real dt = 1e-2;
+    const test::Lattice l = make_lattice(Vec3::Zero(), Vec3i(8, 7, 6), 0.05);
+    SimState s = make_initial_state(model, l.X, l.V0);
+    std::mt19937 rng(5);
+    std::uniform_real_distribution<Real> u(0.15, 0.35);
+    set_theta(model, s, [&](const Vec3&) { return u(rng); });
+    const std::vector<Vec3> x0 = s.x;
+    const std::vector<Real> theta0 = s.theta;
+    std::vector<Real> V(s.size());
+    for (size_t p = 0; p < s.size(); ++p) V[p] = s.V0[p] * s.J[p];
+
+    // assemble M + L and M theta^n explicitly over the nodes the particles touch
+    const Real h = model.h, inv_h = 1 / h, D = model.moisture->D;
+    std::map<std::array<int, 3>, int> index;
+    std::vector<mpm::Stencil> stencils;
+    for (const Vec3& x : x0) {
+        stencils.push_back(mpm::make_stencil((x - s.domain_min) * inv_h));
+        const mpm::Stencil& st = stencils.back();
+        for (int a = 0; a < 3; ++a)
+            for (int b = 0; b < 3; ++b)
+                for (int c = 0; c < 3; ++c)
+                    if (st.weight(a, b, c) > 0)  // the active nodes: W_i > 0
+                        index.emplace(std::array<int, 3>{st.axis[0].base + a, st.axis[1].base + b, st.axis[2].base + c},
+                                      static_cast<int>(index.size()));
+    }
+    const int n = static_cast<int>(index.size());
+    Eigen::MatrixXd A = Eigen::MatrixXd::Zero(n, n);
+    Eigen::VectorXd W = Eigen::VectorXd::Zero(n), Vtheta = Eigen::VectorXd::Zero(n);
+    for (size_t p = 0; p < x0.size(); ++p) {
+        const mpm::Stencil& st = stencils[p];
+        std::vector<std::pair<int, std::pair<Real, Vec3>>> nodes;
+        for (int a = 0; a < 3; ++a)
+            for (int b = 0; b < 3; ++b)
+                for (int c = 0; c < 3; ++c) {
+                    if (!(st.weight(a, b, c) > 0)) continue;
+                    const int i = index.at({st.axis[0].base + a, st.axis[1].base + b, st.axis[2].base + c});
+                    nodes.push_back({i, {st.weight(a, b, c), st.gradient(a, b, c, inv_h)}});
+                }
+        for (const auto& [i, wi] : nodes) {
+            W[i] += V[p] * wi.first;
+            Vtheta[i] += V[p] * wi.first * theta0[p];
+            for (const auto& [j, wj] : nodes) A(i, j) += V[p] * D * wi.second.dot(wj.second);
+        }
+    }
+    Eigen::VectorXd theta_n = Vtheta.cwiseQuotient(W);
+    for (int i = 0; i < n; ++i) A(i, i) += W[i] / dt;
+    const Eigen::VectorXd rhs = (W / dt).cwiseProduct(theta_n);
+    const Eigen::SparseMatrix<double> A_sparse = A.sparseView();
+    const Eigen::SimplicialLLT<Eigen::SparseMatrix<double>> llt(A_sparse);
+    ASSERT_EQ(llt.info(), Eigen::Success) << "M + L must be symmetric positive definite";
+    const Eigen::VectorXd theta_next = llt.solve(rhs);
+    const Eigen::VectorXd dtheta = theta_next - theta_n;
+
+    const std::vector<size_t> slot0 = test::slot_of_id(s);
+    step(model, s, dt);
+    const std::vector<size_t> slot1 = test::slot_of_id(s);
+    Real max_err = 0;
+    for (size_t id = 0; id < s.size(); ++id) {
+        const size_t p0 = slot0[id];
+        const mpm::Stencil& st = stencils[p0];
+        Real expect = theta0[p0];
+        for (int a = 0; a < 3; ++a)
+            for (int b = 0; b < 3; ++b)
+                for (int c = 0; c < 3; ++c)
+                    if (st.weight(a, b, c) > 0)
+                        expect += st.weight(a, b, c) *
+                                  dtheta[index.at({st.axis[0].base + a, st.axis[1].base + b, st.axis[2].base + c})];
+        const Real err = std::abs(expect - s.theta[slot1[id]]);
+        if (!(err <= max_err)) max_err = err;  // a NaN sticks
+    }
+    ASSERT_TRUE(std::isfinite(max_err));
+    EXPECT_LT(max_err, 1e-10) << "CG and the Cholesky solve disagree";
+}
+
+// the implicit Robin variant agrees with the explicit one for mild evaporation and stays near
+// theta_0 for a huge evaporation coefficient, where the explicit one overshoots
+TEST(Moisture, ImplicitRobinAgreesAndDampsOvershoot) {
+    auto run = [](bool implicit, Real lambda) {
+        SimModel model = still_model(0.1);
+        model.moisture->D = 0.1;
+        model.moisture->lambda = lambda;
+        model.moisture->theta0 = 0.1;
+        model.moisture->implicit_robin = implicit;
+        const test::Lattice l = make_lattice(Vec3::Zero(), Vec3i(8, 8, 8), 0.05);
+        SimState s = make_initial_state(model, l.X, l.V0);
+        for (int i = 0; i < 3; ++i) step(model, s, 1e-3);
+        std::vector<Real> theta(s.size());
+        for (size_t p = 0; p < s.size(); ++p) theta[s.id[p]] = s.theta[p];
+        return theta;
+    };
+    const Real eta = MoistureParams{}.eta;
+    const std::vector<Real> a = run(false, 0.2), b = run(true, 0.2);
+    Real max_change = 0, max_diff = 0;
+    for (size_t i = 0; i < a.size(); ++i) {
+        max_change = std::max(max_change, eta - a[i]);
+        max_diff = std::max(max_diff, std::abs(a[i] - b[i]));
+    }
+    EXPECT_GT(max_change, 1e-4);
+    EXPECT_LT(max_diff, 0.05 * max_change);
+    const std::vector<Real> stiff = run(true, 1e5), stiff_explicit = run(false, 1e5);
+    Real lowest = 1, lowest_explicit = 1;
+    for (size_t i = 0; i < stiff.size(); ++i) {
+        lowest = std::min(lowest, stiff[i]);
+        lowest_explicit = std::min(lowest_explicit, stiff_explicit[i]);
+    }
+    std::printf("lambda = 1e5: lowest theta implicit %.4f, explicit %.4f (theta_0 = 0.1)\n", lowest, lowest_explicit);
+    // B-spline quadrature has no discrete maximum principle, so the implicit term may dip below
+    // theta_0 a little; the explicit one overshoots all the way to the clamp at 0
+    EXPECT_GT(lowest, 0.05);
+    EXPECT_LT(lowest, 0.1 + 0.05);  // the surface reached the ambient moisture
+    EXPECT_LT(lowest_explicit, lowest);
+}
+
+TEST(Moisture, FreeBlockThatDriesFullyEndsAtDryVolume) {
+    SimModel model = plain_model(0.1);
+    model.elastic.youngs_modulus = 1e5;
+    model.moisture = MoistureParams{};
+    model.moisture->eta = 0.5;
+    model.moisture->D = 1.0;
+    model.moisture->lambda = 2.0;
+    model.moisture->theta0 = 0;
+    const test::Lattice l = make_lattice(Vec3::Zero(), Vec3i(8, 8, 8), 0.05);
+    SimState s = make_initial_state(model, l.X, l.V0);
+    Real V0_total = 0;
+    for (Real v : s.V0) V0_total += v;
+    for (Real t = 0; t < 2.0;) {
+        const Real dt = stable_dt(model, s);
+        step(model, s, dt);
+        t += dt;
+    }
+    Real V_total = 0, theta_max = 0;
+    for (size_t p = 0; p < s.size(); ++p) {
+        V_total += s.V0[p] * s.J[p];
+        theta_max = std::max(theta_max, s.theta[p]);
+    }
+    EXPECT_LT(theta_max, 1e-3);
+    EXPECT_NEAR(V_total / V0_total, 1 - model.moisture->eta, kDriedVolumeTolerance * (1 - model.moisture->eta));
+}
+
+TEST(Moisture, EtaZeroIsBitwiseIdenticalToNoMoisture) {
+    SimModel dry = plain_model(0.1);
+    dry.gravity = Vec3(0, -9.81, 0);
+    dry.ground = GroundParams{};
+    dry.nacc = NaccParams{};
+    dry.nacc->alpha0 = std::log(0.99);
+    dry.nacc->beta0 = 0.3;  // must not matter: eta = 0 means saturated, beta = beta1
+    SimModel wet = dry;
+    wet.moisture = MoistureParams{};
+    wet.moisture->eta = 0;
+    wet.moisture->lambda = 1;
+    const test::Lattice l = make_lattice(Vec3(0, 0.05, 0), Vec3i(6, 6, 6), 0.05);
+    SimState a = make_initial_state(dry, l.X, l.V0), b = make_initial_state(wet, l.X, l.V0);
+    for (int i = 0; i < 30; ++i) {
+        step(dry, a, stable_dt(dry, a));
+        step(wet, b, stable_dt(wet, b));
+    }
+    EXPECT_EQ(std::memcmp(a.x.data(), b.x.data(), a.size() * sizeof(Vec3)), 0);
+    EXPECT_EQ(std::memcmp(a.Fe.data(), b.Fe.data(), a.size() * sizeof(Mat3)), 0);
+    EXPECT_EQ(std::memcmp(a.alpha.data(), b.alpha.data(), a.size() * sizeof(Real)), 0);
+    EXPECT_EQ(a.time, b.time);
+}
+
+// a wide block on a sticky ground, no diffusion: only particles next to air lose water
+TEST(Moisture, EvaporatesOnlyAtAirExposedFaces) {
+    auto run = [](bool seal) {
+        SimModel model = plain_model(0.1);
+        model.ground = GroundParams{};
+        model.moisture = MoistureParams{};
+        model.moisture->D = 0;
+        model.moisture->lambda = 0.5;
+        model.moisture->seal_colliders = seal;
+        const test::Lattice l = make_lattice(Vec3::Zero(), Vec3i(16, 8, 16), 0.05);
+        SimState s = make_initial_state(model, l.X, l.V0);
+        for (int i = 0; i < 10; ++i) step(model, s, 1e-3);
+        return s;
+    };
+    for (bool seal : {true, false}) {
+        const SimState s = run(seal);
+        const Real eta = MoistureParams{}.eta;
+        Real bottom = 0, top = 0;
+        int nb = 0, nt = 0;
+        for (size_t p = 0; p < s.size(); ++p) {
+            const Vec3& x = s.x[p];
+            if (std::abs(x.x() - 0.4) > 0.1 || std::abs(x.z() - 0.4) > 0.1) continue;  // centre column
+            if (x.y() < 0.05) bottom += s.theta[p], ++nb;
+            if (x.y() > 0.35) top += s.theta[p], ++nt;
+        }
+        ASSERT_GT(nb, 0);
+        ASSERT_GT(nt, 0);
+        bottom /= nb;
+        top /= nt;
+        EXPECT_LT(top, eta - 1e-4) << "the top face must dry (seal " << seal << ")";
+        if (seal)
+            EXPECT_EQ(bottom, eta) << "a sealed bottom keeps its water";
+        else
+            EXPECT_LT(bottom, eta - 1e-4) << "an unsealed bottom dries too";
+    }
+}
+
+TEST(Pore, StepMatchesTheClosedFormAndCapsTheJump) {
+    const Real eta = 0.5;
+    for (Real Jw_old : {1.0, 0.8, 0.55})
+        for (Real sat : {0.0, 0.3, 0.9999, 1.0}) {
+            for (Real tiny : {0.0, 1e-7, -3e-6}) {
+                const Real s = std::clamp(sat + tiny, 0.0, 1.0);
+                const Real target = pore_jw(s, eta);
+                const PoreStep ps = pore_step(Jw_old, s, eta, 0);  // uncapped
+                EXPECT_NEAR(ps.Jw, target, tol::kRoundoff);
+                EXPECT_NEAR(ps.log_ratio, std::log(target / Jw_old), tol::kRoundoff);
+                EXPECT_NEAR(ps.Fe_scale, std::cbrt(Jw_old / target), tol::kRoundoff);
+            }
+        }
+    // a large drop is capped at max_log_step and the remainder carried
+    const PoreStep capped = pore_step(1.0, 0.0, eta, 1e-3);
+    EXPECT_NEAR(capped.log_ratio, -1e-3, tol::kRoundoff);
+    EXPECT_NEAR(capped.Jw, std::exp(-1e-3), tol::kRoundoff);
+    EXPECT_NEAR(capped.Fe_scale, std::exp(1e-3 / 3), tol::kRoundoff);
+    const PoreStep next = pore_step(capped.Jw, 0.0, eta, 1e-3);
+    EXPECT_NEAR(next.Jw, std::exp(-2e-3), tol::kRoundoff);
+    // unchanged saturation: exactly nothing
+    const PoreStep same = pore_step(pore_jw(0.4, eta), 0.4, eta, 1e-3);
+    EXPECT_EQ(same.Fe_scale, 1.0);
+    EXPECT_EQ(same.log_ratio, 0.0);
+    // mass and cohesion
+    MoistureParams mp;
+    mp.eta = 0.4;
+    mp.k_r = 2;
+    EXPECT_NEAR(moist_mass(2.0, 1000, 1.0, mp), 2.0 * (1000 * 0.6 + 500 * 0.4), tol::kRoundoff * 1e3);
+    NaccParams np;
+    np.beta0 = 3;
+    np.beta1 = 1;
+    EXPECT_NEAR(cohesion_of(np, 0.25), 2.5, tol::kRoundoff);
+    EXPECT_EQ(saturation_of(0.2, 0.0), 1.0);
+}
+
+TEST(Moisture, SolvingEveryKStepsCountsItsIterations) {
+    SimModel model = still_model(0.1);
+    model.moisture->D = 0.5;
+    model.moisture->interval = 3;
+    const test::Lattice l = make_lattice(Vec3::Zero(), Vec3i(6, 6, 6), 0.05);
+    SimState s = make_initial_state(model, l.X, l.V0);
+    set_theta(model, s, [&](const Vec3& x) { return 0.1 + 0.3 * x.x(); });
+    for (int i = 0; i < 6; ++i) {
+        const StepStats st = step(model, s, 1e-3);
+        if (i % 3 == 0)
+            EXPECT_GT(st.cg_iterations, 0) << "step " << i;
+        else
+            EXPECT_EQ(st.cg_iterations, 0) << "step " << i;
+    }
+}
+
+}  // namespace
+}  // namespace mudcrack

@@ -1,0 +1,113 @@
+// The issue-3 reference scene: a 0.49 m cube of 125,000 NACC particles (2x2x2 per cell, h = 0.02)
+// falling at 2 m/s onto a sticky ground, dt = 2e-4 fixed, with and without moisture, on 1 and 2
+// threads. Reports particle-steps/s and bytes per particle of simulation state (grid included).
+//
+//   build-mpm/bin/mpm_bench                    # 404 steps per run, 3 runs each, medians
+//   MUDCRACK_BENCH_STEPS=100 build-mpm/bin/mpm_bench --benchmark_filter=NoMoisture/1
+#include <benchmark/benchmark.h>
+
+#include <cmath>
+#include <cstdlib>
+#include <ctime>
+
+#include "sim/core/parallel.h"
+#include "sim/core/stats.h"
+#include "sim/mpm/simulation.h"
+
+namespace mudcrack {
+namespace {
+
+constexpr int kDefaultSteps = 404;
+
+// process CPU time [s]: on a loaded machine wall time measures the other jobs too; with one
+// thread, steps per CPU second is what an idle machine would give
+double process_cpu_seconds() {
+    timespec t;
+    clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &t);
+    return static_cast<double>(t.tv_sec) + 1e-9 * static_cast<double>(t.tv_nsec);
+}
+
+int bench_steps() {
+    const char* env = std::getenv("MUDCRACK_BENCH_STEPS");
+    return env ? std::max(1, std::atoi(env)) : kDefaultSteps;
+}
+
+// moisture_interval: 0 = no moisture section, k = solve the moisture every k steps
+SimModel reference_model(int moisture_interval) {
+    SimModel m;
+    m.h = 0.02;
+    m.gravity = Vec3(0, -9.81, 0);
+    m.initial_velocity = Vec3(0, -2, 0);
+    m.elastic.density = 2;
+    m.elastic.youngs_modulus = 1000;
+    m.elastic.poisson_ratio = 0.35;
+    m.nacc = NaccParams{};
+    m.nacc->alpha0 = std::log(0.99);
+    m.nacc->M = 1.85;
+    m.nacc->beta0 = m.nacc->beta1 = 2;
+    m.nacc->xi = 3;
+    m.ground = GroundParams{};
+    m.ground->height = 0;
+    m.ground->mode = ColliderMode::Sticky;
+    m.time.dt_fixed = 2e-4;
+    if (moisture_interval > 0) {
+        m.moisture = MoistureParams{};
+        m.moisture->interval = moisture_interval;
+    }
+    return m;
+}
+
+// 50^3 particles at spacing 0.01 (2 per cell per axis), the cube's bottom 2 cells above the ground
+void reference_particles(std::vector<Vec3>& X, std::vector<Real>& V0) {
+    constexpr int n = 50;
+    constexpr Real spacing = 0.01;
+    X.clear();
+    V0.clear();
+    for (int k = 0; k < n; ++k)
+        for (int j = 0; j < n; ++j)
+            for (int i = 0; i < n; ++i) {
+                X.emplace_back(spacing * (i + 0.5), 0.04 + spacing * (j + 0.5), spacing * (k + 0.5));
+                V0.push_back(spacing * spacing * spacing);
+            }
+}
+
+void BM_ReferenceScene(benchmark::State& bs, int moisture_interval) {
+    const int threads = static_cast<int>(bs.range(0));
+    set_thread_count(threads);
+    const SimModel model = reference_model(moisture_interval);
+    std::vector<Vec3> X;
+    std::vector<Real> V0;
+    reference_particles(X, V0);
+    const int steps = bench_steps();
+    int64_t particle_steps = 0;
+    double bytes_per_particle = 0, cg_iterations = 0, cpu_seconds = 0;
+    for (auto _ : bs) {
+        bs.PauseTiming();
+        SimState state = make_initial_state(model, X, V0);
+        bs.ResumeTiming();
+        const double cpu0 = process_cpu_seconds();
+        int cg = 0;
+        for (int i = 0; i < steps; ++i) cg += step(model, state, stable_dt(model, state)).cg_iterations;
+        cpu_seconds += process_cpu_seconds() - cpu0;
+        particle_steps += static_cast<int64_t>(state.size()) * steps;
+        bytes_per_particle = static_cast<double>(state_memory_bytes(state)) / state.size();
+        cg_iterations = static_cast<double>(cg) / steps;
+    }
+    bs.counters["particle_steps_per_s"] = benchmark::Counter(static_cast<double>(particle_steps), benchmark::Counter::kIsRate);
+    bs.counters["particle_steps_per_cpu_s"] = static_cast<double>(particle_steps) / cpu_seconds;
+    bs.counters["bytes_per_particle"] = bytes_per_particle;
+    bs.counters["cg_iters_per_step"] = cg_iterations;
+    bs.counters["peak_rss_MB"] = static_cast<double>(peak_rss_bytes()) / (1 << 20);
+}
+
+BENCHMARK_CAPTURE(BM_ReferenceScene, NoMoisture, 0)
+    ->Arg(1)->Arg(2)->Iterations(1)->Repetitions(3)->UseRealTime()->Unit(benchmark::kSecond);
+BENCHMARK_CAPTURE(BM_ReferenceScene, Moisture, 1)
+    ->Arg(1)->Arg(2)->Iterations(1)->Repetitions(3)->UseRealTime()->Unit(benchmark::kSecond);
+BENCHMARK_CAPTURE(BM_ReferenceScene, MoistureEvery4Steps, 4)
+    ->Arg(1)->Arg(2)->Iterations(1)->Repetitions(3)->UseRealTime()->Unit(benchmark::kSecond);
+
+}  // namespace
+}  // namespace mudcrack
+
+BENCHMARK_MAIN();
