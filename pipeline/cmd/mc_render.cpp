@@ -9,6 +9,7 @@
 #include <cstdlib>
 #include <filesystem>
 #include <optional>
+#include <set>
 #include <string>
 #include <utility>
 #include <vector>
@@ -46,7 +47,9 @@ struct FrameSource {
     fs::path dir;        // DIR/surface or DIR/sim
     std::string format;  // mesh extension ("glb", ...) or "vdb"
     float particle_radius = 0;  // [m], particles only
+    std::set<int> frames_without_cracks;  // mc-surface writes no crack file for a frame with no crack
 
+    bool has_cracks_at(int f) const { return has_cracks && !frames_without_cracks.count(f); }
     fs::path boundary_path(int f) const { return frame_path(dir, "boundary", f, format); }
     fs::path crack_path(int f) const { return frame_path(dir, "crack", f, format); }
     fs::path particles_path(int f) const { return frame_path(dir, "particles", f, "vdb"); }
@@ -55,7 +58,7 @@ struct FrameSource {
     std::vector<fs::path> files(int f) const {
         if (!has_meshes) return {particles_path(f)};
         std::vector<fs::path> out = {boundary_path(f)};
-        if (has_cracks) out.push_back(crack_path(f));
+        if (has_cracks_at(f)) out.push_back(crack_path(f));
         return out;
     }
 };
@@ -89,7 +92,7 @@ Scene load_scene(const FrameSource& src, int f) {
     Scene scene;
     if (src.has_meshes) {
         for (TriMesh& m : import_meshes(src.boundary_path(f))) scene.meshes.push_back({std::move(m), SurfaceKind::Boundary});
-        if (src.has_cracks)
+        if (src.has_cracks_at(f))
             for (TriMesh& m : import_meshes(src.crack_path(f))) scene.meshes.push_back({std::move(m), SurfaceKind::Crack});
         return scene;
     }
@@ -159,6 +162,11 @@ int run(const StageOptions& opt, bool force_turntable) {
     src.format = src.has_meshes ? shot.surface->format : "vdb";
     const json input_manifest = src.has_meshes ? read_input_manifest(src.dir, shot, Stage::Surface, "mc-surface")
                                                : read_input_manifest(src.dir, shot, Stage::Sim, "mc-sim");
+    if (src.has_meshes && input_manifest.contains("per_frame") && input_manifest["per_frame"].is_array())
+        for (const json& entry : input_manifest["per_frame"])
+            if (entry.contains("frame") && entry.contains("crack") && entry["crack"].is_object() &&
+                entry["crack"].contains("file") && entry["crack"]["file"].is_null())
+                src.frames_without_cracks.insert(entry["frame"].get<int>());
     int first = shot.sim.time.frame_start, last = shot.sim.time.frame_end;
     if (input_manifest.contains("frames") && input_manifest["frames"].is_object()) {
         const json& fr = input_manifest["frames"];
