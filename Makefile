@@ -78,3 +78,22 @@ clean-shot:
 
 clean:
 	rm -rf $(BUILD)
+
+# ---- make report (issue 7): error against run time, and the stability matrix ----------------
+# Writes $(OUT)/report/report.md with PNG Pareto plots (gnuplot, installed here when missing,
+# with the same "missing packages" logic as deps). REPORT_ARGS=--quick runs the reduced version.
+REPORT_PACKAGES := gnuplot-nox
+REPORT_ARGS     ?=
+.PHONY: report report-deps
+report-deps:
+	@missing=$$(for p in $(REPORT_PACKAGES); do \
+	    dpkg-query -W -f='$${Status}\n' $$p 2>/dev/null | grep -q '^install ok installed' || echo $$p; done); \
+	if [ -z "$$missing" ]; then exit 0; fi; \
+	echo "mudcrack: missing Debian packages:" $$missing; \
+	if [ "$$(id -u)" -ne 0 ]; then \
+	    echo "mudcrack: not root; install them with: sudo apt-get install -y --no-install-recommends" $$missing; exit 1; fi; \
+	(apt-get update -qq && DEBIAN_FRONTEND=noninteractive apt-get install -y -qq --no-install-recommends $$missing) \
+	  || { echo "mudcrack: apt-get failed installing:" $$missing; exit 1; }
+
+report: build assets report-deps
+	$(BUILD)/bin/mc-report --out $(OUT)/report --threads $(JOBS) $(REPORT_ARGS)
