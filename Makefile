@@ -27,16 +27,20 @@ help:
 	@echo "make bench  build and run the benchmarks"
 	@echo "make clean  remove the build tree"
 
-# install whatever is missing, in one apt-get line; nothing happens when all is present
-deps:
-	@missing=$$(for p in $(APT_PACKAGES); do \
+# install_missing(packages): one apt-get line for those not installed; nothing when all are
+define install_missing
+	@missing=$$(for p in $(1); do \
 	    dpkg-query -W -f='$${Status}\n' $$p 2>/dev/null | grep -q '^install ok installed' || echo $$p; done); \
-	if [ -z "$$missing" ]; then echo "mudcrack: all Debian packages present"; exit 0; fi; \
+	if [ -z "$$missing" ]; then exit 0; fi; \
 	echo "mudcrack: missing Debian packages:" $$missing; \
 	if [ "$$(id -u)" -ne 0 ]; then \
 	    echo "mudcrack: not root; install them with: sudo apt-get install -y --no-install-recommends" $$missing; exit 1; fi; \
 	(apt-get update -qq && DEBIAN_FRONTEND=noninteractive apt-get install -y -qq --no-install-recommends $$missing) \
 	  || { echo "mudcrack: apt-get failed installing:" $$missing; exit 1; }
+endef
+
+deps:
+	$(call install_missing,$(APT_PACKAGES))
 
 assets: $(BUNNY)
 $(BUNNY): | deps
@@ -86,14 +90,7 @@ REPORT_PACKAGES := gnuplot-nox
 REPORT_ARGS     ?=
 .PHONY: report report-deps
 report-deps:
-	@missing=$$(for p in $(REPORT_PACKAGES); do \
-	    dpkg-query -W -f='$${Status}\n' $$p 2>/dev/null | grep -q '^install ok installed' || echo $$p; done); \
-	if [ -z "$$missing" ]; then exit 0; fi; \
-	echo "mudcrack: missing Debian packages:" $$missing; \
-	if [ "$$(id -u)" -ne 0 ]; then \
-	    echo "mudcrack: not root; install them with: sudo apt-get install -y --no-install-recommends" $$missing; exit 1; fi; \
-	(apt-get update -qq && DEBIAN_FRONTEND=noninteractive apt-get install -y -qq --no-install-recommends $$missing) \
-	  || { echo "mudcrack: apt-get failed installing:" $$missing; exit 1; }
+	$(call install_missing,$(REPORT_PACKAGES))
 
 report: build assets report-deps
 	$(BUILD)/bin/mc-report --out $(OUT)/report --threads $(JOBS) $(REPORT_ARGS)

@@ -22,8 +22,9 @@ void write_atomically(const fs::path& path, const std::function<void(const fs::p
     std::error_code ec;
     fs::rename(tmp, path, ec);
     if (ec) {
+        const std::string reason = ec.message();
         fs::remove(tmp, ec);
-        throw RuntimeError(path.string() + ": cannot rename the finished file into place: " + ec.message());
+        throw RuntimeError(path.string() + ": cannot rename the finished file into place: " + reason);
     }
 }
 

@@ -356,19 +356,26 @@ void export_meshes(const fs::path& path, const std::vector<TriMesh>& meshes, con
     if (blob == nullptr) {
         throw RuntimeError(path.string() + ": assimp could not export " + format + ": " + exporter.GetErrorString());
     }
-    // side files first (obj's .mtl), then the main file, so the main file never points at nothing
+    // side files first (obj's .mtl), then the main file, so the main file never points at nothing.
+    // assimp names side blobs "<blob name up to its first dot>.<ext>" ("boundary.mtl" for
+    // "boundary.0001.obj"), so frames would share one side file and race when written in
+    // parallel: each side file is named after the main file instead, and references follow.
+    std::string main_text = post_process(format, blob_text(*blob));
     for (const aiExportDataBlob* side = blob->next; side != nullptr; side = side->next) {
-        // assimp names side blobs "<blob name>.<ext>" (e.g. "scene.mtl"), or just "<ext>"
         const std::string side_name = side->name.C_Str();
+        const std::string ext = side_name.find('.') != std::string::npos
+                                    ? side_name.substr(side_name.rfind('.') + 1) : side_name;
         fs::path side_path = path;
-        if (side_name.find('.') != std::string::npos) {
-            side_path = path.parent_path() / side_name;
-        } else {
-            side_path.replace_extension(side_name);
+        side_path.replace_extension(ext);
+        const std::string own_name = side_path.filename().string();
+        if (side_name.find('.') != std::string::npos && side_name != own_name) {
+            for (size_t at = main_text.find(side_name); at != std::string::npos;
+                 at = main_text.find(side_name, at + own_name.size()))
+                main_text.replace(at, side_name.size(), own_name);
         }
         write_text_atomically(side_path, blob_text(*side));
     }
-    write_text_atomically(path, post_process(format, blob_text(*blob)));
+    write_text_atomically(path, main_text);
 }
 
 std::vector<TriMesh> import_meshes(const fs::path& path) {

@@ -146,11 +146,12 @@ G2PResult g2p_impl(const SimModel& model, SimState& state, const SparseGrid& gri
             state.v[p] = vp;
             state.C[p] = Cp;
 
-            // finite-ness: a NaN or inf anywhere poisons the sum
+            // finite-ness: a NaN or inf anywhere poisons the sum; J <= 0 is an inverted particle,
+            // which no stable step produces (it precedes the overflow by many steps)
             Real check = x.sum() + vp.sum() + state.Fe[p].sum() + state.J[p];
             if constexpr (kNacc) check += state.alpha[p];
             if constexpr (kPore) check += state.theta[p];
-            if (!std::isfinite(check) && (bad[t] < 0 || p < bad[t])) bad[t] = p;
+            if ((!std::isfinite(check) || !(state.J[p] > 0)) && (bad[t] < 0 || p < bad[t])) bad[t] = p;
             speed2 = std::max(speed2, vp.squaredNorm());
         }
         max_speed2[t] = speed2;

@@ -86,24 +86,28 @@ void bin_and_sort(SimState& state, SimWorkspace& ws, bool force_sort) {
     }
 }
 
+constexpr Real kMaxCellsPerStep = 2;  // velocity CFL hard limit [cells/step]
+
 std::string describe_non_finite(const SimState& s, size_t p, int64_t substep) {
     auto finite3 = [](const auto& m) { return m.allFinite(); };
     const char* what = nullptr;
     if (!finite3(s.x[p]))
-        what = "position";
+        what = "non-finite position";
     else if (!finite3(s.v[p]))
-        what = "velocity";
+        what = "non-finite velocity";
     else if (!finite3(s.Fe[p]))
-        what = "elastic deformation gradient Fe";
+        what = "non-finite elastic deformation gradient Fe";
     else if (!std::isfinite(s.J[p]))
-        what = "volume ratio J";
+        what = "non-finite volume ratio J";
+    else if (!(s.J[p] > 0))
+        what = "an inverted volume, J <= 0 (the step is unstable)";
     else if (!s.alpha.empty() && !std::isfinite(s.alpha[p]))
-        what = "hardening state alpha";
+        what = "non-finite hardening state alpha";
     else if (!s.theta.empty() && !std::isfinite(s.theta[p]))
-        what = "water content theta";
+        what = "non-finite water content theta";
     if (!what) return {};
     std::ostringstream os;
-    os << "substep " << substep << ": particle " << s.id[p] << " has non-finite " << what << " (theta="
+    os << "substep " << substep << ": particle " << s.id[p] << " has " << what << " (theta="
        << (s.theta.empty() ? std::string("n/a") : std::to_string(s.theta[p])) << ", J=" << s.J[p]
        << ", alpha=" << (s.alpha.empty() ? std::string("n/a") : std::to_string(s.alpha[p]))
        << ", |v|=" << s.v[p].norm() << ")";
@@ -275,6 +279,15 @@ StepStats step(const SimModel& model, SimState& state, Real dt) {
             msg = os.str();
         }
         throw RuntimeError(msg);
+    }
+    // a particle crossing more than kMaxCellsPerStep cells in one step has left the regime
+    // where the quadratic kernel transfers momentum consistently: stop before it diverges
+    if (g2p.max_speed * dt > kMaxCellsPerStep * model.h) {
+        std::ostringstream os;
+        os << "substep " << substep << ": max |v| = " << g2p.max_speed << " m/s moves particles "
+           << g2p.max_speed * dt / model.h << " cells in one step of dt = " << dt
+           << " s (h = " << model.h << " m): the time step is unstable; lower /sim/dt or /sim/cfl_velocity";
+        throw RuntimeError(os.str());
     }
 
     stats.active_nodes = 0;

@@ -228,8 +228,11 @@ TEST_F(SimFrameStepper, FramesEndExactlyOnTheFrameTime) {
 
 TEST_F(SimFrameStepper, FixedStepSplitsTheRemainderInsteadOfASliver) {
     SimModel model = small_model();
+    // a frame of 2.5 stable steps: dt, then 0.75 dt twice (dt half the elastic bound, so the
+    // physics stays stable and only the stepping logic is under test)
+    model.time.fps = 1.0 / (2.5 * 0.5 * elastic_dt_bound(model));
     const double frame_length = 1.0 / model.time.fps;
-    model.time.dt_fixed = frame_length / 2.5;  // 2.5 steps a frame: dt, then 0.75 dt twice
+    model.time.dt_fixed = frame_length / 2.5;
     SimState state = small_state(model);
     SimTotals totals;
     EXPECT_EQ(advance_frame(model, state, 1, totals), 3);
