@@ -8,12 +8,14 @@ BUILD_TYPE ?= Release
 JOBS       ?= $(shell nproc)
 OUT        ?= out
 CMAKE_ARGS ?=
+include pipeline/farm.mk
 
 # One apt-get line: everything the build, the tests, the demo asset and the previews need.
 APT_PACKAGES := cmake make g++ pkg-config \
   libeigen3-dev libcgal-dev libgmp-dev libmpfr-dev libassimp-dev libopenvdb-dev libboost-iostreams-dev \
   libosmesa6-dev libtbb-dev libpng-dev nlohmann-json3-dev libcli11-dev \
-  libgtest-dev libgmock-dev libbenchmark-dev libcgal-demo tetgen ffmpeg
+  libgtest-dev libgmock-dev libbenchmark-dev libcgal-demo tetgen ffmpeg \
+  slurm-wlm munge jq
 
 # The demo asset: CGAL's Stanford bunny, extracted from Debian's libcgal-demo (never committed).
 CGAL_DATA  := /usr/share/doc/libcgal-dev/data.tar.gz
@@ -22,10 +24,14 @@ BUNNY      := shots/assets/bunny00.off
 .PHONY: help deps configure build demo test bench clean assets shot shots clean-shot
 
 help:
-	@echo "make demo   install missing packages, build, run the demo shot end to end"
-	@echo "make test   install missing packages, build, run the test suite (ctest)"
-	@echo "make bench  build and run the benchmarks"
-	@echo "make clean  remove the build tree"
+	@echo "make demo                  install missing packages, build, run the demo shot end to end"
+	@echo "make test                  install missing packages, build, run the test suite (ctest)"
+	@echo "make shot SHOT=x           run shots/x.json's stages (only what changed); FARM=slurm submits to Slurm"
+	@echo "make shots                 every shot under shots/ (bench_* excluded)"
+	@echo "make farm-status SHOT=x    queued/running/done/failed tasks of a Slurm run"
+	@echo "make report                accuracy against run time and the stability matrix (out/report)"
+	@echo "make bench                 build and run the benchmarks"
+	@echo "make clean                 remove the build tree"
 
 # install_missing(packages): one apt-get line for those not installed; nothing when all are
 define install_missing
@@ -70,7 +76,8 @@ shot: build assets
 	@test -n "$(SHOT)" || { echo "usage: make shot SHOT=<name of shots/<name>.json>"; exit 2; }
 	@test -f shots/$(SHOT).json || { echo "mudcrack: shots/$(SHOT).json: no such shot"; exit 1; }
 	@$(BUILD)/bin/mc-shot validate shots/$(SHOT).json >/dev/null
-	@$(MAKE) --no-print-directory -f Makefile -f pipeline/shot.mk shot-run shot-summary SHOT=$(SHOT)
+	@$(MAKE) --no-print-directory -f Makefile -f pipeline/shot.mk \
+	    $(if $(filter slurm,$(FARM)),farm-submit,shot-run shot-summary) SHOT=$(SHOT)
 
 SHOTS ?= $(filter-out bench_%,$(basename $(notdir $(wildcard shots/*.json))))
 shots: build assets
