@@ -66,7 +66,8 @@ test: build assets
 	cd $(BUILD) && ctest --output-on-failure -j $(JOBS) --timeout 900
 
 bench: build assets
-	$(BUILD)/bin/mc-bench-all 2>/dev/null || for b in $(BUILD)/bin/*_bench; do $$b; done
+	@for b in $(BUILD)/bin/*_bench; do echo "== $$b"; $$b --benchmark_counters_tabular=true || exit 1; done
+	tools/bench_init.sh $(BUILD)
 
 demo: build assets
 	@$(MAKE) --no-print-directory shot SHOT=demo
