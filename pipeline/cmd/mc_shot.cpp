@@ -2,16 +2,20 @@
 // table, `slice` writes the part of a shot one stage reads, only when it changed, so make reruns
 // a stage exactly when its inputs changed; `stages` and `summary` serve pipeline/shot.mk. It has no --shot/--out, so it does not use run_stage,
 // but follows the same exit codes: 0 ok, 1 bad input, 2 bad usage.
+#include <cmath>
 #include <cstdint>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
+#include <initializer_list>
 #include <iostream>
+#include <map>
 #include <sstream>
 #include <string>
 
 #include <CLI/CLI.hpp>
 
+#include "pipeline/cmd/stage_cli.h"
 #include "pipeline/io/atomic_output.h"
 #include "pipeline/io/manifest.h"
 #include "pipeline/shot/shot.h"
@@ -118,15 +122,36 @@ std::string stage_list(const Shot& shot) {
     return s;
 }
 
-/// One line per stage output folder under `out`: files, size, and the manifest's numbers.
+namespace {
+/// The first number found at one of the JSON pointers, or NaN.
+double first_number(const nlohmann::json& m, std::initializer_list<const char*> pointers) {
+    for (const char* p : pointers) {
+        const nlohmann::json::json_pointer ptr(p);
+        if (m.contains(ptr) && m[ptr].is_number()) return m[ptr].get<double>();
+    }
+    return std::nan("");
+}
+}  // namespace
+
+/// The table `make shot` ends with: per stage output folder under `out`, the frames, wall time,
+/// throughput, peak memory and outputs, as the stage's manifest recorded them.
 int run_summary(const std::string& out) {
     namespace fs = std::filesystem;
+    struct Throughput { const char* pointer; const char* unit; };
+    const std::map<std::string, std::vector<Throughput>> throughput = {
+        {"init", {{"/rates/particles_per_s", "particles/s"}}},
+        {"sim", {{"/particle_steps_per_second", "particle-steps/s"}}},
+        {"surface", {{"/tets_per_second", "tets/s"}}},
+        {"render", {{"/seconds_per_frame", "s/frame"}}},
+    };
+    std::printf("%-8s %-10s %9s %24s %10s  %s\n", "stage", "frames", "wall [s]", "throughput", "peak MiB",
+                "outputs");
     int stages_found = 0;
     for (const char* stage : {"init", "sim", "surface", "render"}) {
         const fs::path dir = fs::path(out) / stage;
         std::error_code ec;
         if (!fs::is_regular_file(dir / "manifest.json", ec)) continue;
-        const nlohmann::json manifest = read_manifest(dir);
+        const nlohmann::json m = read_manifest(dir);
         int files = 0;
         std::uintmax_t bytes = 0;
         for (const fs::directory_entry& e : fs::directory_iterator(dir)) {
@@ -134,28 +159,27 @@ int run_summary(const std::string& out) {
             ++files;
             bytes += e.file_size();
         }
-        char size[32];
-        std::snprintf(size, sizeof size, "%.1f MiB", static_cast<double>(bytes) / 1048576.0);
-        std::string line = std::string(stage) + ": " + std::to_string(files) + " files, " + size +
-                           " in " + dir.string();
-        // the manifest's own measurements (counts, wall time, rates), as written by the stage
-        for (const auto& [key, value] : manifest.items()) {
-            if (!value.is_number() || key == "threads" || key == "host_threads") continue;
-            line += ", " + key + " " + number(value.get<double>());
+        std::string frames = "-";
+        const double first = first_number(m, {"/frames/first"}), last = first_number(m, {"/frames/last"});
+        if (!std::isnan(first) && !std::isnan(last))
+            frames = std::to_string(int(first)) + "-" + std::to_string(int(last));
+        const double wall = first_number(m, {"/wall_seconds", "/wall_time_seconds"});
+        const double peak = first_number(m, {"/peak_memory_bytes", "/peak_rss_bytes"});
+        std::string rate = "-";
+        for (const Throughput& t : throughput.at(stage)) {
+            const double v = first_number(m, {t.pointer});
+            if (!std::isnan(v)) rate = number(v) + " " + t.unit;
         }
-        std::cout << line << "\n";
+        char outputs[64];
+        std::snprintf(outputs, sizeof outputs, "%d files, %.1f MiB", files, static_cast<double>(bytes) / 1048576.0);
+        std::printf("%-8s %-10s %9.2f %24s %10.1f  %s in %s\n", stage, frames.c_str(), wall, rate.c_str(),
+                    peak / 1048576.0, outputs, dir.string().c_str());
         ++stages_found;
     }
     if (stages_found == 0) throw InputError(out + ": no stage outputs (no <stage>/manifest.json)");
     return 0;
 }
 
-/// One "mc-shot: error: ..." line per problem (an InputError may list several).
-void report(const std::string& message) {
-    std::istringstream lines(message);
-    std::string line;
-    while (std::getline(lines, line)) log::error(line);
-}
 
 }  // namespace
 }  // namespace mudcrack
@@ -217,11 +241,11 @@ int main(int argc, char** argv) {
         }
         return run_slice(file, stage, out);
     } catch (const InputError& e) {
-        report(e.what());
+        report_error_lines(e.what());
     } catch (const RuntimeError& e) {
-        report(e.what());
+        report_error_lines(e.what());
     } catch (const std::exception& e) {
-        report(std::string("unexpected failure: ") + e.what());
+        report_error_lines(std::string("unexpected failure: ") + e.what());
     }
     return 1;
 }

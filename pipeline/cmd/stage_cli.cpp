@@ -24,9 +24,6 @@ FrameRange parse_frame_range(const std::string& text) {
     return r;
 }
 
-namespace {
-/// One "program: error: ..." line per line of a (possibly multi-line) message, so every problem
-/// a validation reports is greppable on its own.
 void report_error_lines(const std::string& message) {
     size_t begin = 0;
     while (begin <= message.size()) {
@@ -37,7 +34,6 @@ void report_error_lines(const std::string& message) {
         begin = end + 1;
     }
 }
-}  // namespace
 
 int run_stage(const std::string& program, const std::string& description, int argc, char** argv,
               const std::function<void(CLI::App&)>& add_flags,

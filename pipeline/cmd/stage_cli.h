@@ -32,6 +32,10 @@ struct StageOptions {
 /// Parses "A-B" or "N" (1-based, A <= B). Throws InputError naming the flag otherwise.
 FrameRange parse_frame_range(const std::string& text);
 
+/// Prints one "program: error: ..." line per line of a (possibly multi-line) message, so every
+/// problem a validation reports is greppable on its own.
+void report_error_lines(const std::string& message);
+
 /// Runs a stage main: builds the CLI with the common flags plus `add_flags`, parses (usage
 /// errors exit 2, --help/--version exit 0), applies threads/log level, calls body, and maps
 /// InputError/RuntimeError to one "program: error: ..." line and exit 1.

@@ -103,11 +103,23 @@ TEST_F(McShotCli, StagesListsWhatTheShotTurnsOn) {
 
 TEST_F(McShotCli, SummaryReadsTheManifests) {
     fs::create_directories(m_dir / "out" / "init");
-    std::ofstream(m_dir / "out" / "init" / "manifest.json") << R"({"stage": "init", "particles": 4805})";
+    std::ofstream(m_dir / "out" / "init" / "manifest.json")
+        << R"({"stage": "init", "wall_seconds": 1.25, "peak_memory_bytes": 10485760,
+               "rates": {"particles_per_s": 4805}})";
+    fs::create_directories(m_dir / "out" / "sim");
+    std::ofstream(m_dir / "out" / "sim" / "manifest.json")
+        << R"({"stage": "sim", "wall_seconds": 12.5, "frames": {"first": 1, "last": 48},
+               "particle_steps_per_second": 2500000})";
     const Result r = mc_shot("summary " + (m_dir / "out").string());
     EXPECT_EQ(r.code, 0) << r.err;
-    EXPECT_EQ(r.out.rfind("init: 1 files", 0), 0u) << r.out;
-    EXPECT_NE(r.out.find("particles 4805"), std::string::npos) << r.out;
+    // a header, then one row per stage: frames, wall time, throughput, peak memory, outputs
+    EXPECT_EQ(r.out.rfind("stage", 0), 0u) << r.out;
+    EXPECT_NE(r.out.find("throughput"), std::string::npos) << r.out;
+    EXPECT_NE(r.out.find("4805 particles/s"), std::string::npos) << r.out;
+    EXPECT_NE(r.out.find("10.0  1 files"), std::string::npos) << r.out;
+    EXPECT_NE(r.out.find("1-48"), std::string::npos) << r.out;
+    EXPECT_NE(r.out.find("12.50"), std::string::npos) << r.out;
+    EXPECT_NE(r.out.find("2.5e+06 particle-steps/s"), std::string::npos) << r.out;
     EXPECT_EQ(mc_shot("summary " + (m_dir / "empty").string()).code, 1);
 }
 
