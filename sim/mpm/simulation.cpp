@@ -208,6 +208,18 @@ SimState make_initial_state(const SimModel& model, const std::vector<Vec3>& X, c
     return s;
 }
 
+void set_moisture_field(const SimModel& model, SimState& state,
+                        const std::function<Real(const Vec3&)>& theta_of_x) {
+    MC_CHECK(model.moisture.has_value());
+    const MoistureParams& mp = *model.moisture;
+    for (size_t p = 0; p < state.size(); ++p) {
+        state.theta[p] = std::clamp(theta_of_x(state.x[p]), Real(0), mp.eta);
+        const Real sat = saturation_of(state.theta[p], mp.eta);
+        state.Jw[p] = pore_jw(sat, mp.eta);
+        state.mass[p] = moist_mass(state.V0[p], model.elastic.density, sat, mp);
+    }
+}
+
 Real stable_dt(const SimModel& model, const SimState& state) {
     if (model.time.dt_fixed > 0) return model.time.dt_fixed;
     Real dt = model.time.dt_max;

@@ -3,6 +3,7 @@
 /// SimState holds particles, time and scratch; `step` advances one substep.
 /// Tu et al. 2023 Sections 4-5; the consolidated step of physics.md Section 7.
 #include <cstdint>
+#include <functional>
 #include <memory>
 #include <vector>
 
@@ -53,6 +54,12 @@ struct StepStats {
 /// at model.initial_velocity, at theta_init when the model has moisture.
 SimState make_initial_state(const SimModel& model, const std::vector<Vec3>& X,
                             const std::vector<Real>& V0);
+
+/// Sets every particle's water content to theta_of_x(x) (clamped to [0, eta]) with the matching
+/// pore determinant Jw and mass: a non-uniform initial moisture field (tests, the report).
+/// Requires model.moisture.
+void set_moisture_field(const SimModel& model, SimState& state,
+                        const std::function<Real(const Vec3&)>& theta_of_x);
 
 /// The adaptive time step min(dt_max, C_v h / max|v|, C_E h / c_p), or dt_fixed when set.
 Real stable_dt(const SimModel& model, const SimState& state);

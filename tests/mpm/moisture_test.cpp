@@ -39,18 +39,6 @@ SimModel still_model(Real h) {
     return m;
 }
 
-// sets theta per particle and the matching Jw and mass
-template <class Fn>
-void set_theta(const SimModel& model, SimState& s, Fn&& theta_of_x) {
-    const MoistureParams& mp = *model.moisture;
-    for (size_t p = 0; p < s.size(); ++p) {
-        s.theta[p] = theta_of_x(s.x[p]);
-        const Real sat = saturation_of(s.theta[p], mp.eta);
-        s.Jw[p] = pore_jw(sat, mp.eta);
-        s.mass[p] = moist_mass(s.V0[p], model.elastic.density, sat, mp);
-    }
-}
-
 TEST(Moisture, WaterIsConservedWithoutEvaporation) {
     SimModel model = still_model(0.1);
     model.moisture->D = 0.5;  // D dt/h^2 = 0.05
@@ -59,7 +47,7 @@ TEST(Moisture, WaterIsConservedWithoutEvaporation) {
     std::mt19937 rng(11);
     std::uniform_real_distribution<Real> u(-0.02, 0.02);
     // a smooth wave the grid resolves plus particle noise
-    set_theta(model, s, [&](const Vec3& x) { return 0.25 + 0.1 * std::sin(2 * M_PI * x.x() / 0.5) + u(rng); });
+    set_moisture_field(model, s, [&](const Vec3& x) { return 0.25 + 0.1 * std::sin(2 * M_PI * x.x() / 0.5) + u(rng); });
     auto spread = [&] {  // standard deviation of theta
         Real mean = 0, var = 0;
         for (Real t : s.theta) mean += t / s.size();
@@ -96,7 +84,7 @@ Real diffusion_error(Real h) {
     const test::Lattice l = make_lattice(Vec3(-L, 0, 0), Vec3i(n_along, 4, 4), h / 2);
     SimState s = make_initial_state(model, l.X, l.V0);
     auto exact = [&](Real x, Real t) { return eta / 2 * std::erfc(x / (2 * std::sqrt(D * t))); };
-    set_theta(model, s, [&](const Vec3& x) { return exact(x.x(), t0); });
+    set_moisture_field(model, s, [&](const Vec3& x) { return exact(x.x(), t0); });
     // dt proportional to h^2 (backward Euler is first order in time)
     const int steps = static_cast<int>(std::lround((t1 - t0) / (0.4 * h * h / D)));
     const Real dt = (t1 - t0) / steps;
@@ -124,7 +112,7 @@ TEST(Moisture, ConjugateGradientsMatchAnEigenDirectSolve) {
     SimState s = make_initial_state(model, l.X, l.V0);
     std::mt19937 rng(5);
     std::uniform_real_distribution<Real> u(0.15, 0.35);
-    set_theta(model, s, [&](const Vec3&) { return u(rng); });
+    set_moisture_field(model, s, [&](const Vec3&) { return u(rng); });
     const std::vector<Vec3> x0 = s.x;
     const std::vector<Real> theta0 = s.theta;
     std::vector<Real> V(s.size());
@@ -360,7 +348,7 @@ TEST(Moisture, SolvingEveryKStepsCountsItsIterations) {
     model.moisture->interval = 3;
     const test::Lattice l = make_lattice(Vec3::Zero(), Vec3i(6, 6, 6), 0.05);
     SimState s = make_initial_state(model, l.X, l.V0);
-    set_theta(model, s, [&](const Vec3& x) { return 0.1 + 0.3 * x.x(); });
+    set_moisture_field(model, s, [&](const Vec3& x) { return 0.1 + 0.3 * x.x(); });
     for (int i = 0; i < 6; ++i) {
         const StepStats st = step(model, s, 1e-3);
         if (i % 3 == 0)

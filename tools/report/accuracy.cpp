@@ -44,18 +44,6 @@ SimModel still_moisture_model(Real h, Real D) {
     return m;
 }
 
-// sets theta per particle from its position, with the matching Jw and mass
-template <class Fn>
-void set_theta(const SimModel& model, SimState& s, Fn&& theta_of_x) {
-    const MoistureParams& mp = *model.moisture;
-    for (size_t p = 0; p < s.size(); ++p) {
-        s.theta[p] = theta_of_x(s.x[p]);
-        const Real sat = saturation_of(s.theta[p], mp.eta);
-        s.Jw[p] = pore_jw(sat, mp.eta);
-        s.mass[p] = moist_mass(s.V0[p], model.elastic.density, sat, mp);
-    }
-}
-
 struct DiffusionRun {
     Real error = 0;  // RMS theta error over the particles
     std::vector<Real> theta_by_id;  // final theta per particle id
@@ -75,7 +63,7 @@ DiffusionRun run_diffusion_1d(Real h, int steps) {
     const ParticleBlock b = lattice_block(Vec3(-L, 0, 0), Vec3i(n_along, 4, 4), h / 2);
     SimState s = make_initial_state(model, b.X, b.V0);
     auto exact = [&](Real x, Real t) { return eta / 2 * std::erfc(x / (2 * std::sqrt(D * t))); };
-    set_theta(model, s, [&](const Vec3& x) { return exact(x.x(), t0); });
+    set_moisture_field(model, s, [&](const Vec3& x) { return exact(x.x(), t0); });
     const Real dt = (t1 - t0) / steps;
     DiffusionRun r;
     int64_t cg = 0;
@@ -108,7 +96,7 @@ DiffusionRun run_diffusion_3d(int cells_per_side) {
     auto mode = [&](const Vec3& x) {
         return std::cos(kPi * x.x() / L) * std::cos(kPi * x.y() / L) * std::cos(kPi * x.z() / L);
     };
-    set_theta(model, s, [&](const Vec3& x) { return eta / 2 + A * mode(x); });
+    set_moisture_field(model, s, [&](const Vec3& x) { return eta / 2 + A * mode(x); });
     const Real dt = t1 / steps;
     DiffusionRun r;
     int64_t cg = 0;
