@@ -6,10 +6,11 @@
 #   make farm-status SHOT=demo                   queued, running, done and failed tasks
 #   make farm-cluster-start / farm-cluster-stop  a one-node cluster on this machine, in FARM_CLUSTER
 #
-# Variables: FARM_CHUNK (frames per surfacing task, default 4), THREADS (--threads of every
-# stage), and from the environment or the command line: MUDCRACK_PARTITION / SLURM_PARTITION,
-# MUDCRACK_ACCOUNT / SLURM_ACCOUNT, FARM_<STAGE>_CPUS|MEM|TIME with STAGE in INIT SIM SURFACE
-# MERGE RENDER, FARM_SBATCH_ARGS (pipeline/farm/submit.sh documents them).
+# Variables: FARM_CHUNK (frames per surfacing and render task, default 4), THREADS (--threads of
+# every stage), and from the environment or the command line: FARM_RENDER_CHUNK (frames per
+# render task, default FARM_CHUNK), MUDCRACK_PARTITION / SLURM_PARTITION, MUDCRACK_ACCOUNT /
+# SLURM_ACCOUNT, FARM_<STAGE>_CPUS|MEM|TIME with STAGE in INIT SIM SURFACE MERGE RENDER ASSEMBLE,
+# FARM_SBATCH_ARGS (pipeline/farm/submit.sh documents them).
 
 FARM          ?=
 FARM_CHUNK    ?= 4

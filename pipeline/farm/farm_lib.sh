@@ -8,7 +8,8 @@
 #   jobs.<time>.tsv         earlier submissions
 #   state/<task>            written by the task itself (key=value): job, frames, start, end, log,
 #                           status = running | ok | failed | killed, rc
-#   <stage>.chunks          the frame ranges of an array, one per line (line i = array index i)
+#   <stage>.chunks          the frame ranges of an array, one per line (line i = array index i):
+#                           surface.chunks, render.chunks
 #   surface-base/           the break history and manifest the surfacing chunks start from
 #   surface-chunks/A-B.json the manifest each surfacing chunk wrote, merged at the end
 #   work/<task>/            a chunk's private output root (inputs linked in), removed on success

@@ -38,7 +38,7 @@ state_value() { sed -n "s/^$2=//p" "$1" 2>/dev/null | head -n 1; }
 seconds() { awk -v a="$1" -v b="$2" 'BEGIN { if (a == "" || b == "") print "-"; else printf "%.1f", b - a }'; }
 
 queued=0 running=0 finished=0 failed=0 never=0
-[ $failures_only -eq 1 ] || printf '%-14s %-10s %-12s %-24s %8s %8s  %s\n' stage frames job state "wait[s]" "run[s]" log
+[ $failures_only -eq 1 ] || printf '%-16s %-10s %-12s %-24s %8s %8s  %s\n' stage frames job state "wait[s]" "run[s]" log
 while IFS=$'\t' read -r stage job frames log submitted; do
     task=$(basename "$log" .log)
     state_file=$out/farm/state/$task
@@ -73,7 +73,7 @@ while IFS=$'\t' read -r stage job frames log submitted; do
                 echo "mc-farm: last submission: $stage frames $frames (job $job): $state; log $log" ;;
         esac
     else
-        printf '%-14s %-10s %-12s %-24s %8s %8s  %s\n' "$stage" "$frames" "$job" "$state" "$wait_s" "$run_s" "$log"
+        printf '%-16s %-10s %-12s %-24s %8s %8s  %s\n' "$stage" "$frames" "$job" "$state" "$wait_s" "$run_s" "$log"
     fi
 done <"$jobs"
 [ $failures_only -eq 1 ] || echo "queued $queued, running $running, done $finished, failed $failed, not run $never"

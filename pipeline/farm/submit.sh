@@ -1,11 +1,13 @@
 #!/usr/bin/env bash
 # Submits what a shot still needs to a Slurm cluster: init and sim as jobs, surfacing as an array
 # over frame chunks (after a first chunk that computes the break history), a merge of the
-# surfacing manifest, then the render; chained with afterok dependencies so nothing starts before
-# its inputs exist. What is already done is not submitted: a stage is done when its manifest is
-# newer than its inputs (make's rule, as in pipeline/shot.mk), a surfacing frame when its mesh is;
-# an interrupted sim resumes from its last checkpoint. Re-running after a failure therefore
-# resubmits only the failed or missing work.
+# surfacing manifest, the render as an array over frame chunks (mc-render --frames; after the
+# merge, whose manifest every chunk reads), then the render assembly (mc-render --assemble:
+# turntable, contact sheet, movies, manifest); chained with afterok dependencies so nothing starts
+# before its inputs exist. What is already done is not submitted: a stage is done when its
+# manifest is newer than its inputs (make's rule, as in pipeline/shot.mk), a surfacing frame when
+# its mesh is, a rendered frame when its PNG is; an interrupted sim resumes from its last
+# checkpoint. Re-running after a failure therefore resubmits only the failed or missing work.
 #
 #   submit.sh --shot shots/demo.json --out out/demo --bin build/bin [--chunk 4] [--wait] [--dry-run]
 #
@@ -13,7 +15,9 @@
 #   MUDCRACK_PARTITION or SLURM_PARTITION    partition (default: the cluster's default)
 #   MUDCRACK_ACCOUNT or SLURM_ACCOUNT        account
 #   FARM_CHUNK                               frames per surfacing task (default 4; --chunk wins)
-#   FARM_<STAGE>_CPUS / _MEM / _TIME         per stage (INIT, SIM, SURFACE, MERGE, RENDER):
+#   FARM_RENDER_CHUNK                        frames per render task (default: as FARM_CHUNK)
+#   FARM_<STAGE>_CPUS / _MEM / _TIME         per stage (INIT, SIM, SURFACE, MERGE, RENDER,
+#                                            ASSEMBLE):
 #                                            CPUs per task, --mem, --time (defaults below)
 #   FARM_THREADS                             --threads for every stage (default: the task's CPUs)
 #   FARM_SBATCH_ARGS                         extra sbatch arguments, e.g. "--qos=short"
@@ -43,6 +47,8 @@ while [ $# -gt 0 ]; do
 done
 [ -n "$shot" ] && [ -n "$out" ] && [ -n "$bin" ] || usage
 [[ $chunk =~ ^[1-9][0-9]*$ ]] || farm_die "--chunk / FARM_CHUNK = '$chunk': expected a whole number >= 1"
+render_chunk=${FARM_RENDER_CHUNK:-$chunk}
+[[ $render_chunk =~ ^[1-9][0-9]*$ ]] || farm_die "FARM_RENDER_CHUNK = '$render_chunk': expected a whole number >= 1"
 [ -f "$shot" ] || farm_die "$shot: no such shot file"
 for tool in sbatch squeue jq flock; do
     command -v "$tool" >/dev/null || farm_die "$tool not found (Slurm clients: slurm-client; jq: jq)"
@@ -75,7 +81,7 @@ done
 has_stage() { [[ " $stages " == *" $1 "* ]]; }
 
 # -- what is not done -----------------------------------------------------------------------------
-run_init=0 run_sim=0 resume=0 surface_prep="" surface_chunks=() run_merge=0 run_render=0
+run_init=0 run_sim=0 resume=0 surface_prep="" surface_chunks=() run_merge=0 render_chunks=() run_assemble=0
 farm_fresh "$out/init/manifest.json" "$out/init.params.json" "$bin/mc-init" || run_init=1
 if [ $run_init -eq 1 ] || ! farm_fresh "$out/sim/manifest.json" "$out/init/manifest.json" "$out/sim.params.json" "$bin/mc-sim"; then
     run_sim=1
@@ -112,10 +118,18 @@ if has_stage surface; then
     fi
 fi
 if has_stage render; then
-    render_input=$out/$(has_stage surface && echo surface || echo sim)/manifest.json
-    if [ $run_sim -eq 1 ] || [ $run_merge -eq 1 ] ||
-        ! farm_fresh "$out/render/manifest.json" "$render_input" "$out/render.params.json" "$bin/mc-render"; then
-        run_render=1
+    inputs=("$out/$(has_stage surface && echo surface || echo sim)/manifest.json" "$out/render.params.json" "$bin/mc-render")
+    if [ $run_sim -eq 1 ] || [ $run_merge -eq 1 ] || ! farm_fresh "$out/render/manifest.json" "${inputs[@]}"; then
+        run_assemble=1
+        missing=()
+        if [ $run_sim -eq 1 ] || [ $run_merge -eq 1 ]; then
+            mapfile -t missing < <(seq "$frame_first" "$frame_last")
+        else
+            for ((n = frame_first; n <= frame_last; n++)); do
+                farm_fresh "$(farm_frame_file "$out/render" frame "$n" png)" "${inputs[@]}" || missing+=("$n")
+            done
+        fi
+        mapfile -t render_chunks < <(printf '%s\n' "${missing[@]+"${missing[@]}"}" | sed '/^$/d' | farm_chunk_frames "$render_chunk")
     fi
 fi
 
@@ -129,7 +143,8 @@ declare -A defaults=(
     [SIM_CPUS]=2 [SIM_MEM]=8G [SIM_TIME]=2-00:00:00
     [SURFACE_CPUS]=1 [SURFACE_MEM]=4G [SURFACE_TIME]=02:00:00
     [MERGE_CPUS]=1 [MERGE_MEM]=1G [MERGE_TIME]=00:10:00
-    [RENDER_CPUS]=2 [RENDER_MEM]=4G [RENDER_TIME]=04:00:00
+    [RENDER_CPUS]=2 [RENDER_MEM]=4G [RENDER_TIME]=02:00:00
+    [ASSEMBLE_CPUS]=2 [ASSEMBLE_MEM]=4G [ASSEMBLE_TIME]=02:00:00
 )
 resource() {  # resource SIM CPUS -> $FARM_SIM_CPUS or the default
     local var=FARM_$1_$2
@@ -204,9 +219,19 @@ if [ $run_merge -eq 1 ]; then
     record surface-merge "$id" - surface-merge
     deps=("$id")
 fi
-if [ $run_render -eq 1 ]; then
-    id=$(submit_task RENDER render "$(after "${deps[@]+"${deps[@]}"}")" render)
-    record render "$id" "$frame_first-$frame_last" render
+if [ ${#render_chunks[@]} -gt 0 ]; then
+    printf '%s\n' "${render_chunks[@]}" >"$farm/render.chunks"
+    id=$(submit_task RENDER render "$(after "${deps[@]+"${deps[@]}"}")" render-chunk "$farm/render.chunks" \
+        -- --array="1-${#render_chunks[@]}")
+    for i in "${!render_chunks[@]}"; do
+        read -r a b <<<"${render_chunks[$i]}"
+        record render "${id}_$((i + 1))" "$a-$b" "$(farm_task_name render "$a" "$b")"
+    done
+    deps=("$id")
+fi
+if [ $run_assemble -eq 1 ]; then
+    id=$(submit_task ASSEMBLE render-assemble "$(after "${deps[@]+"${deps[@]}"}")" render-assemble)
+    record render-assemble "$id" - render-assemble
 fi
 
 if [ $dry -eq 1 ]; then
@@ -221,7 +246,7 @@ if [ ! -s "$farm/jobs.tsv" ]; then
     exit 0
 fi
 echo "mc-farm: $name: submitted $(wc -l <"$farm/jobs.tsv") tasks (logs in $out/logs/):"
-awk -F'\t' '{ printf "  %-14s job %-10s frames %s\n", $1, $2, $3 }' "$farm/jobs.tsv"
+awk -F'\t' '{ printf "  %-16s job %-10s frames %s\n", $1, $2, $3 }' "$farm/jobs.tsv"
 if [ $wait -eq 0 ]; then
     echo "mc-farm: follow with: make farm-status SHOT=$name"
     exit 0

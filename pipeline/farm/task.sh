@@ -4,8 +4,9 @@
 #   task.sh KIND SHOT_FILE SHOT_OUT BIN [FIRST LAST | CHUNKS_FILE]
 #
 # KIND: init | sim | sim-resume | surface-prep FIRST LAST | surface-chunk CHUNKS_FILE |
-#       surface-merge | render
-# An array task (surface-chunk) takes its frames from line $SLURM_ARRAY_TASK_ID of CHUNKS_FILE.
+#       surface-merge | render-chunk CHUNKS_FILE | render-assemble | render (all of it in one job)
+# An array task (surface-chunk, render-chunk) takes its frames from line $SLURM_ARRAY_TASK_ID of
+# CHUNKS_FILE.
 # The task appends to its log OUT/logs/<task>.log and writes its state to OUT/farm/state/<task>
 # (status=running, then ok / failed / killed), which status.sh reads once the job left the queue.
 # Stage outputs land exactly where a local run puts them; per-chunk work happens in a private
@@ -24,15 +25,16 @@ shift 4
 first="" last=""
 case $kind in
     surface-prep) first=$1 last=$2 ;;
-    surface-chunk)
-        [ -n "${SLURM_ARRAY_TASK_ID:-}" ] || farm_die "surface-chunk runs as a Slurm array task"
+    surface-chunk | render-chunk)
+        [ -n "${SLURM_ARRAY_TASK_ID:-}" ] || farm_die "$kind runs as a Slurm array task"
         read -r first last < <(sed -n "${SLURM_ARRAY_TASK_ID}p" "$1")
         [ -n "$first" ] || farm_die "$1: no line $SLURM_ARRAY_TASK_ID"
         ;;
 esac
-# the task's name in logs and state files: "init", "sim", "surface.0005-0008", "surface-merge"
+# the task's name in logs and state files: "init", "sim", "surface.0005-0008", "surface-merge",
+# "render.0005-0008", "render-assemble"
 if [ -n "$first" ]; then
-    name=$(farm_task_name surface "$first" "$last")
+    name=$(farm_task_name "${kind%%-*}" "$first" "$last")
 elif [ "$kind" = sim-resume ]; then
     name=sim
 else
@@ -175,6 +177,9 @@ case $kind in
     sim-resume) run "$bin/mc-sim" "${flags[@]}" --resume ;;
     surface-prep | surface-chunk) surface_frames ;;
     surface-merge) surface_merge ;;
+    # the frames of a chunk, each PNG renamed into OUT/render/ when complete (mc-render --frames)
+    render-chunk) run "$bin/mc-render" "${flags[@]}" --frames "$first-$last" ;;
+    render-assemble) run "$bin/mc-render" "${flags[@]}" --assemble ;;
     render) run "$bin/mc-render" "${flags[@]}" ;;
     *) farm_die "unknown task kind '$kind'" ;;
 esac

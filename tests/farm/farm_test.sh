@@ -10,12 +10,15 @@
 # 3. submits it to the cluster (pipeline/farm/submit.sh, 2 frames per surfacing task), cancels
 #    one surfacing array task as soon as it runs, waits, and checks the status reports that
 #    task killed with its frames and log;
-# 4. re-runs the submission and checks it resubmits exactly that task's frames (plus the merge and
-#    the render that depend on them), and nothing of init or sim;
+# 4. re-runs the submission and checks it resubmits exactly that task's frames (plus the merge, the
+#    render array over every frame in chunks of 2 and the assembly that depend on them), and
+#    nothing of init or sim;
 # 5. compares every cache, mesh, image and movie (VDB, VTU, GLB, edge breaks, PNG, MP4) byte for
 #    byte (the edge break history without its header's input hash, which covers the sim's wall
-#    times);
-# 6. removes the sim's last frames and checkpoint (an interrupted sim) and checks the re-run
+#    times): frames rendered in chunks and assembled by another job equal a local mc-render run;
+# 6. removes two rendered frames and the render manifest (what a failed render chunk leaves) and
+#    checks the re-run submits only that chunk and the assembly, then compares again;
+# 7. removes the sim's last frames and checkpoint (an interrupted sim) and checks the re-run
 #    resumes from the checkpoint before them, then compares again.
 # Prints the farm overhead it measured (submit-to-start latency, task vs local stage times).
 # Exits 77 (ctest SKIP_RETURN_CODE) only when slurm-wlm or munge is not installed.
@@ -100,9 +103,9 @@ cpus=$(sinfo -h -N -o %c | head -n 1)
 # runs use the same. One thread per task: on a busy 2-core machine a 2-thread sim of this small
 # shot spends most of its time waiting at barriers (measured: 1.4 s vs 0.4 s).
 threads=1
-export FARM_SIM_CPUS=1 FARM_INIT_CPUS=1 FARM_RENDER_CPUS=1 FARM_SURFACE_CPUS=1
-export FARM_SIM_MEM=2G FARM_INIT_MEM=2G FARM_SURFACE_MEM=1G FARM_RENDER_MEM=2G FARM_MERGE_MEM=256M
-unset MUDCRACK_PARTITION SLURM_PARTITION MUDCRACK_ACCOUNT SLURM_ACCOUNT FARM_THREADS FARM_SBATCH_ARGS
+export FARM_SIM_CPUS=1 FARM_INIT_CPUS=1 FARM_RENDER_CPUS=1 FARM_SURFACE_CPUS=1 FARM_ASSEMBLE_CPUS=1
+export FARM_SIM_MEM=2G FARM_INIT_MEM=2G FARM_SURFACE_MEM=1G FARM_RENDER_MEM=2G FARM_MERGE_MEM=256M FARM_ASSEMBLE_MEM=2G
+unset MUDCRACK_PARTITION SLURM_PARTITION MUDCRACK_ACCOUNT SLURM_ACCOUNT FARM_THREADS FARM_SBATCH_ARGS FARM_RENDER_CHUNK
 
 echo "== local run ($threads threads)"
 local_out=$tmp/local/farm_test
@@ -163,13 +166,31 @@ echo "$resubmit"
 grep -q "last submission: surface frames $victim_frames (job $victim): KILLED; log $victim_log" <<<"$resubmit" ||
     fail "the re-run does not report the killed task with its frames and log"
 stages_again=$(cut -f1,3 "$jobs" | tr '\t' ' ' | tr '\n' ',')
-all_frames=$(jq -r '"\(.frames.start)-\(.frames.end)"' "$out/sim.params.json")
-[ "$stages_again" = "surface $victim_frames,surface-merge -,render $all_frames," ] ||
-    fail "the re-run submitted '$stages_again', expected only surface $victim_frames, the merge and the render"
+# every frame is rendered again (the merge rewrote the surfacing manifest), 2 frames per task
+render_tasks=$(seq "$(jq -r .frames.start "$out/sim.params.json")" "$(jq -r .frames.end "$out/sim.params.json")" |
+    awk '{ if (NR % 2) a = $1; else printf "render %d-%d,", a, $1 } END { if (NR % 2) printf "render %d-%d,", a, a }')
+[ "$stages_again" = "surface $victim_frames,surface-merge -,${render_tasks}render-assemble -," ] ||
+    fail "the re-run submitted '$stages_again', expected only surface $victim_frames, the merge, ${render_tasks} and the assembly"
+render_task_seconds=$(for t in "$out"/farm/state/render.*; do
+    elapsed "$(sed -n 's/^start=//p' "$t")" "$(sed -n 's/^end=//p' "$t")"; echo; done | awk '{ printf "%s ", $1 }')
+assemble_seconds=$(elapsed "$(sed -n 's/^start=//p' "$out/farm/state/render-assemble")" "$(sed -n 's/^end=//p' "$out/farm/state/render-assemble")")
 again=$(bash "$farm/submit.sh" --shot "$shot" --out "$out" --bin "$bin" --chunk 2)
 grep -q "nothing submitted" <<<"$again" || fail "a third run submitted work: $again"
 
 echo "== comparing outputs"
+compare_outputs
+
+echo "== a failed render chunk: the re-run renders only its frames, then assembles"
+# what a render task killed during frame 6 leaves: frames 5 and 6 missing (a killed frame never
+# reaches its name), no manifest (chunks remove it; the assembly never ran)
+rm -f "$out/render/manifest.json" "$out/render/frame.0005.png" "$out/render/frame.0006.png"
+bash "$farm/submit.sh" --shot "$shot" --out "$out" --bin "$bin" --chunk 2 --wait >"$tmp/render_again.txt" ||
+    { cat "$tmp/render_again.txt"; fail "the render re-run did not complete"; }
+cat "$tmp/render_again.txt"
+[ "$(cut -f1,3 "$jobs" | tr '\t' ' ' | tr '\n' ',')" = "render 5-6,render-assemble -," ] ||
+    fail "after losing frames 5-6, expected only render 5-6 and the assembly: $(cut -f1,3 "$jobs" | tr '\t' ' ' | tr '\n' ',')"
+grep -E "^render +5-6 +[0-9_]+ +done " "$tmp/render_again.txt" >/dev/null || fail "status does not show render 5-6 done"
+grep -E "^render-assemble +- +[0-9]+ +done " "$tmp/render_again.txt" >/dev/null || fail "status does not show the assembly done"
 compare_outputs
 
 echo "== an interrupted sim: the re-run resumes from its last checkpoint"
@@ -178,8 +199,8 @@ rm -f "$out/sim/manifest.json" "$out/sim/particles.0007.vdb" "$out/sim/particles
 [ -f "$out/sim/checkpoint.0006.bin" ] || fail "no checkpoint.0006.bin to resume from"
 bash "$farm/submit.sh" --shot "$shot" --out "$out" --bin "$bin" --chunk 2 --wait >"$tmp/resume.txt" ||
     { cat "$tmp/resume.txt"; fail "the resumed run did not complete"; }
-[ "$(cut -f1 "$jobs" | sort -u | tr '\n' ' ')" = "render sim surface surface-merge " ] ||
-    fail "after removing the sim's last frames, expected sim, surface, merge and render jobs: $(cut -f1 "$jobs" | tr '\n' ' ')"
+[ "$(cut -f1 "$jobs" | sort -u | tr '\n' ' ')" = "render render-assemble sim surface surface-merge " ] ||
+    fail "after removing the sim's last frames, expected sim, surface, merge, render and assembly jobs: $(cut -f1 "$jobs" | tr '\n' ' ')"
 grep -q -- "--resume" "$out/logs/sim.log" && grep -q "resuming from .*checkpoint.0006.bin" "$out/logs/sim.log" ||
     fail "the sim did not resume from checkpoint.0006.bin: see $out/logs/sim.log"
 compare_outputs
@@ -189,6 +210,7 @@ echo "   submit to start (no dependency): $latency s"
 echo "   dependency released to start: $gaps s"
 echo "   task run times (init, sim, 3 of 4 surfacing chunks): $task_seconds s; local init + sim + surface: $(
     awk -v a="${local_seconds[init]}" -v b="${local_seconds[sim]}" -v c="${local_seconds[surface]}" 'BEGIN { printf "%.2f", a + b + c }') s"
+echo "   render tasks (2 frames each): $render_task_seconds s; assembly: $assemble_seconds s; local mc-render: ${local_seconds[render]} s"
 echo "   first farm run (all stages, one task killed): $first_run_seconds s; local run $(
     printf '%s\n' "${local_seconds[@]}" | awk '{ s += $1 } END { printf "%.2f", s }') s"
 echo "PASS"

@@ -1,13 +1,16 @@
 // mc-render end to end on fabricated inputs (surfaced meshes, or a particle cache), plus bad input:
-// exit codes, the files written, the manifest, and no half-written output on failure.
+// exit codes, the files written, the manifest, and no half-written output on failure; and the
+// farm's split (--frames chunks, then --assemble) against a full run, byte for byte.
 #include <gtest/gtest.h>
 #include <unistd.h>
 
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <map>
 #include <sstream>
 #include <string>
+#include <vector>
 
 #include <nlohmann/json.hpp>
 
@@ -140,13 +143,101 @@ TEST_F(McRenderCli, RendersFramesTurntableSheetAndManifest) {
     EXPECT_FALSE(fs::exists(out() / ".render.partial"));
 }
 
-TEST_F(McRenderCli, FrameRangeAndHardeningMode) {
+TEST_F(McRenderCli, FrameRangeWritesOnlyThoseFramesInHardeningMode) {
     const Shot shot = write_shot(kSurfacedShot, "hardening");
     write_surface(shot, 3);
     ASSERT_EQ(run("--frames 2-3"), 0) << m_stderr;
+    const fs::path r = out() / "render";
+    EXPECT_FALSE(fs::exists(r / "frame.0001.png"));
+    EXPECT_EQ(read_png(r / "frame.0003.png").width, 96);
+    EXPECT_TRUE(fs::exists(r / "frame.0002.png"));
+    // a chunk: no turntable, sheet, movie or manifest (--assemble writes them)
+    EXPECT_FALSE(fs::exists(r / "turntable.0001.png"));
+    EXPECT_FALSE(fs::exists(r / "contact_sheet.png"));
+    EXPECT_FALSE(fs::exists(r / "preview.mp4"));
+    EXPECT_FALSE(fs::exists(r / "manifest.json"));
+    ASSERT_EQ(run("--frames 1-1"), 0) << m_stderr;
+    ASSERT_EQ(run("--assemble"), 0) << m_stderr;
+    const nlohmann::json m = read_manifest(r);
+    EXPECT_EQ(m.at("color_mode"), "hardening");
+    EXPECT_EQ(m.at("frames").at("count"), 3);
+    EXPECT_EQ(m.at("views"), 6);
+}
+
+/// Every regular file of dir by name, with its bytes.
+std::map<std::string, std::string> files_of(const fs::path& dir) {
+    std::map<std::string, std::string> out;
+    for (const fs::directory_entry& e : fs::directory_iterator(dir)) {
+        if (!e.is_regular_file()) continue;
+        std::ifstream is(e.path(), std::ios::binary);
+        std::stringstream ss;
+        ss << is.rdbuf();
+        out[e.path().filename().string()] = ss.str();
+    }
+    return out;
+}
+
+TEST_F(McRenderCli, ChunksPlusAssembleAreByteIdenticalToAFullRun) {
+    // 5 frames of a sphere drifting up: chunk 1-2 alone would frame it lower than the full run
+    const Shot shot = write_shot(std::string(kSurfacedShot).replace(std::string(kSurfacedShot).find("\"end\": 3"), 8,
+                                                                    "\"end\": 5"));
+    write_surface(shot, 5);
+    ASSERT_EQ(run(), 0) << m_stderr;
+    const fs::path r = out() / "render";
+    const nlohmann::json full_manifest = read_manifest(r);
+    std::map<std::string, std::string> full = files_of(r);
+    fs::remove_all(r);
+
+    ASSERT_EQ(run("--frames 3-5"), 0) << m_stderr;  // chunks in any order
+    ASSERT_EQ(run("--frames 1-2"), 0) << m_stderr;
+    EXPECT_TRUE(fs::exists(r / ".chunk.0001-0002.json"));
+    EXPECT_FALSE(fs::exists(r / "manifest.json"));
+    ASSERT_EQ(run("--assemble"), 0) << m_stderr;
+    std::map<std::string, std::string> assembled = files_of(r);
+    EXPECT_FALSE(fs::exists(r / ".chunk.0001-0002.json")) << "the assembly removes the chunk statistics";
+
+    // same files; every PNG and movie byte for byte (the manifests differ in timings)
+    full.erase("manifest.json");
+    assembled.erase("manifest.json");
+    std::vector<std::string> full_names, assembled_names;
+    for (const auto& [name, bytes] : full) full_names.push_back(name);
+    for (const auto& [name, bytes] : assembled) assembled_names.push_back(name);
+    EXPECT_EQ(assembled_names, full_names);
+    EXPECT_EQ(full.size(), 5u + 6u + 1u + (find_on_path("ffmpeg").empty() ? 0u : 2u));
+    for (const auto& [name, bytes] : full) {
+        ASSERT_TRUE(assembled.count(name)) << name;
+        EXPECT_TRUE(assembled.at(name) == bytes) << name << " differs from the full run";
+    }
+    const nlohmann::json m = read_manifest(r);
+    EXPECT_EQ(m.at("frames"), full_manifest.at("frames"));
+    EXPECT_EQ(m.at("triangles"), full_manifest.at("triangles"));
+    EXPECT_EQ(m.at("contact_sheet"), full_manifest.at("contact_sheet"));
+    EXPECT_EQ(m.at("movies"), full_manifest.at("movies"));
+    EXPECT_GT(m.at("seconds_per_frame").get<double>(), 0.0);
+}
+
+TEST_F(McRenderCli, AssembleNamesAMissingOrStaleFrame) {
+    const Shot shot = write_shot(kSurfacedShot);
+    write_surface(shot, 3);
+    ASSERT_EQ(run("--frames 1-2"), 0) << m_stderr;
+    EXPECT_EQ(run("--assemble"), 1);
+    EXPECT_NE(m_stderr.find("frame.0003.png: missing"), std::string::npos) << m_stderr;
+    EXPECT_FALSE(fs::exists(out() / "render/manifest.json"));
+    ASSERT_EQ(run("--frames 3-3"), 0) << m_stderr;
+    write_surface(shot, 3);  // new surfacing: the rendered frames no longer match it
+    EXPECT_EQ(run("--assemble"), 1);
+    EXPECT_NE(m_stderr.find("frame.0001.png: older than"), std::string::npos) << m_stderr;
+    EXPECT_FALSE(fs::exists(out() / "render/manifest.json"));
+}
+
+TEST_F(McRenderCli, AssembleRefusesAFrameRange) {
+    const Shot shot = write_shot(kSurfacedShot);
+    write_surface(shot, 3);
+    EXPECT_EQ(run("--assemble --frames 1-2"), 1);
+    EXPECT_NE(m_stderr.find("--assemble with --frames 1-2"), std::string::npos) << m_stderr;
+    EXPECT_EQ(run("--frames 4-5"), 1);
+    EXPECT_NE(m_stderr.find("--frames 4-5: outside the frames 1-3"), std::string::npos) << m_stderr;
     EXPECT_FALSE(fs::exists(out() / "render/frame.0001.png"));
-    EXPECT_TRUE(fs::exists(out() / "render/frame.0003.png"));
-    EXPECT_EQ(read_manifest(out() / "render").at("color_mode"), "hardening");
 }
 
 TEST_F(McRenderCli, RendersParticlesWithoutSurfacing) {
