@@ -382,5 +382,25 @@ TEST_F(ShotTest, ShippedShotsValidate) {
     }
 }
 
+// every shot the project ships must load; the figure shots follow Table 1 (Tu et al. 2023)
+TEST_F(ShotTest, EveryShippedShotLoads) {
+    const std::filesystem::path dir = std::filesystem::path(MUDCRACK_SOURCE_DIR) / "shots";
+    int count = 0;
+    for (const auto& entry : std::filesystem::directory_iterator(dir)) {
+        if (entry.path().extension() != ".json") continue;
+        EXPECT_NO_THROW(load_shot(entry.path().string())) << entry.path();
+        ++count;
+    }
+    EXPECT_GE(count, 3);
+    // Table 1's Fig. 8 ablation: eta = 0 (a), eps = 0 (b), the full model (c)
+    const Shot a = load_shot((dir / "fig8_a.json").string()), b = load_shot((dir / "fig8_b.json").string()),
+               c = load_shot((dir / "fig8_c.json").string());
+    ASSERT_TRUE(a.sim.moisture && b.sim.moisture && c.sim.moisture);
+    EXPECT_EQ(a.sim.moisture->eta, 0);
+    EXPECT_EQ(b.sim.moisture->eps, 0);
+    EXPECT_EQ(c.sim.moisture->eta, 0.4);
+    EXPECT_EQ(c.sim.moisture->eps, 1);
+}
+
 }  // namespace
 }  // namespace mudcrack
