@@ -3,6 +3,8 @@
 #include <algorithm>
 #include <cmath>
 
+#include <Eigen/Core>
+
 #include "sim/core/parallel.h"
 #include "sim/mpm/bspline.h"
 
@@ -105,33 +107,91 @@ void mark_surface_nodes(const SparseGrid& grid, const MoistureSeal& seal, Moistu
     });
 }
 
-// One gather/scatter pass over the particles (physics.md 4.5): y = L x (+ R x with the implicit
-// Robin term). The first pass of a solve also finds the boundary particles (a surface node in
+// The window of one particle block as 4-lane rows: a particle's 3 stencil nodes along z are
+// loaded and stored as 4 contiguous values whose 4th lane has weight 0. Its sub-windows are
+// kWindowStride apart so that lane past the last node stays inside the scratch.
+using Lanes = Eigen::Array<Real, 4, 1>;
+constexpr int kWindowStride = kWindowNodes + 8;
+
+inline Lanes load_lanes(const Real* p) { return Eigen::Map<const Lanes>(p); }
+inline void add_lanes(Real* p, const Lanes& v) { Eigen::Map<Lanes>(p) += v; }
+
+// The evaporation pass (physics.md 4.2, 4.4): finds the boundary particles (a surface node in
 // their stencil; the containing-cell variant of physics.md 4.4 misses flat faces: with 2
 // particles per cell the last massive node lies 1.25 h above the top layer, outside its cell)
-// and scatters their evaporation: r into mg.rhs, and lambda S w^2 into mg.diag when implicit.
-template <bool kFirst>
-void particle_pass(const MoistureParams& mp, const SparseGrid& grid, const MoistureParticles& pp, MoistureGrid& mg,
-                   const Real* x, Real* y, std::vector<std::vector<Real>>& windows) {
+// and scatters their evaporation: r into mg.rhs (zeroed), and lambda S w^2 into mg.diag when
+// the Robin term is implicit. Particle blocks whose window holds no surface node are skipped.
+void evaporation_pass(const MoistureParams& mp, const SparseGrid& grid, const MoistureParticles& pp, MoistureGrid& mg,
+                      std::vector<std::vector<Real>>& windows) {
+    const mpm::GridGeometry& geo = grid.geo;
+    const bool implicit_robin = mp.implicit_robin;
+    mpm::for_each_pblock_colored(grid, [&](int t, int32_t pb) {
+        Real* sw = windows[t].data();       // surface flags
+        Real* rw = sw + kWindowStride;      // evaporation r
+        Real* dw = rw + kWindowStride;      // Robin diagonal
+        mpm::gather_window<1, 1, 1>(grid, pb, mg.surface.data(), 0, sw);
+        const bool any_surface = std::any_of(sw, sw + kWindowNodes, [](Real f) { return f > 0; });
+        if (!any_surface) {
+            for (int32_t i = grid.pblock_begin[pb]; i < grid.pblock_begin[pb + 1]; ++i)
+                mg.particle_is_boundary[grid.order[i]] = 0;
+            return;
+        }
+        std::fill(rw, rw + 2 * kWindowStride, Real(0));
+        bool any_boundary = false;
+        const Vec3i origin = geo.block_coord(grid.pblock_key[pb]) * kBlockWidth;
+        for (int32_t i = grid.pblock_begin[pb]; i < grid.pblock_begin[pb + 1]; ++i) {
+            const int32_t p = grid.order[i];
+            const mpm::Stencil st = mpm::make_stencil(geo.to_grid(pp.x[p]));
+            const mpm::AxisWeights &ax = st.axis[0], &ay = st.axis[1], &az = st.axis[2];
+            const int o0 = ax.base - origin.x(), o1 = ay.base - origin.y(), o2 = az.base - origin.z();
+            bool is_boundary = false;
+            for (int a = 0; a < 3 && !is_boundary; ++a)
+                for (int b = 0; b < 3 && !is_boundary; ++b) {
+                    const Real* row = sw + mpm::window_index(o0 + a, o1 + b, o2);
+                    is_boundary = row[0] + row[1] + row[2] > 0;
+                }
+            mg.particle_is_boundary[p] = is_boundary;
+            if (!is_boundary) continue;
+            any_boundary = true;
+            const Real lambda_S = mp.lambda * particle_area(pp.V0[p] * pp.J[p]);
+            // explicit: r_i = -S lambda (theta_p - theta_0) w_ip; implicit: r_0,i =
+            // S lambda theta_0 w_ip, and S lambda w_ip^2 on the diagonal
+            const Real source = implicit_robin ? lambda_S * mp.theta0 : -lambda_S * (pp.theta[p] - mp.theta0);
+            for (int a = 0; a < 3; ++a)
+                for (int b = 0; b < 3; ++b) {
+                    const int n = mpm::window_index(o0 + a, o1 + b, o2);
+                    const Real wab = ax.w[a] * ay.w[b];
+                    for (int c = 0; c < 3; ++c) {
+                        const Real w = wab * az.w[c];
+                        rw[n + c] += source * w;
+                        dw[n + c] += lambda_S * w * w;
+                    }
+                }
+        }
+        if (any_boundary) {
+            mpm::flush_window<1, 1>(grid, pb, rw, mg.rhs.data());
+            if (implicit_robin) mpm::flush_window<1, 1>(grid, pb, dw, mg.diag.data());
+        }
+    });
+}
+
+// One gather/scatter pass over the particles (physics.md 4.5): y = L x (+ R x with the implicit
+// Robin term, on the particles the evaporation pass flagged). The 3x3x3 gather and scatter run
+// on z rows of 4 lanes (the z weights with a zero 4th lane), which the compiler maps to one SIMD
+// operation per row.
+template <bool kImplicitRobin>
+void operator_pass(const MoistureParams& mp, const SparseGrid& grid, const MoistureParticles& pp,
+                   const MoistureGrid& mg, const Real* x, Real* y, std::vector<std::vector<Real>>& windows) {
     const int64_t n_nodes = node_count(grid);
     parallel_chunks(n_nodes, [&](int, int64_t b, int64_t e) { std::fill(y + b, y + e, Real(0)); });
     const mpm::GridGeometry& geo = grid.geo;
     const Real D_scale = mp.D * geo.inv_h * geo.inv_h;
-    const bool evaporates = mp.lambda > 0;
-    const bool implicit_robin = mp.implicit_robin && evaporates;
     mpm::for_each_pblock_colored(grid, [&](int t, int32_t pb) {
         Real* xw = windows[t].data();
-        Real* yw = xw + kWindowNodes;
-        Real* sw = yw + kWindowNodes;   // first pass: surface flags
-        Real* rw = sw + kWindowNodes;   // first pass: evaporation r
-        Real* dw = rw + kWindowNodes;   // first pass: Robin diagonal
+        Real* yw = xw + kWindowStride;
         mpm::gather_window<1, 1, 1>(grid, pb, x, 0, xw);
-        std::fill(yw, yw + kWindowNodes, Real(0));
-        bool any_boundary = false;
-        if constexpr (kFirst) {
-            mpm::gather_window<1, 1, 1>(grid, pb, mg.surface.data(), 0, sw);
-            std::fill(rw, rw + 2 * kWindowNodes, Real(0));
-        }
+        std::fill(xw + kWindowNodes, xw + kWindowStride, Real(0));
+        std::fill(yw, yw + kWindowStride, Real(0));
         const Vec3i origin = geo.block_coord(grid.pblock_key[pb]) * kBlockWidth;
         for (int32_t i = grid.pblock_begin[pb]; i < grid.pblock_begin[pb + 1]; ++i) {
             const int32_t p = grid.order[i];
@@ -139,79 +199,58 @@ void particle_pass(const MoistureParams& mp, const SparseGrid& grid, const Moist
             const mpm::AxisWeights &ax = st.axis[0], &ay = st.axis[1], &az = st.axis[2];
             const int o0 = ax.base - origin.x(), o1 = ay.base - origin.y(), o2 = az.base - origin.z();
             const Real V = pp.V0[p] * pp.J[p];
+            const Lanes wz(az.w[0], az.w[1], az.w[2], 0), dwz(az.dw[0], az.dw[1], az.dw[2], 0);
 
-            bool is_boundary = false;
-            if constexpr (kFirst) {
-                if (evaporates) {
-                    for (int a = 0; a < 3 && !is_boundary; ++a)
-                        for (int b = 0; b < 3 && !is_boundary; ++b) {
-                            const Real* row = sw + mpm::window_index(o0 + a, o1 + b, o2);
-                            is_boundary = row[0] + row[1] + row[2] > 0;
-                        }
-                }
-                mg.particle_is_boundary[p] = is_boundary;
-                if (is_boundary) {
-                    any_boundary = true;
-                    const Real lambda_S = mp.lambda * particle_area(V);
-                    // explicit: r_i = -S lambda (theta_p - theta_0) w_ip; implicit: r_0,i =
-                    // S lambda theta_0 w_ip, and S lambda w_ip^2 on the diagonal
-                    const Real source =
-                        mp.implicit_robin ? lambda_S * mp.theta0 : -lambda_S * (pp.theta[p] - mp.theta0);
-                    for (int a = 0; a < 3; ++a)
-                        for (int b = 0; b < 3; ++b) {
-                            const int n = mpm::window_index(o0 + a, o1 + b, o2);
-                            const Real wab = ax.w[a] * ay.w[b];
-                            for (int c = 0; c < 3; ++c) {
-                                const Real w = wab * az.w[c];
-                                rw[n + c] += source * w;
-                                dw[n + c] += lambda_S * w * w;
-                            }
-                        }
-                }
-            } else {
-                is_boundary = implicit_robin && mg.particle_is_boundary[p];
-            }
-
-            // gather g_p = sum_j x_j grad w_jp (in units of 1/h) and s_p = sum_j w_jp x_j,
-            // factorised along z
-            Real gx = 0, gy = 0, gz = 0, s = 0;
+            // the x-y factors of w and of the two in-plane gradient components per z row
+            Real wxy[9], dxy[9], xdy[9];
             for (int a = 0; a < 3; ++a)
                 for (int b = 0; b < 3; ++b) {
-                    const Real* row = xw + mpm::window_index(o0 + a, o1 + b, o2);
-                    const Real tw = az.w[0] * row[0] + az.w[1] * row[1] + az.w[2] * row[2];
-                    const Real td = az.dw[0] * row[0] + az.dw[1] * row[1] + az.dw[2] * row[2];
-                    const Real wab = ax.w[a] * ay.w[b];
-                    gx += ax.dw[a] * ay.w[b] * tw;
-                    gy += ax.w[a] * ay.dw[b] * tw;
-                    gz += wab * td;
-                    s += wab * tw;
+                    wxy[3 * a + b] = ax.w[a] * ay.w[b];
+                    dxy[3 * a + b] = ax.dw[a] * ay.w[b];
+                    xdy[3 * a + b] = ax.w[a] * ay.dw[b];
+                }
+            // gather g_p = sum_j x_j grad w_jp (in units of 1/h) and s_p = sum_j w_jp x_j: the
+            // x-y factors weight whole z rows, the z factors close the sums
+            const Real* xrow = xw + mpm::window_index(o0, o1, o2);
+            Real* yrow = yw + mpm::window_index(o0, o1, o2);
+            Lanes rx = Lanes::Zero(), ry = Lanes::Zero(), rs = Lanes::Zero();
+            for (int a = 0; a < 3; ++a)
+                for (int b = 0; b < 3; ++b) {
+                    const Lanes row = load_lanes(xrow + mpm::window_index(a, b, 0));
+                    rx += dxy[3 * a + b] * row;
+                    ry += xdy[3 * a + b] * row;
+                    rs += wxy[3 * a + b] * row;
                 }
             // scatter V D grad w_ip . g_p (the 1/h of both gradients in D_scale) and the
             // implicit Robin term lambda S w_ip s_p
             const Real scale = V * D_scale;
-            gx *= scale;
-            gy *= scale;
-            gz *= scale;
-            const Real robin = (implicit_robin && is_boundary) ? mp.lambda * particle_area(V) * s : 0;
+            const Real gx = scale * (rx * wz).sum();
+            const Real gy = scale * (ry * wz).sum();
+            const Real gz = scale * (rs * dwz).sum();
+            Real robin = 0;
+            if constexpr (kImplicitRobin) {
+                if (mg.particle_is_boundary[p]) robin = mp.lambda * particle_area(V) * (rs * wz).sum();
+            }
             for (int a = 0; a < 3; ++a)
                 for (int b = 0; b < 3; ++b) {
-                    Real* row = yw + mpm::window_index(o0 + a, o1 + b, o2);
-                    const Real wab = ax.w[a] * ay.w[b];
-                    const Real cw = gx * ax.dw[a] * ay.w[b] + gy * ax.w[a] * ay.dw[b] + robin * wab;
-                    const Real cd = gz * wab;
-                    row[0] += cw * az.w[0] + cd * az.dw[0];
-                    row[1] += cw * az.w[1] + cd * az.dw[1];
-                    row[2] += cw * az.w[2] + cd * az.dw[2];
+                    const int k = 3 * a + b;
+                    Real cw = gx * dxy[k] + gy * xdy[k];
+                    if constexpr (kImplicitRobin) cw += robin * wxy[k];
+                    const Real cd = gz * wxy[k];
+                    add_lanes(yrow + mpm::window_index(a, b, 0), cw * wz + cd * dwz);
                 }
         }
         mpm::flush_window<1, 1>(grid, pb, yw, y);
-        if constexpr (kFirst) {
-            if (any_boundary) {
-                mpm::flush_window<1, 1>(grid, pb, rw, mg.rhs.data());
-                if (implicit_robin) mpm::flush_window<1, 1>(grid, pb, dw, mg.diag.data());
-            }
-        }
     });
+}
+
+// y = L x (+ R x when the evaporation is implicit and on)
+void apply_stiffness(const MoistureParams& mp, const SparseGrid& grid, const MoistureParticles& pp,
+                     const MoistureGrid& mg, const Real* x, Real* y, std::vector<std::vector<Real>>& windows) {
+    if (mp.implicit_robin && mp.lambda > 0)
+        operator_pass<true>(mp, grid, pp, mg, x, y, windows);
+    else
+        operator_pass<false>(mp, grid, pp, mg, x, y, windows);
 }
 
 }  // namespace
@@ -265,18 +304,30 @@ MoistureSolveStats solve_moisture(const MoistureParams& mp, const MoistureSeal& 
     mg.p.resize(n_nodes);
     mg.Ap.resize(n_nodes);
 
-    // x0 = theta^n; the first particle pass gives L x0 in Ap, the boundary particles and r in rhs
-    parallel_for(n_nodes, [&](int64_t i) { mg.x[i] = mg.theta[i]; });
-    particle_pass<true>(mp, grid, pp, mg, mg.x.data(), mg.Ap.data(), windows);
-
-    // rhs = M theta^n + r; residual b - (M + L) x0 = r - L theta^n (the M terms cancel exactly)
+    // evaporation r into rhs (and the implicit Robin diagonal), then the initial guess: theta^n
+    // plus the Jacobi step on the explicit evaporation, x0 = theta^n + r / diag (it takes most of
+    // the initial residual, so the CG needs about one iteration less); x holds x0 - theta^n
+    if (mp.lambda > 0) evaporation_pass(mp, grid, pp, mg, windows);
+    else std::fill(mg.particle_is_boundary.begin(), mg.particle_is_boundary.end(), uint8_t(0));
+    const bool explicit_evaporation = !mp.implicit_robin && mp.lambda > 0;
     auto inv_diag = [&](int64_t i) { return mg.diag[i] > 0 ? 1 / mg.diag[i] : Real(0); };
     parallel_for(n_nodes, [&](int64_t i) {
+        const Real dx = explicit_evaporation && mg.W[i] > 0 ? mg.rhs[i] * inv_diag(i) : Real(0);
+        mg.x[i] = dx;
+        mg.p[i] = mg.theta[i] + dx;
+    });
+    apply_stiffness(mp, grid, pp, mg, mg.p.data(), mg.Ap.data(), windows);
+
+    // rhs = M theta^n + r; residual b - (M + L) x0 = r - M (x0 - theta^n) - L x0, formed from
+    // the small terms (the M theta^n parts cancel exactly)
+    parallel_for(n_nodes, [&](int64_t i) {
         if (mg.W[i] > 0) {
-            mg.r[i] = mg.rhs[i] - mg.Ap[i];
-            mg.rhs[i] += mg.W[i] * inv_dt * mg.theta[i];
+            const Real m = mg.W[i] * inv_dt;
+            mg.r[i] = mg.rhs[i] - m * mg.x[i] - mg.Ap[i];
+            mg.rhs[i] += m * mg.theta[i];
+            mg.x[i] += mg.theta[i];
         } else {
-            mg.r[i] = mg.rhs[i] = 0;
+            mg.r[i] = mg.rhs[i] = mg.x[i] = 0;
         }
         mg.p[i] = mg.r[i] * inv_diag(i);
     });
@@ -290,7 +341,7 @@ MoistureSolveStats solve_moisture(const MoistureParams& mp, const MoistureSeal& 
         const Real target = mp.cg_tolerance * b_norm;
         while (r_norm > target && stats.iterations < mp.cg_max_iterations) {
             // Ap = (M + L [+ R]) p
-            particle_pass<false>(mp, grid, pp, mg, mg.p.data(), mg.Ap.data(), windows);
+            apply_stiffness(mp, grid, pp, mg, mg.p.data(), mg.Ap.data(), windows);
             ++stats.iterations;
             const Real pAp = block_sum(grid, mg.block_partial, [&](int64_t i) {
                 mg.Ap[i] += mg.W[i] * inv_dt * mg.p[i];

@@ -3,8 +3,9 @@
 ///   (M + L) theta^{n+1} = M theta^n + r,   M_ii = W_i/dt,  W_i = sum_p V_p w_ip,
 ///   L_ij = sum_p V_p D grad w_ip . grad w_jp,   r_i = -sum_{p boundary} S_p lambda (theta_p - theta_0) w_ip
 /// (the minus sign of r is required, physics.md 4.2), solved matrix-free with Jacobi-preconditioned
-/// CG from theta^n. Node fields live on the sparse grid's allocated blocks; they exist only when
-/// the model has moisture.
+/// CG from theta^n plus one Jacobi step on the explicit evaporation, theta^n + r / diag (that
+/// step removes most of the initial residual: usually one CG iteration reaches 1e-6). Node fields
+/// live on the sparse grid's allocated blocks; they exist only when the model has moisture.
 #include <cstdint>
 #include <vector>
 
@@ -58,7 +59,7 @@ void begin_moisture_p2g(MoistureGrid& mg, const mpm::SparseGrid& grid);
 /// On return mg.x holds theta^{n+1} - theta^n per node (zero off the material) and
 /// mg.particle_is_boundary flags the evaporating particles.
 /// @param dt moisture time step [s] (k dt when solving every k MPM steps)
-/// @param windows per-thread scratch, at least 2 * 216 values each
+/// @param windows per-thread scratch, at least 5 * 224 values each
 MoistureSolveStats solve_moisture(const MoistureParams& params, const MoistureSeal& seal,
                                   const mpm::SparseGrid& grid, const MoistureParticles& particles,
                                   Real dt, MoistureGrid& mg, std::vector<std::vector<Real>>& windows);

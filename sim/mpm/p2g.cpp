@@ -1,6 +1,8 @@
 // P2G: mass, APIC momentum with the fused MLS stress, and the moisture fields (physics.md 1.2, 4.3).
 #include <algorithm>
 
+#include <Eigen/Core>
+
 #include "sim/material/neo_hookean.h"
 #include "sim/mpm/bspline.h"
 #include "sim/mpm/transfer.h"
@@ -9,11 +11,16 @@ namespace mudcrack::mpm {
 
 namespace {
 
-// window layout per node: m, (m v) x y z, then with moisture W, (V theta), sum V |grad w|^2, pad
+// window layout: per node m, (m v) x y z; with moisture then three planar windows W, (V theta),
+// sum V |grad w|^2, kMoistureStride apart, whose z rows are updated as 4 lanes (the z weights with
+// a zero 4th lane: one SIMD operation per row; the stride keeps that lane inside the scratch)
+constexpr int kMoistureStride = kWindowNodes + 8;
+using Lanes = Eigen::Array<Real, 4, 1>;
+
 template <bool kMoisture>
 void p2g_impl(const SimModel& model, const SimState& state, SparseGrid& grid, MoistureGrid* mg, Real dt,
               std::vector<std::vector<Real>>& windows) {
-    constexpr int kStride = kMoisture ? 8 : 4;
+    constexpr int kStride = kNodeFields;
     const GridGeometry& geo = grid.geo;
     const LameParams lame = lame_params(model.elastic);
     const Real h = geo.h;
@@ -29,7 +36,8 @@ void p2g_impl(const SimModel& model, const SimState& state, SparseGrid& grid, Mo
 
     for_each_pblock_colored(grid, [&](int t, int32_t pb) {
         Real* win = windows[t].data();
-        std::fill(win, win + kWindowNodes * kStride, Real(0));
+        Real* mw = win + kWindowNodes * kStride;  // moisture windows
+        std::fill(win, win + kWindowNodes * kStride + (kMoisture ? 3 * kMoistureStride : 0), Real(0));
         const Vec3i origin = geo.block_coord(grid.pblock_key[pb]) * kBlockWidth;
         for (int32_t i = grid.pblock_begin[pb]; i < grid.pblock_begin[pb + 1]; ++i) {
             const int32_t p = grid.order[i];
@@ -49,9 +57,13 @@ void p2g_impl(const SimModel& model, const SimState& state, SparseGrid& grid, Mo
             const Real db[4] = {0, Ah(0, 1), Ah(1, 1), Ah(2, 1)};
             const Real dc[4] = {0, Ah(0, 2), Ah(1, 2), Ah(2, 2)};
             Real V = 0, Vtheta = 0;
+            Lanes wz = Lanes::Zero(), wz2 = Lanes::Zero(), dwz2 = Lanes::Zero();
             if constexpr (kMoisture) {
                 V = V0[p] * J[p];
                 Vtheta = V * theta[p];
+                wz << az.w[0], az.w[1], az.w[2], 0;
+                wz2 = wz * wz;
+                dwz2 << az.dw[0] * az.dw[0], az.dw[1] * az.dw[1], az.dw[2] * az.dw[2], 0;
             }
 
             // scatter to the 3x3x3 stencil
@@ -65,14 +77,16 @@ void p2g_impl(const SimModel& model, const SimState& state, SparseGrid& grid, Mo
                         const Real w = wab * az.w[c];
                         Real* node = row + c * kStride;
                         for (int k = 0; k < 4; ++k) node[k] += w * (q[k] + Real(c) * dc[k]);
-                        if constexpr (kMoisture) {
-                            const Real gx = ax.dw[a] * ay.w[b] * az.w[c];
-                            const Real gy = ax.w[a] * ay.dw[b] * az.w[c];
-                            const Real gz = wab * az.dw[c];
-                            node[4] += w * V;
-                            node[5] += w * Vtheta;
-                            node[6] += V * (gx * gx + gy * gy + gz * gz);
-                        }
+                    }
+                    if constexpr (kMoisture) {
+                        // W, V theta and V |grad w|^2 with |grad w|^2 (in 1/h^2) =
+                        // ((dwx wy)^2 + (wx dwy)^2) wz^2 + (wx wy)^2 dwz^2
+                        const int n = window_index(o0 + a, o1 + b, o2);
+                        const Real gxy = ax.dw[a] * ay.w[b], gyx = ax.w[a] * ay.dw[b];
+                        Eigen::Map<Lanes>(mw + n) += (V * wab) * wz;
+                        Eigen::Map<Lanes>(mw + kMoistureStride + n) += (Vtheta * wab) * wz;
+                        Eigen::Map<Lanes>(mw + 2 * kMoistureStride + n) +=
+                            (V * (gxy * gxy + gyx * gyx)) * wz2 + (V * wab * wab) * dwz2;
                     }
                 }
             }
@@ -81,14 +95,9 @@ void p2g_impl(const SimModel& model, const SimState& state, SparseGrid& grid, Mo
         // flush the window into the 8 blocks it overlaps
         flush_window<kNodeFields, kStride>(grid, pb, win, grid.nodes.data());
         if constexpr (kMoisture) {
-            const WindowMap& map = window_map();
-            const std::array<int32_t, 8>& nb = grid.pblock_neighbors[pb];
-            for (int n = 0; n < kWindowNodes; ++n) {
-                const int64_t node = static_cast<int64_t>(nb[map.neighbor[n]]) * kBlockNodes + map.local[n];
-                mg->W[node] += win[n * kStride + 4];
-                mg->theta[node] += win[n * kStride + 5];
-                mg->diag[node] += win[n * kStride + 6];
-            }
+            flush_window<1, 1>(grid, pb, mw, mg->W.data());
+            flush_window<1, 1>(grid, pb, mw + kMoistureStride, mg->theta.data());
+            flush_window<1, 1>(grid, pb, mw + 2 * kMoistureStride, mg->diag.data());
         }
     });
 }
