@@ -144,7 +144,7 @@ int run_summary(const std::string& out) {
         {"surface", {{"/tets_per_second", "tets/s"}}},
         {"render", {{"/seconds_per_frame", "s/frame"}}},
     };
-    std::printf("%-8s %-10s %9s %24s %10s  %s\n", "stage", "frames", "wall [s]", "throughput", "peak MiB",
+    std::printf("%-8s %-10s %9s %26s %10s  %s\n", "stage", "frames", "wall [s]", "throughput", "peak MiB",
                 "outputs");
     int stages_found = 0;
     for (const char* stage : {"init", "sim", "surface", "render"}) {
@@ -172,7 +172,7 @@ int run_summary(const std::string& out) {
         }
         char outputs[64];
         std::snprintf(outputs, sizeof outputs, "%d files, %.1f MiB", files, static_cast<double>(bytes) / 1048576.0);
-        std::printf("%-8s %-10s %9.2f %24s %10.1f  %s in %s\n", stage, frames.c_str(), wall, rate.c_str(),
+        std::printf("%-8s %-10s %9.2f %26s %10.1f  %s in %s\n", stage, frames.c_str(), wall, rate.c_str(),
                     peak / 1048576.0, outputs, dir.string().c_str());
         ++stages_found;
     }
