@@ -71,14 +71,6 @@ struct FrameSource {
     }
 };
 
-std::string manifest_slice_hash(const json& m) {
-    for (const char* key : {"shot_slice_hash", "slice_hash"}) {
-        const auto it = m.find(key);
-        if (it != m.end() && it->is_string()) return it->get<std::string>();
-    }
-    return {};
-}
-
 /// DIR/<stage>/manifest.json, checked to come from this shot's slice of that stage.
 json read_input_manifest(const fs::path& dir, const Shot& shot, Stage stage, const char* producer) {
     const fs::path file = dir / "manifest.json";

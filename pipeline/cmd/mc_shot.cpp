@@ -40,16 +40,6 @@ std::string number(double v) {
     return buf;
 }
 
-// source_type_name() lives in the init target (CGAL), which mc-shot does not link
-const char* source_kind(SourceType type) {
-    switch (type) {
-        case SourceType::Mesh: return "mesh";
-        case SourceType::Box: return "box";
-        case SourceType::Heightfield: return "heightfield";
-    }
-    return "?";
-}
-
 const char* collider_mode_name(ColliderMode mode) {
     switch (mode) {
         case ColliderMode::Sticky: return "sticky";
@@ -65,7 +55,7 @@ std::string summary(const Shot& shot) {
     std::string s = shot.name + ": stages init sim";
     if (shot.surface) s += " surface";
     if (shot.render) s += " render";
-    s += "; source " + std::string(source_kind(shot.init.type));
+    s += "; source " + std::string(source_type_name(shot.init.type));
     s += "; plasticity " + std::string(sim.nacc ? "on" : "off");
     s += "; moisture " + std::string(sim.moisture ? "on" : "off");
     s += sim.ground ? "; ground " + std::string(collider_mode_name(sim.ground->mode)) + " at y=" +

@@ -52,21 +52,12 @@ struct BreakHistory {
     std::vector<int32_t> first_break;
 };
 
-/// The shot slice hash a manifest records (make_manifest's "shot_slice_hash"; "slice_hash" too).
-std::string slice_hash_of(const json& manifest) {
-    for (const char* key : {"shot_slice_hash", "slice_hash"}) {
-        const auto it = manifest.find(key);
-        if (it != manifest.end() && it->is_string()) return it->get<std::string>();
-    }
-    return std::string();
-}
-
 /// Reads DIR/<stage>/manifest.json and checks it was made from this shot's slice of that stage.
 json read_input_manifest(const fs::path& dir, const Shot& shot, Stage stage, const char* producer) {
     const fs::path file = dir / "manifest.json";
     if (!fs::exists(file)) throw InputError(file.string() + ": missing: run " + producer + " first");
     json m = read_manifest(dir);
-    const std::string expected = shot.slice_hash(stage), found = slice_hash_of(m);
+    const std::string expected = shot.slice_hash(stage), found = manifest_slice_hash(m);
     if (found != expected)
         throw InputError(file.string() + ": slice_hash = \"" + found + "\": stale for this shot (expected \"" +
                          expected + "\"): re-run " + producer);
@@ -240,7 +231,7 @@ int run_surface_stage(const StageOptions& options, const std::string& mode_flag,
         } catch (const InputError&) {
             return false;
         }
-        return slice_hash_of(previous) == shot.slice_hash(Stage::Surface) &&
+        return manifest_slice_hash(previous) == shot.slice_hash(Stage::Surface) &&
                previous.value("mode", "") == surface_mode_name(params.mode) &&
                previous.value("format", "") == params.format;
     }();
@@ -309,8 +300,8 @@ int run_surface_stage(const StageOptions& options, const std::string& mode_flag,
     json per_frame = json::array();
     for (auto& [n, e] : frames) per_frame.push_back(e);
     json m = make_manifest("surface", shot.path, shot.slice_hash(Stage::Surface));
-    m["inputs"] = {{"init", {{"dir", init_dir.string()}, {"slice_hash", slice_hash_of(init_manifest)}}},
-                   {"sim", {{"dir", sim_dir.string()}, {"slice_hash", slice_hash_of(sim_manifest)}}}};
+    m["inputs"] = {{"init", {{"dir", init_dir.string()}, {"slice_hash", manifest_slice_hash(init_manifest)}}},
+                   {"sim", {{"dir", sim_dir.string()}, {"slice_hash", manifest_slice_hash(sim_manifest)}}}};
     m["mode"] = surface_mode_name(params.mode);
     m["format"] = params.format;
     m["zeta"] = params.zeta;

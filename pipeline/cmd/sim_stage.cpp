@@ -36,11 +36,6 @@ struct InitParticles {
     nlohmann::json manifest;
 };
 
-std::string slice_hash_of(const nlohmann::json& manifest) {
-    const auto it = manifest.find("shot_slice_hash");
-    return it != manifest.end() && it->is_string() ? it->get<std::string>() : std::string();
-}
-
 // read DIR/init/ and check that it was made from this shot's init slice
 InitParticles read_init(const fs::path& init_dir, const Shot& shot) {
     const fs::path manifest_file = init_dir / "manifest.json";
@@ -49,7 +44,7 @@ InitParticles read_init(const fs::path& init_dir, const Shot& shot) {
     InitParticles init;
     init.manifest = read_manifest(init_dir);
     const std::string expected = shot.slice_hash(Stage::Init);
-    const std::string found = slice_hash_of(init.manifest);
+    const std::string found = manifest_slice_hash(init.manifest);
     if (found != expected)
         throw InputError(manifest_file.string() + ": shot_slice_hash = \"" + found +
                          "\": the init outputs are stale for this shot (its init slice hashes to \"" +
@@ -294,7 +289,7 @@ int run_sim_stage(const Shot& shot, const StageOptions& options, const SimStageO
     const double rate = step_seconds > 0 ? double(run_substeps) * double(n) / step_seconds : 0;
     const double cg_mean = totals.substeps > 0 ? double(totals.cg_iterations) / double(totals.substeps) : 0;
     nlohmann::json m = make_manifest("sim", shot.path, shot.slice_hash(Stage::Sim));
-    m["inputs"] = {{"init", {{"dir", (out / "init").string()}, {"slice_hash", slice_hash_of(init.manifest)}}}};
+    m["inputs"] = {{"init", {{"dir", (out / "init").string()}, {"slice_hash", manifest_slice_hash(init.manifest)}}}};
     m["frames"] = {{"first", first}, {"last", last}, {"count", last - first + 1}, {"fps", model.time.fps}};
     m["particles"] = n;
     m["threads"] = thread_count();

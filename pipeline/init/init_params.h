@@ -53,6 +53,14 @@ struct InitParams {
 }  // namespace mudcrack
 
 namespace mudcrack {
-/// "mesh" | "box" | "heightfield".
-const char* source_type_name(SourceType type);
+/// "mesh" | "box" | "heightfield" (inline: the shot library names sources without linking the
+/// CGAL init target).
+inline const char* source_type_name(SourceType type) {
+    switch (type) {
+        case SourceType::Mesh: return "mesh";
+        case SourceType::Box: return "box";
+        case SourceType::Heightfield: return "heightfield";
+    }
+    return "?";
+}
 }  // namespace mudcrack

@@ -50,6 +50,11 @@ nlohmann::json make_manifest(const std::string& stage, const std::string& shot_p
     return m;
 }
 
+std::string manifest_slice_hash(const nlohmann::json& manifest) {
+    const auto it = manifest.find("shot_slice_hash");
+    return it != manifest.end() && it->is_string() ? it->get<std::string>() : std::string();
+}
+
 void write_manifest(const fs::path& dir, const nlohmann::json& manifest) {
     write_text_atomically(dir / kManifestName, manifest.dump(2) + "\n");
 }

@@ -14,6 +14,10 @@ namespace mudcrack {
 nlohmann::json make_manifest(const std::string& stage, const std::string& shot_path,
                              const std::string& slice_hash);
 
+/// The hash of the shot slice a manifest was made from (make_manifest's "shot_slice_hash"),
+/// or "" when it records none.
+std::string manifest_slice_hash(const nlohmann::json& manifest);
+
 /// Writes dir/manifest.json atomically, pretty-printed.
 void write_manifest(const std::filesystem::path& dir, const nlohmann::json& manifest);
 
