@@ -7,7 +7,6 @@
 // frame range can be surfaced, in any order and in parallel, with identical files.
 #include <algorithm>
 #include <cstdio>
-#include <cstring>
 #include <exception>
 #include <filesystem>
 #include <fstream>
@@ -22,6 +21,7 @@
 
 #include "pipeline/cmd/stage_cli.h"
 #include "pipeline/io/atomic_output.h"
+#include "pipeline/io/break_history_io.h"
 #include "pipeline/io/checksum.h"
 #include "pipeline/io/manifest.h"
 #include "pipeline/io/mesh_io.h"
@@ -40,17 +40,6 @@ using nlohmann::json;
 
 namespace mudcrack {
 namespace {
-
-constexpr char kBreaksMagic[8] = {'M', 'C', 'B', 'R', 'K', 'v', '1', '\0'};
-constexpr const char* kBreaksFile = "edge_breaks.bin";
-
-/// The break history on disk: which inputs it was computed from, the frames scanned, and the
-/// first break frame per edge.
-struct BreakHistory {
-    uint64_t source_hash = 0;  // sim manifest + break parameters + mesh size
-    int32_t first_frame = 0, last_frame = 0;
-    std::vector<int32_t> first_break;
-};
 
 /// Reads DIR/<stage>/manifest.json and checks it was made from this shot's slice of that stage.
 json read_input_manifest(const fs::path& dir, const Shot& shot, Stage stage, const char* producer) {
@@ -73,45 +62,6 @@ uint64_t break_source_hash(const json& sim_manifest, const SurfaceParams& params
     os << params.zeta << "|" << params.length_consistent << "|" << topo.n_edges() << "|" << topo.n_tets();
     const std::string s = os.str();
     return fnv1a64(s.data(), s.size());
-}
-
-void write_break_history(const fs::path& path, const BreakHistory& h) {
-    write_atomically(path, [&](const fs::path& tmp) {
-        std::ofstream out(tmp, std::ios::binary);
-        const int64_t n = static_cast<int64_t>(h.first_break.size());
-        const uint64_t checksum = fnv1a64(h.first_break.data(), h.first_break.size() * sizeof(int32_t));
-        out.write(kBreaksMagic, sizeof kBreaksMagic);
-        out.write(reinterpret_cast<const char*>(&h.source_hash), sizeof h.source_hash);
-        out.write(reinterpret_cast<const char*>(&h.first_frame), sizeof h.first_frame);
-        out.write(reinterpret_cast<const char*>(&h.last_frame), sizeof h.last_frame);
-        out.write(reinterpret_cast<const char*>(&n), sizeof n);
-        out.write(reinterpret_cast<const char*>(h.first_break.data()), n * sizeof(int32_t));
-        out.write(reinterpret_cast<const char*>(&checksum), sizeof checksum);
-        if (!out) throw RuntimeError(tmp.string() + ": cannot write the edge break history");
-    });
-}
-
-/// The stored history if it is intact and was computed from the same inputs; nullopt otherwise
-/// (it is a cache: a stale or damaged one is recomputed, not an error).
-std::optional<BreakHistory> read_break_history(const fs::path& path, uint64_t source_hash, int64_t n_edges) {
-    std::ifstream in(path, std::ios::binary);
-    if (!in) return std::nullopt;
-    char magic[8];
-    BreakHistory h;
-    int64_t n = 0;
-    in.read(magic, sizeof magic);
-    in.read(reinterpret_cast<char*>(&h.source_hash), sizeof h.source_hash);
-    in.read(reinterpret_cast<char*>(&h.first_frame), sizeof h.first_frame);
-    in.read(reinterpret_cast<char*>(&h.last_frame), sizeof h.last_frame);
-    in.read(reinterpret_cast<char*>(&n), sizeof n);
-    if (!in || std::memcmp(magic, kBreaksMagic, sizeof magic) != 0 || h.source_hash != source_hash || n != n_edges)
-        return std::nullopt;
-    h.first_break.resize(n);
-    uint64_t checksum = 0;
-    in.read(reinterpret_cast<char*>(h.first_break.data()), n * sizeof(int32_t));
-    in.read(reinterpret_cast<char*>(&checksum), sizeof checksum);
-    if (!in || checksum != fnv1a64(h.first_break.data(), h.first_break.size() * sizeof(int32_t))) return std::nullopt;
-    return h;
 }
 
 /// Loads one sim cache and checks that it is the expected frame of this mesh.
@@ -243,12 +193,12 @@ int run_surface_stage(const StageOptions& options, const std::string& mode_flag,
     timer.reset();
     const uint64_t source_hash = break_source_hash(sim_manifest, params, topo);
     std::optional<BreakHistory> history;
-    if (update_in_place) history = read_break_history(surface_dir / kBreaksFile, source_hash, topo.n_edges());
+    if (update_in_place) history = read_break_history(surface_dir / kBreakHistoryFile, source_hash, topo.n_edges());
     const bool reused = history && history->first_frame <= sim_first && history->last_frame >= last;
     if (!reused) {
         log::info("break history: scanning frames " + std::to_string(sim_first) + "-" + std::to_string(sim_last));
         history = scan_breaks(sim_dir, sim_first, sim_last, topo, params, source_hash);
-        write_break_history(dir / kBreaksFile, *history);
+        write_break_history(dir / kBreakHistoryFile, *history);
     }
     const double break_seconds = timer.seconds();
 
@@ -317,7 +267,7 @@ int run_surface_stage(const StageOptions& options, const std::string& mode_flag,
     m["preprocessing_seconds"] = preprocessing_seconds;
     m["topology_bytes"] = topo.memory_bytes();
     m["topology_bytes_per_tet"] = double(topo.memory_bytes()) / topo.n_tets();
-    m["break_history"] = {{"file", kBreaksFile}, {"reused", reused}, {"frames_scanned", reused ? 0 : sim_last - sim_first + 1},
+    m["break_history"] = {{"file", kBreakHistoryFile}, {"reused", reused}, {"frames_scanned", reused ? 0 : sim_last - sim_first + 1},
                           {"seconds", break_seconds}};
     m["surfacing_seconds"] = surfacing_seconds;
     m["tets_per_second"] = surfacing_seconds > 0 ? double(topo.n_tets()) * n_frames / surfacing_seconds : 0.0;

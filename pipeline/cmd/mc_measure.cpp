@@ -1,0 +1,158 @@
+// mc-measure: what drying did to a shot, in numbers (issue 6: the figure claims checked on
+// numbers, not only by eye). Reads DIR/init/tets.vtu, DIR/sim/particles.####.vdb and, when the
+// shot surfaces, DIR/surface/edge_breaks.bin; prints per frame the curl of the top surface, the
+// share of columns split horizontally or lifted off the ground (pipeline/measure/shape_measures.h
+// says how each is defined), and the broken edges and fragment sizes of the surfacing.
+// Writes nothing into DIR; --json FILE writes the table as JSON (atomically).
+#include <cstdio>
+#include <filesystem>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+
+#include "pipeline/cmd/stage_cli.h"
+#include "pipeline/io/atomic_output.h"
+#include "pipeline/io/break_history_io.h"
+#include "pipeline/io/manifest.h"
+#include "pipeline/io/points_io.h"
+#include "pipeline/io/tet_mesh_io.h"
+#include "pipeline/measure/shape_measures.h"
+#include "pipeline/shot/shot.h"
+#include "sim/core/error.h"
+#include "surfacing/core_topology.h"
+#include "surfacing/edge_breaks.h"
+#include "surfacing/fragments.h"
+
+namespace fs = std::filesystem;
+using nlohmann::json;
+
+namespace mudcrack {
+namespace {
+
+constexpr const char* kProgram = "mc-measure";
+
+/// The edges broken at frame n by the break history (broken at or before n).
+std::vector<uint8_t> broken_at(const BreakHistory& history, int n) {
+    std::vector<uint8_t> is_broken(history.first_break.size());
+    for (size_t e = 0; e < is_broken.size(); ++e) is_broken[e] = history.first_break[e] <= n ? 1 : 0;
+    return is_broken;
+}
+
+int run_measure(const StageOptions& options, const std::string& json_file) {
+    const Shot shot = load_shot(options.shot);
+    const fs::path out(options.out);
+    const fs::path init_dir = out / "init", sim_dir = out / "sim", surface_dir = out / "surface";
+    for (const fs::path& dir : {init_dir, sim_dir})
+        if (!fs::exists(dir / "manifest.json"))
+            throw InputError((dir / "manifest.json").string() + ": missing: run the shot's " +
+                             dir.filename().string() + " stage first");
+    const json sim_manifest = read_manifest(sim_dir);
+    int first = sim_manifest.at("frames").at("first").get<int>();
+    int last = sim_manifest.at("frames").at("last").get<int>();
+    if (options.frame_range.is_set()) {
+        if (options.frame_range.first < first || options.frame_range.last > last)
+            throw InputError("--frames " + options.frames + ": outside the cached frames " + std::to_string(first) +
+                             "-" + std::to_string(last) + " of " + (sim_dir / "manifest.json").string());
+        first = options.frame_range.first;
+        last = options.frame_range.last;
+    }
+
+    const TetMesh mesh = read_tet_mesh_vtu(init_dir / "tets.vtu");
+    const std::vector<Real> rest_volume = particle_rest_volumes(mesh);
+    const Real spacing = particle_spacing(rest_volume);
+    const RestColumns columns = build_rest_columns(mesh.X, spacing);
+
+    // fragments only when the surfacing ran: its break history is the one source of "broken"
+    std::optional<CoreTopology> topo;
+    std::optional<BreakHistory> history;
+    int min_particles = 1;
+    if (fs::exists(surface_dir / "manifest.json")) {
+        const json surface_manifest = read_manifest(surface_dir);
+        min_particles = surface_manifest.value("min_fragment_particles", 1);
+        topo = build_core_topology(mesh);
+        history = read_break_history(surface_dir / kBreakHistoryFile, std::nullopt, topo->n_edges());
+        if (!history)
+            throw InputError((surface_dir / kBreakHistoryFile).string() +
+                             ": missing or damaged (or from another mesh): re-run mc-surface");
+        if (history->last_frame < last)
+            throw InputError((surface_dir / kBreakHistoryFile).string() + ": covers frames up to " +
+                             std::to_string(history->last_frame) + ", not " + std::to_string(last) +
+                             ": re-run mc-surface");
+    }
+
+    if (!options.quiet) {
+        std::printf("%s: %s, %zu particles in %d columns of %.4g m\n", kProgram, shot.name.c_str(), mesh.X.size(),
+                    columns.n_columns(), spacing);
+        std::printf("%6s %8s %11s %9s %9s %10s %8s %10s %9s %13s\n", "frame", "time[s]", "rise50[mm]", "curl[mm]",
+                    "split[%]", "lifted[%]", "broken", "fragments", "polygons", "polygon[m^2]");
+    }
+    json table = json::array();
+    for (int n = first; n <= last; ++n) {
+        const fs::path path = frame_path(sim_dir, "particles", n, "vdb");
+        const PointCloud cloud = read_points(path);
+        const ParticleFrame frame = points_to_frame(cloud, path.string());
+        if (frame.size() != mesh.X.size())
+            throw InputError(path.string() + ": " + std::to_string(frame.size()) + " particles, but " +
+                             (init_dir / "tets.vtu").string() + " has " + std::to_string(mesh.X.size()));
+        std::vector<Vec3> x(frame.size());
+        for (size_t p = 0; p < x.size(); ++p) x[p] = frame.P[p].cast<Real>();
+        const LayerShape shape = measure_layer_shape(columns, mesh.X, x, spacing);
+        const double time = cloud.meta_double.count("mudcrack:time") ? cloud.meta_double.at("mudcrack:time") : 0.0;
+        json row = {{"frame", n},
+                    {"time", time},
+                    {"top_rise_median", shape.top_rise_median},
+                    {"top_rise_p95", shape.top_rise_p95},
+                    {"curl", shape.curl},
+                    {"split_fraction", shape.split_fraction},
+                    {"lifted_fraction", shape.lifted_fraction}};
+        int64_t broken = -1;
+        FragmentSizes sizes;
+        SurfacePolygons polygons;
+        if (topo) {
+            broken = count_broken_edges(history->first_break, n);
+            const std::vector<uint8_t> is_broken = broken_at(*history, n);
+            sizes = measure_fragment_sizes(find_fragments(*topo, is_broken, min_particles), rest_volume);
+            polygons = measure_surface_polygons(*topo, is_broken, columns, min_particles);
+            row["broken_edges"] = broken;
+            row["fragments"] = sizes.count;
+            row["largest_fragment_fraction"] = sizes.largest_fraction;
+            row["weighted_mean_fragment_volume"] = sizes.weighted_mean_volume;
+            row["surface_polygons"] = polygons.count;
+            row["weighted_mean_polygon_area"] = polygons.weighted_mean_area;
+            row["largest_polygon_fraction"] = polygons.largest_fraction;
+        }
+        if (!options.quiet) {
+            std::printf("%6d %8.4f %11.2f %9.2f %9.2f %10.2f", n, time, 1e3 * shape.top_rise_median, 1e3 * shape.curl,
+                        100 * shape.split_fraction, 100 * shape.lifted_fraction);
+            if (topo)
+                std::printf(" %8lld %10d %9d %13.4g\n", static_cast<long long>(broken), sizes.count, polygons.count,
+                            polygons.weighted_mean_area);
+            else
+                std::printf(" %8s %10s %9s %13s\n", "-", "-", "-", "-");
+        }
+        table.push_back(std::move(row));
+    }
+    if (!json_file.empty()) {
+        const json doc = {{"shot", shot.name},
+                          {"particles", mesh.X.size()},
+                          {"column_width", spacing},
+                          {"columns", columns.n_columns()},
+                          {"frames", std::move(table)}};
+        write_text_atomically(json_file, doc.dump(2) + "\n");
+    }
+    return 0;
+}
+
+}  // namespace
+}  // namespace mudcrack
+
+int main(int argc, char** argv) {
+    using namespace mudcrack;
+    std::string json_file;
+    return run_stage(
+        kProgram, "Measures a shot's curl, horizontal splits and fragments from its caches (writes nothing into --out)",
+        argc, argv, [&](CLI::App& app) { app.add_option("--json", json_file, "also write the table to this JSON file"); },
+        [&](const StageOptions& options) { return run_measure(options, json_file); });
+}

@@ -1,0 +1,158 @@
+// The shape measures on layers moved by hand, where the answer is known exactly.
+#include <gtest/gtest.h>
+
+#include <vector>
+
+#include "pipeline/measure/shape_measures.h"
+#include "sim/core/error.h"
+#include "tolerance.h"
+
+namespace mudcrack {
+namespace {
+
+constexpr double kSpacing = 0.02;
+constexpr int kN = 10;   // columns per side
+constexpr int kLayers = 6;
+
+/// A kN x kLayers x kN lattice with particles at cell centres; index (i, j, k) -> (k kLayers + j) kN + i.
+std::vector<Vec3> lattice() {
+    std::vector<Vec3> x;
+    for (int k = 0; k < kN; ++k)
+        for (int j = 0; j < kLayers; ++j)
+            for (int i = 0; i < kN; ++i) x.push_back(kSpacing * Vec3(i + 0.5, j + 0.5, k + 0.5));
+    return x;
+}
+int index(int i, int j, int k) { return (k * kLayers + j) * kN + i; }
+bool on_rim(int i, int k) { return i == 0 || k == 0 || i == kN - 1 || k == kN - 1; }
+
+TEST(RestColumns, GroupsALatticeIntoStacksBottomToTop) {
+    const std::vector<Vec3> rest = lattice();
+    const RestColumns columns = build_rest_columns(rest, kSpacing);
+    ASSERT_EQ(columns.n_columns(), kN * kN);
+    for (int c = 0; c < columns.n_columns(); ++c) {
+        ASSERT_EQ(columns.begin[c + 1] - columns.begin[c], kLayers);
+        for (int k = columns.begin[c] + 1; k < columns.begin[c + 1]; ++k) {
+            const Vec3& lo = rest[columns.particle[k - 1]];
+            const Vec3& hi = rest[columns.particle[k]];
+            EXPECT_NEAR(hi.y() - lo.y(), kSpacing, tol::kRoundoff);
+            EXPECT_EQ(lo.x(), hi.x());
+            EXPECT_EQ(lo.z(), hi.z());
+        }
+    }
+}
+
+TEST(RestColumns, RejectsANonPositiveWidth) {
+    EXPECT_THROW(build_rest_columns(lattice(), 0), InputError);
+    EXPECT_THROW(build_rest_columns(lattice(), -kSpacing), InputError);
+}
+
+TEST(ParticleSpacing, IsTheCubeRootOfTheMeanVolume) {
+    EXPECT_NEAR(particle_spacing(std::vector<Real>(100, 8e-6)), 0.02, tol::kRoundoff);
+    EXPECT_NEAR(particle_spacing({1e-6, 15e-6}), 0.02, tol::kRoundoff);
+    EXPECT_EQ(particle_spacing({}), 0);
+}
+
+TEST(LayerShape, UnmovedLayerHasNoCurlSplitOrLift) {
+    const std::vector<Vec3> rest = lattice();
+    const LayerShape s = measure_layer_shape(build_rest_columns(rest, kSpacing), rest, rest, kSpacing);
+    EXPECT_EQ(s.columns, kN * kN);
+    EXPECT_EQ(s.curl, 0);
+    EXPECT_EQ(s.top_rise_median, 0);
+    EXPECT_EQ(s.split_fraction, 0);
+    EXPECT_EQ(s.lifted_fraction, 0);
+}
+
+TEST(LayerShape, UniformShrinkageIsNotCurl) {
+    const std::vector<Vec3> rest = lattice();
+    std::vector<Vec3> x = rest;
+    for (Vec3& p : x) p = Vec3(0.7 * p.x(), 0.6 * p.y(), 0.7 * p.z());  // dried: shrunk, flat
+    const LayerShape s = measure_layer_shape(build_rest_columns(rest, kSpacing), rest, x, kSpacing);
+    const double top = kSpacing * (kLayers - 0.5);
+    EXPECT_NEAR(s.top_rise_median, -0.4 * top, tol::kRoundoff);
+    EXPECT_NEAR(s.curl, 0, tol::kRoundoff);
+    EXPECT_EQ(s.split_fraction, 0);
+    EXPECT_EQ(s.lifted_fraction, 0);
+}
+
+TEST(LayerShape, CurlIsTheRiseOfTheRimOverTheTypicalSurface) {
+    // the rim ring (36 of 100 columns) bends up: the top particle rises by d, the one below by d/2
+    const std::vector<Vec3> rest = lattice();
+    std::vector<Vec3> x = rest;
+    const double d = 0.013;
+    for (int k = 0; k < kN; ++k)
+        for (int i = 0; i < kN; ++i)
+            if (on_rim(i, k)) {
+                x[index(i, kLayers - 1, k)].y() += d;
+                x[index(i, kLayers - 2, k)].y() += d / 2;
+            }
+    const LayerShape s = measure_layer_shape(build_rest_columns(rest, kSpacing), rest, x, kSpacing);
+    EXPECT_NEAR(s.curl, d, tol::kRoundoff);
+    EXPECT_NEAR(s.top_rise_p95, d, tol::kRoundoff);
+    EXPECT_EQ(s.top_rise_median, 0);
+    EXPECT_EQ(s.split_fraction, 0);  // bent, not split: neighbours opened by d/2 < one spacing
+}
+
+TEST(LayerShape, AGapInsideAColumnIsAHorizontalSplit) {
+    // a crust of two layers peels up by 1.5 spacings in 30 columns
+    const std::vector<Vec3> rest = lattice();
+    std::vector<Vec3> x = rest;
+    int peeled = 0;
+    for (int k = 0; k < kN && peeled < 30; ++k)
+        for (int i = 0; i < kN && peeled < 30; ++i, ++peeled)
+            for (int j = kLayers - 2; j < kLayers; ++j) x[index(i, j, k)].y() += 1.5 * kSpacing;
+    const LayerShape s = measure_layer_shape(build_rest_columns(rest, kSpacing), rest, x, kSpacing);
+    EXPECT_NEAR(s.split_fraction, 0.30, tol::kRoundoff);
+    EXPECT_EQ(s.lifted_fraction, 0);
+}
+
+TEST(LayerShape, SidewaysCracksAreNotHorizontalSplits) {
+    // vertical cracks: half of the layer moves 3 spacings sideways and every column tilts a little
+    const std::vector<Vec3> rest = lattice();
+    std::vector<Vec3> x = rest;
+    for (int k = 0; k < kN; ++k)
+        for (int j = 0; j < kLayers; ++j)
+            for (int i = 0; i < kN; ++i) {
+                Vec3& p = x[index(i, j, k)];
+                if (i >= kN / 2) p.x() += 3 * kSpacing;
+                p.z() += 0.3 * kSpacing * j;
+            }
+    const LayerShape s = measure_layer_shape(build_rest_columns(rest, kSpacing), rest, x, kSpacing);
+    EXPECT_EQ(s.split_fraction, 0);
+    EXPECT_EQ(s.lifted_fraction, 0);
+    EXPECT_EQ(s.curl, 0);
+}
+
+TEST(LayerShape, AColumnOffTheGroundIsLiftedNotSplit) {
+    const std::vector<Vec3> rest = lattice();
+    std::vector<Vec3> x = rest;
+    for (int k = 0; k < kN; ++k)
+        for (int i = 0; i < kN; ++i)
+            if (on_rim(i, k))
+                for (int j = 0; j < kLayers; ++j) x[index(i, j, k)].y() += 2 * kSpacing;
+    const LayerShape s = measure_layer_shape(build_rest_columns(rest, kSpacing), rest, x, kSpacing);
+    EXPECT_NEAR(s.lifted_fraction, 0.36, tol::kRoundoff);
+    EXPECT_EQ(s.split_fraction, 0);
+}
+
+TEST(LayerShape, RejectsMismatchedSizes) {
+    const std::vector<Vec3> rest = lattice();
+    std::vector<Vec3> x(rest.begin(), rest.end() - 1);
+    EXPECT_THROW(measure_layer_shape(build_rest_columns(rest, kSpacing), rest, x, kSpacing), InputError);
+}
+
+TEST(FragmentSizes, WeightsFragmentsByVolumeAndSkipsCulledParticles) {
+    Fragments f;
+    f.id = {0, 0, 1, 2, 2, -1};
+    f.count = 3;
+    const std::vector<Real> volume = {0.5, 0.5, 1.0, 1.5, 0.5, 7.0};
+    const FragmentSizes s = measure_fragment_sizes(f, volume);
+    EXPECT_EQ(s.count, 3);
+    EXPECT_NEAR(s.total_volume, 4.0, tol::kRoundoff);
+    EXPECT_NEAR(s.largest_fraction, 0.5, tol::kRoundoff);
+    EXPECT_NEAR(s.weighted_mean_volume, (1.0 + 1.0 + 4.0) / 4.0, tol::kRoundoff);
+    f.id.pop_back();
+    EXPECT_THROW(measure_fragment_sizes(f, volume), InputError);
+}
+
+}  // namespace
+}  // namespace mudcrack
