@@ -1,12 +1,13 @@
 #!/usr/bin/env bash
-# One farm task, run by Slurm on a compute node (submit.sh submits it; never needed by hand).
+# One unit of chunked stage work: a farm task run by Slurm on a compute node (submit.sh submits
+# it), or a job of a parallel local make (pipeline/shot.mk runs the chunks of `make -jN shot`).
 #
 #   task.sh KIND SHOT_FILE SHOT_OUT BIN [FIRST LAST | CHUNKS_FILE]
 #
-# KIND: init | sim | sim-resume | surface-prep FIRST LAST | surface-chunk CHUNKS_FILE |
-#       surface-merge | render-chunk CHUNKS_FILE | render-assemble | render (all of it in one job)
-# An array task (surface-chunk, render-chunk) takes its frames from line $SLURM_ARRAY_TASK_ID of
-# CHUNKS_FILE.
+# KIND: init | sim | sim-resume | surface-prep FIRST LAST | surface-chunk FIRST LAST|CHUNKS_FILE |
+#       surface-merge | render-chunk FIRST LAST|CHUNKS_FILE | render-assemble | render (all of it)
+# A Slurm array task (surface-chunk, render-chunk) given CHUNKS_FILE takes its frames from line
+# $SLURM_ARRAY_TASK_ID of it; given FIRST LAST (make) it runs those frames.
 # The task appends to its log OUT/logs/<task>.log and writes its state to OUT/farm/state/<task>
 # (status=running, then ok / failed / killed), which status.sh reads once the job left the queue.
 # Stage outputs land exactly where a local run puts them; per-chunk work happens in a private
@@ -21,16 +22,27 @@ FARM_DIR=$(cd "$(dirname "${BASH_SOURCE[0]}")" && pwd)
 [ $# -ge 4 ] || farm_die "usage: task.sh KIND SHOT_FILE SHOT_OUT BIN [FIRST LAST | CHUNKS_FILE]"
 kind=$1 shot=$2 out=$3 bin=$4
 shift 4
+# absolute paths: the chunk work folders link the shot's init/ and sim/ by path
+[ -f "$shot" ] || farm_die "$shot: no such shot file"
+[ -d "$bin" ] || farm_die "$bin: no such folder (the stage binaries)"
+mkdir -p "$out" || farm_die "$out: cannot create"
+shot=$(cd "$(dirname "$shot")" && pwd)/$(basename "$shot") out=$(cd "$out" && pwd) bin=$(cd "$bin" && pwd)
 
 first="" last=""
 case $kind in
     surface-prep) first=$1 last=$2 ;;
     surface-chunk | render-chunk)
-        [ -n "${SLURM_ARRAY_TASK_ID:-}" ] || farm_die "$kind runs as a Slurm array task"
-        read -r first last < <(sed -n "${SLURM_ARRAY_TASK_ID}p" "$1")
-        [ -n "$first" ] || farm_die "$1: no line $SLURM_ARRAY_TASK_ID"
+        if [ $# -ge 2 ]; then
+            first=$1 last=$2
+        else
+            [ -n "${SLURM_ARRAY_TASK_ID:-}" ] || farm_die "$kind CHUNKS_FILE runs as a Slurm array task (or give FIRST LAST)"
+            read -r first last < <(sed -n "${SLURM_ARRAY_TASK_ID}p" "$1")
+            [ -n "$first" ] || farm_die "$1: no line $SLURM_ARRAY_TASK_ID"
+        fi
         ;;
 esac
+[ -z "$first" ] || [[ $first =~ ^[0-9]+$ && $last =~ ^[0-9]+$ && $first -le $last ]] ||
+    farm_die "$kind: frames '$first' '$last': expected FIRST <= LAST, whole numbers"
 # the task's name in logs and state files: "init", "sim", "surface.0005-0008", "surface-merge",
 # "render.0005-0008", "render-assemble"
 if [ -n "$first" ]; then
@@ -45,8 +57,10 @@ if [ -n "${SLURM_ARRAY_JOB_ID:-}" ]; then job=${SLURM_ARRAY_JOB_ID}_${SLURM_ARRA
 mkdir -p "$out/logs" "$out/farm/state"
 log=$out/logs/$name.log
 state=$out/farm/state/$name
-exec >>"$log" 2>&1
-threads=${SLURM_CPUS_PER_TASK:-$(nproc)}
+# everything goes to the task's log; fd 3 keeps the caller's stderr for the verdict on failure
+exec 3>&2 >>"$log" 2>&1
+# FARM_THREADS (make: the job's share of the cores) wins over the CPUs Slurm allocated
+threads=${FARM_THREADS:-${SLURM_CPUS_PER_TASK:-$(nproc)}}
 start=$(date +%s.%N)
 echo "=== $name: job $job on $(hostname -s), $threads threads, $(date -Is)"
 
@@ -72,6 +86,7 @@ on_term() {
     [ -n "$child" ] && wait "$child" 2>/dev/null
     echo "=== $name: killed (SIGTERM) at $(date -Is)"
     write_state killed 143
+    echo "$FARM_PROGRAM: $name${first:+ (frames $first-$last)} killed; log $log" >&3
     exit 143
 }
 trap on_term TERM INT
@@ -88,7 +103,7 @@ run() {
     return $rc
 }
 
-flags=(--shot "$shot" --out "$out" --threads "${FARM_THREADS:-$threads}")
+flags=(--shot "$shot" --out "$out" --threads "$threads")
 
 # mc-surface on frames first..last in a private output root whose init/ and sim/ are the shot's;
 # an existing base (break history + manifest) makes mc-surface update it in place rather than
@@ -104,7 +119,7 @@ surface_frames() {
         rmdir "$work/surface"  # the first chunk builds the stage folder from scratch
     fi
     run "$bin/mc-surface" --shot "$shot" --out "$work" --frames "$first-$last" \
-        --threads "${FARM_THREADS:-$threads}" || return $?
+        --threads "$threads" || return $?
     local format
     format=$(jq -r .format "$work/surface/manifest.json") || return 1
     mkdir -p "$out/farm/surface-chunks" || return 1
@@ -190,5 +205,9 @@ if [ $rc -eq 0 ]; then
 else
     write_state failed $rc
     echo "=== $name: FAILED (exit $rc)"
+    {
+        echo "$FARM_PROGRAM: $name${first:+ (frames $first-$last)} FAILED (exit $rc); log $log ends with:"
+        tail -n 12 "$log" | sed 's/^/    /'
+    } >&3
 fi
 exit $rc

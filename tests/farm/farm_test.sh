@@ -1,26 +1,31 @@
 #!/usr/bin/env bash
-# Issue 8 acceptance: a shot run through Slurm gives the same files as a local run, and a killed
-# surfacing task is all that a re-run resubmits.
+# Issue 8 acceptance: the demo shot run through Slurm gives the same files as a local run, and a
+# killed surfacing task is all that a re-run resubmits.
 #
-#   farm_test.sh SOURCE_DIR BIN_DIR [SHOT_FILE]
+#   farm_test.sh SOURCE_DIR BIN_DIR [SHOT_FILE]     (SHOT_FILE default: SOURCE_DIR/shots/demo.json)
 #
 # 1. starts a one-node Slurm cluster (slurm-wlm + munge) in a temporary folder, stopped by a trap
 #    whatever happens;
 # 2. runs the shot locally (the stage binaries in shot.mk's order) into TMP/local;
-# 3. submits it to the cluster (pipeline/farm/submit.sh, 2 frames per surfacing task), cancels
-#    one surfacing array task as soon as it runs, waits, and checks the status reports that
-#    task killed with its frames and log;
+# 3. submits it to the cluster (pipeline/farm/submit.sh, FARM_TEST_CHUNK frames per surfacing and
+#    render task, default 8), cancels the surfacing array's second task (neither the first chunk
+#    nor the first array task) as soon as it runs, waits, and checks the status reports that task
+#    killed with its frames and log;
 # 4. re-runs the submission and checks it resubmits exactly that task's frames (plus the merge, the
-#    render array over every frame in chunks of 2 and the assembly that depend on them), and
-#    nothing of init or sim;
+#    render array over every frame in chunks and the assembly that depend on them), and nothing of
+#    init or sim;
 # 5. compares every cache, mesh, image and movie (VDB, VTU, GLB, edge breaks, PNG, MP4) byte for
 #    byte (the edge break history without its header's input hash, which covers the sim's wall
 #    times): frames rendered in chunks and assembled by another job equal a local mc-render run;
-# 6. removes two rendered frames and the render manifest (what a failed render chunk leaves) and
-#    checks the re-run submits only that chunk and the assembly, then compares again;
-# 7. removes the sim's last frames and checkpoint (an interrupted sim) and checks the re-run
-#    resumes from the checkpoint before them, then compares again.
-# Prints the farm overhead it measured (submit-to-start latency, task vs local stage times).
+# 6. removes the last two frames of the second render chunk and the render manifest (what a render
+#    task killed during the first of them leaves) and checks the re-run submits only those frames
+#    and the assembly, then compares again;
+# 7. removes the sim's frames after its last checkpoint before the final frame, the later
+#    checkpoints and the manifest (what a sim killed during the frame after that checkpoint
+#    leaves) and checks the re-run resumes from that checkpoint, then compares again.
+# Every frame number comes from the shot (its sim slice), the chunk files submit.sh wrote and the
+# checkpoints the sim wrote. Prints the farm overhead it measured (submit-to-start latency, task vs
+# local stage times).
 # Exits 77 (ctest SKIP_RETURN_CODE) only when slurm-wlm or munge is not installed.
 # FARM_TEST_KEEP=1 keeps the temporary folder for inspection.
 set -euo pipefail
@@ -28,8 +33,11 @@ set -euo pipefail
 [ $# -ge 2 ] || { echo "usage: farm_test.sh SOURCE_DIR BIN_DIR [SHOT_FILE]" >&2; exit 2; }
 src=$(cd "$1" && pwd)
 bin=$(cd "$2" && pwd)
-shot=${3:-$src/tests/farm/farm_shot.json}
+shot=${3:-$src/shots/demo.json}
+shot=$(cd "$(dirname "$shot")" && pwd)/$(basename "$shot")
 farm=$src/pipeline/farm
+name=$(basename "$shot" .json)
+chunk=${FARM_TEST_CHUNK:-8}
 
 if ! command -v slurmctld >/dev/null 2>&1 || ! command -v slurmd >/dev/null 2>&1; then
     echo "SKIPPED: slurm-wlm not installed (apt-get install slurm-wlm munge)"
@@ -45,6 +53,10 @@ command -v jq >/dev/null || fail "jq not found (apt-get install jq): the farm sc
 for b in mc-shot mc-init mc-sim mc-surface mc-render; do
     [ -x "$bin/$b" ] || fail "$bin/$b: not built"
 done
+[ -f "$shot" ] || fail "$shot: no such shot file"
+# frame chunking and file names exactly as submit.sh computes them
+# shellcheck source=../../pipeline/farm/farm_lib.sh
+. "$farm/farm_lib.sh"
 
 tmp=$(mktemp -d "${TMPDIR:-/tmp}/mudcrack-farm-test.XXXXXX")
 cluster=$tmp/slurm
@@ -53,7 +65,7 @@ cleanup() {
     bash "$farm/slurm_local_cluster.sh" stop "$cluster" || true
     if [ "${FARM_TEST_KEEP:-0}" = 1 ] || [ $rc -ne 0 ]; then
         echo "farm_test: kept $tmp (slurm logs in $cluster/log)"
-        [ $rc -ne 0 ] && [ -d "$tmp/farm/farm_test/logs" ] && tail -n 5 "$tmp"/farm/farm_test/logs/*.log || true
+        [ $rc -ne 0 ] && [ -d "$tmp/farm/$name/logs" ] && tail -n 5 "$tmp/farm/$name"/logs/*.log || true
     else
         rm -rf "$tmp"
     fi
@@ -62,6 +74,10 @@ trap cleanup EXIT
 
 now() { date +%s.%N; }
 elapsed() { awk -v a="$1" -v b="$2" 'BEGIN { printf "%.2f", b - a }'; }
+# the stages and jobs.tsv of the last submission as "stage frames," pairs
+submitted() { cut -f1,3 "$out/farm/jobs.tsv" | tr '\t' ' ' | tr '\n' ','; }
+# "stage A-B," for each "A B" line on stdin
+as_tasks() { awk -v stage="$1" '{ printf "%s %d-%d,", stage, $1, $2 }'; }
 
 # every cache, mesh and image of the local run, byte for byte in the farm run, and no extra ones
 compare_outputs() {
@@ -100,17 +116,31 @@ export SLURM_CONF=$cluster/slurm.conf
 cpus=$(sinfo -h -N -o %c | head -n 1)
 
 # The sim is bitwise reproducible at a fixed thread count (mc-sim --resume's contract), so both
-# runs use the same. One thread per task: on a busy 2-core machine a 2-thread sim of this small
-# shot spends most of its time waiting at barriers (measured: 1.4 s vs 0.4 s).
+# runs use the same. One thread per task: per-frame tasks run one per CPU, and the sim, alone on
+# the node, runs at nearly the same speed as with two on a busy 2-core machine.
 threads=1
 export FARM_SIM_CPUS=1 FARM_INIT_CPUS=1 FARM_RENDER_CPUS=1 FARM_SURFACE_CPUS=1 FARM_ASSEMBLE_CPUS=1
 export FARM_SIM_MEM=2G FARM_INIT_MEM=2G FARM_SURFACE_MEM=1G FARM_RENDER_MEM=2G FARM_MERGE_MEM=256M FARM_ASSEMBLE_MEM=2G
 unset MUDCRACK_PARTITION SLURM_PARTITION MUDCRACK_ACCOUNT SLURM_ACCOUNT FARM_THREADS FARM_SBATCH_ARGS FARM_RENDER_CHUNK
 
-echo "== local run ($threads threads)"
-local_out=$tmp/local/farm_test
+echo "== local run of $name ($threads threads)"
+local_out=$tmp/local/$name
+mkdir -p "$local_out"
 declare -A local_seconds
-for stage in $("$bin/mc-shot" stages "$shot"); do
+stages=$("$bin/mc-shot" stages "$shot")
+for stage in $stages; do
+    "$bin/mc-shot" slice "$shot" "$stage" --out "$local_out/$stage.params.json"
+done
+[[ " $stages " == *" surface "* && " $stages " == *" render "* ]] ||
+    fail "$shot: runs '$stages'; the farm test needs a shot with surfacing and rendering"
+frame_first=$(jq -r .frames.start "$local_out/sim.params.json")
+frame_last=$(jq -r .frames.end "$local_out/sim.params.json")
+# the surfacing chunks submit.sh makes: the first one (the break history), then the array
+mapfile -t surface_chunks < <(seq "$frame_first" "$frame_last" | farm_chunk_frames "$chunk")
+[ ${#surface_chunks[@]} -ge 3 ] ||
+    fail "frames $frame_first-$frame_last in chunks of $chunk: ${#surface_chunks[@]} surfacing tasks, the test needs 3 (FARM_TEST_CHUNK)"
+echo "   frames $frame_first-$frame_last, $chunk per surfacing and render task: ${#surface_chunks[@]} surfacing tasks"
+for stage in $stages; do
     t0=$(now)
     "$bin/mc-$stage" --shot "$shot" --out "$local_out" --threads "$threads" --quiet >"$tmp/local.$stage.log" 2>&1 ||
         { cat "$tmp/local.$stage.log"; fail "local mc-$stage failed"; }
@@ -119,19 +149,26 @@ for stage in $("$bin/mc-shot" stages "$shot"); do
 done
 
 echo "== farm run, killing one surfacing task"
-out=$tmp/farm/farm_test
+out=$tmp/farm/$name
 t0=$(now)
-bash "$farm/submit.sh" --shot "$shot" --out "$out" --bin "$bin" --chunk 2
+bash "$farm/submit.sh" --shot "$shot" --out "$out" --bin "$bin" --chunk "$chunk"
 jobs=$out/farm/jobs.tsv
-# the victim: the array's second task (frames of a chunk that is neither the first nor the prep)
+cp "$jobs" "$tmp/jobs.first.tsv"
+[ "$(submitted)" = "init -,sim $frame_first-$frame_last,$(printf '%s\n' "${surface_chunks[@]}" | as_tasks surface)surface-merge -,$(
+    printf '%s\n' "${surface_chunks[@]}" | as_tasks render)render-assemble -," ] ||
+    fail "the first submission is not init, sim, ${#surface_chunks[@]} surfacing tasks, the merge, the render array and the assembly: $(submitted)"
+# the victim: the array's second task, frames of a chunk that is neither the first nor the prep
 victim_line=$(awk -F'\t' '$1 == "surface" && $2 ~ /_2$/' "$jobs")
 [ -n "$victim_line" ] || fail "no surfacing array task _2 in $jobs:
 $(cat "$jobs")"
 victim=$(cut -f2 <<<"$victim_line")
 victim_frames=$(cut -f3 <<<"$victim_line")
 victim_log=$(cut -f4 <<<"$victim_line")
+[ "$victim_frames" = "$(tr ' ' - <<<"${surface_chunks[2]}")" ] ||
+    fail "surfacing array task _2 runs frames $victim_frames, expected the third chunk ${surface_chunks[2]}"
 victim_state=$out/farm/state/$(basename "$victim_log" .log)
-deadline=$((SECONDS + 150))
+# the sim comes first: allow it the local sim time plus margin before giving up
+deadline=$((SECONDS + 120 + 3 * ${local_seconds[sim]%.*}))
 # running = its task.sh has started (and set its TERM trap), not only allocated
 until grep -qx "job=$victim" "$victim_state" 2>/dev/null; do
     [ $SECONDS -lt $deadline ] || fail "surfacing task $victim never ran"
@@ -150,67 +187,92 @@ grep -E "^surface +$victim_frames +$victim +KILLED .*$victim_log\$" <<<"$status"
 first_run_seconds=$(elapsed "$t0" "$(now)")
 # the scheduling overhead, from the tasks' own clocks: submit to start of the first job, and
 # from the end of a job to the start of the one waiting on it (init -> sim -> first surfacing
-# chunk -> the array)
+# chunk -> the array's first task)
 st() { sed -n "s/^$2=//p" "$out/farm/state/$1"; }
+# a chunk is "A B": split on purpose into farm_task_name's two frame arguments
+# shellcheck disable=SC2086
+prep_task=$(farm_task_name surface ${surface_chunks[0]})
+# shellcheck disable=SC2086
+array_first_task=$(farm_task_name surface ${surface_chunks[1]})
 submit_time=$(awk -F'\t' '$1 == "init" { print $5 }' "$jobs")
 latency="$(elapsed "$submit_time" "$(st init start)")"
-gaps="$(elapsed "$(st init end)" "$(st sim start)") $(elapsed "$(st sim end)" "$(st surface.0001-0002 start)")"
-for task in surface.0003-0004 surface.0007-0008; do gaps="$gaps $(elapsed "$(st surface.0001-0002 end)" "$(st $task start)")"; done
-task_seconds=$(for t in init sim surface.0001-0002 surface.0003-0004 surface.0007-0008; do
-    elapsed "$(st $t start)" "$(st $t end)"; echo; done | awk '{ s += $1 } END { printf "%.2f", s }')
+gaps="$(elapsed "$(st init end)" "$(st sim start)") $(elapsed "$(st sim end)" "$(st "$prep_task" start)") $(
+    elapsed "$(st "$prep_task" end)" "$(st "$array_first_task" start)")"
+# run times of init, the sim and every surfacing task that was not killed
+surface_tasks=$(awk -F'\t' -v victim="$victim" '$1 == "surface" && $2 != victim { n = split($4, p, "/"); sub(/\.log$/, "", p[n]); print p[n] }' "$jobs")
+task_seconds=$(for t in init sim $surface_tasks; do
+    elapsed "$(st "$t" start)" "$(st "$t" end)"; echo; done | awk '{ s += $1 } END { printf "%.2f", s }')
+surface_task_count=$(wc -w <<<"$surface_tasks")
+sim_task_seconds=$(elapsed "$(st sim start)" "$(st sim end)")
 
 echo "== re-run: resubmits only frames $victim_frames"
-resubmit=$(bash "$farm/submit.sh" --shot "$shot" --out "$out" --bin "$bin" --chunk 2 --wait) ||
+resubmit=$(bash "$farm/submit.sh" --shot "$shot" --out "$out" --bin "$bin" --chunk "$chunk" --wait) ||
     { echo "$resubmit"; fail "the re-run did not complete"; }
 echo "$resubmit"
 grep -q "last submission: surface frames $victim_frames (job $victim): KILLED; log $victim_log" <<<"$resubmit" ||
     fail "the re-run does not report the killed task with its frames and log"
-stages_again=$(cut -f1,3 "$jobs" | tr '\t' ' ' | tr '\n' ',')
-# every frame is rendered again (the merge rewrote the surfacing manifest), 2 frames per task
-render_tasks=$(seq "$(jq -r .frames.start "$out/sim.params.json")" "$(jq -r .frames.end "$out/sim.params.json")" |
-    awk '{ if (NR % 2) a = $1; else printf "render %d-%d,", a, $1 } END { if (NR % 2) printf "render %d-%d,", a, a }')
-[ "$stages_again" = "surface $victim_frames,surface-merge -,${render_tasks}render-assemble -," ] ||
-    fail "the re-run submitted '$stages_again', expected only surface $victim_frames, the merge, ${render_tasks} and the assembly"
+# every frame is rendered again (the merge rewrote the surfacing manifest), in chunks
+render_tasks=$(printf '%s\n' "${surface_chunks[@]}" | as_tasks render)
+[ "$(submitted)" = "surface $victim_frames,surface-merge -,${render_tasks}render-assemble -," ] ||
+    fail "the re-run submitted '$(submitted)', expected only surface $victim_frames, the merge, ${render_tasks} and the assembly"
 render_task_seconds=$(for t in "$out"/farm/state/render.*; do
     elapsed "$(sed -n 's/^start=//p' "$t")" "$(sed -n 's/^end=//p' "$t")"; echo; done | awk '{ printf "%s ", $1 }')
-assemble_seconds=$(elapsed "$(sed -n 's/^start=//p' "$out/farm/state/render-assemble")" "$(sed -n 's/^end=//p' "$out/farm/state/render-assemble")")
-again=$(bash "$farm/submit.sh" --shot "$shot" --out "$out" --bin "$bin" --chunk 2)
+assemble_seconds=$(elapsed "$(st render-assemble start)" "$(st render-assemble end)")
+again=$(bash "$farm/submit.sh" --shot "$shot" --out "$out" --bin "$bin" --chunk "$chunk")
 grep -q "nothing submitted" <<<"$again" || fail "a third run submitted work: $again"
 
 echo "== comparing outputs"
 compare_outputs
 
-echo "== a failed render chunk: the re-run renders only its frames, then assembles"
-# what a render task killed during frame 6 leaves: frames 5 and 6 missing (a killed frame never
-# reaches its name), no manifest (chunks remove it; the assembly never ran)
-rm -f "$out/render/manifest.json" "$out/render/frame.0005.png" "$out/render/frame.0006.png"
-bash "$farm/submit.sh" --shot "$shot" --out "$out" --bin "$bin" --chunk 2 --wait >"$tmp/render_again.txt" ||
+# what a render task killed during frame K of its chunk A-B leaves: frames K..B missing (a killed
+# frame never reaches its name), no manifest (chunks remove it; the assembly never ran); K is the
+# second-to-last frame of the second chunk
+read -r ra rb < <(sed -n 2p "$out/farm/render.chunks")
+[ -n "${rb:-}" ] || fail "no second render chunk in $out/farm/render.chunks"
+rk=$((rb > ra ? rb - 1 : rb))
+echo "== a failed render chunk ($ra-$rb, killed at frame $rk): the re-run renders only frames $rk-$rb, then assembles"
+rm -f "$out/render/manifest.json"
+for ((n = rk; n <= rb; n++)); do rm -f "$(farm_frame_file "$out/render" frame "$n" png)"; done
+bash "$farm/submit.sh" --shot "$shot" --out "$out" --bin "$bin" --chunk "$chunk" --wait >"$tmp/render_again.txt" ||
     { cat "$tmp/render_again.txt"; fail "the render re-run did not complete"; }
 cat "$tmp/render_again.txt"
-[ "$(cut -f1,3 "$jobs" | tr '\t' ' ' | tr '\n' ',')" = "render 5-6,render-assemble -," ] ||
-    fail "after losing frames 5-6, expected only render 5-6 and the assembly: $(cut -f1,3 "$jobs" | tr '\t' ' ' | tr '\n' ',')"
-grep -E "^render +5-6 +[0-9_]+ +done " "$tmp/render_again.txt" >/dev/null || fail "status does not show render 5-6 done"
+[ "$(submitted)" = "render $rk-$rb,render-assemble -," ] ||
+    fail "after losing frames $rk-$rb, expected only render $rk-$rb and the assembly: $(submitted)"
+grep -E "^render +$rk-$rb +[0-9_]+ +done " "$tmp/render_again.txt" >/dev/null || fail "status does not show render $rk-$rb done"
 grep -E "^render-assemble +- +[0-9]+ +done " "$tmp/render_again.txt" >/dev/null || fail "status does not show the assembly done"
 compare_outputs
 
-echo "== an interrupted sim: the re-run resumes from its last checkpoint"
-# what a sim killed during frame 7 leaves: caches and checkpoints up to frame 6, no manifest
-rm -f "$out/sim/manifest.json" "$out/sim/particles.0007.vdb" "$out/sim/particles.0008.vdb" "$out/sim/checkpoint.0008.bin"
-[ -f "$out/sim/checkpoint.0006.bin" ] || fail "no checkpoint.0006.bin to resume from"
-bash "$farm/submit.sh" --shot "$shot" --out "$out" --bin "$bin" --chunk 2 --wait >"$tmp/resume.txt" ||
+# what a sim killed during the frame after checkpoint C leaves: caches and checkpoints up to C,
+# no manifest. C is the last checkpoint the sim wrote before its final frame.
+mapfile -t checkpoint_frames < <(find "$out/sim" -name 'checkpoint.*.bin' -printf '%f\n' |
+    sed -n 's/^checkpoint\.0*\([0-9][0-9]*\)\.bin$/\1/p' | sort -n)
+resume_frame=""
+for c in "${checkpoint_frames[@]+"${checkpoint_frames[@]}"}"; do [ "$c" -lt "$frame_last" ] && resume_frame=$c; done
+[ -n "$resume_frame" ] || fail "the sim wrote no checkpoint before its last frame $frame_last (checkpoints: ${checkpoint_frames[*]:-none}): set /sim/checkpoint_every in $shot"
+resume_checkpoint=$(printf 'checkpoint.%04d.bin' "$resume_frame")
+echo "== an interrupted sim (killed in frame $((resume_frame + 1))): the re-run resumes from $resume_checkpoint"
+rm -f "$out/sim/manifest.json"
+for ((n = resume_frame + 1; n <= frame_last; n++)); do
+    rm -f "$(farm_frame_file "$out/sim" particles "$n" vdb)" "$(farm_frame_file "$out/sim" checkpoint "$n" bin)"
+done
+bash "$farm/submit.sh" --shot "$shot" --out "$out" --bin "$bin" --chunk "$chunk" --wait >"$tmp/resume.txt" ||
     { cat "$tmp/resume.txt"; fail "the resumed run did not complete"; }
-[ "$(cut -f1 "$jobs" | sort -u | tr '\n' ' ')" = "render render-assemble sim surface surface-merge " ] ||
-    fail "after removing the sim's last frames, expected sim, surface, merge, render and assembly jobs: $(cut -f1 "$jobs" | tr '\n' ' ')"
-grep -q -- "--resume" "$out/logs/sim.log" && grep -q "resuming from .*checkpoint.0006.bin" "$out/logs/sim.log" ||
-    fail "the sim did not resume from checkpoint.0006.bin: see $out/logs/sim.log"
+[ "$(submitted)" = "sim $frame_first-$frame_last,$(printf '%s\n' "${surface_chunks[@]}" | as_tasks surface)surface-merge -,${render_tasks}render-assemble -," ] ||
+    fail "after removing the sim's last frames, expected the sim, every surfacing and render task, the merge and the assembly: $(submitted)"
+grep -q -- "--resume" "$out/logs/sim.log" && grep -q "resuming from .*$resume_checkpoint" "$out/logs/sim.log" ||
+    fail "the sim did not resume from $resume_checkpoint: see $out/logs/sim.log"
+[ "$(jq .resumed_from_frame "$out/sim/manifest.json")" = "$resume_frame" ] ||
+    fail "sim/manifest.json resumed_from_frame is $(jq .resumed_from_frame "$out/sim/manifest.json"), expected $resume_frame"
+resumed_sim_seconds=$(elapsed "$(st sim start)" "$(st sim end)")
 compare_outputs
 
-echo "== overhead (this machine, $cpus CPUs)"
+echo "== overhead (this machine, $cpus CPUs; shot $name, frames $frame_first-$frame_last, $chunk frames per task)"
 echo "   submit to start (no dependency): $latency s"
-echo "   dependency released to start: $gaps s"
-echo "   task run times (init, sim, 3 of 4 surfacing chunks): $task_seconds s; local init + sim + surface: $(
+echo "   dependency released to start (init->sim, sim->first surfacing chunk, first chunk->array): $gaps s"
+echo "   task run times (init, sim, $surface_task_count of ${#surface_chunks[@]} surfacing chunks): $task_seconds s; local init + sim + surface: $(
     awk -v a="${local_seconds[init]}" -v b="${local_seconds[sim]}" -v c="${local_seconds[surface]}" 'BEGIN { printf "%.2f", a + b + c }') s"
-echo "   render tasks (2 frames each): $render_task_seconds s; assembly: $assemble_seconds s; local mc-render: ${local_seconds[render]} s"
-echo "   first farm run (all stages, one task killed): $first_run_seconds s; local run $(
-    printf '%s\n' "${local_seconds[@]}" | awk '{ s += $1 } END { printf "%.2f", s }') s"
+echo "   sim task: $sim_task_seconds s (local mc-sim ${local_seconds[sim]} s); resumed from frame $resume_frame: $resumed_sim_seconds s"
+echo "   render tasks ($chunk frames each): $render_task_seconds s; assembly: $assemble_seconds s; local mc-render: ${local_seconds[render]} s"
+echo "   first farm run, submit to last task (init, sim, surfacing; the killed task cancels the merge and render): $first_run_seconds s"
+echo "   local run: $(printf '%s\n' "${local_seconds[@]}" | awk '{ s += $1 } END { printf "%.2f", s }') s; whole test so far: $SECONDS s"
 echo "PASS"
