@@ -18,6 +18,15 @@
 # Variables: THREADS (--threads of every stage; by default a chunk gets its share of the cores),
 # SHOT_CHUNK (frames per chunk; by default one render chunk per make job, and one surfacing chunk
 # per job after the first).
+#
+# A shot with /reuse (e.g. fig9: "reuse": "fig8_c") shares the outputs of another shot of the
+# same folder: every stage whose slice file is byte-identical to that shot's (so are the stages
+# before it, whose keys each slice holds) is brought up to date by a make of the other shot
+# limited to those stages, then OUT/<shot>/<stage> is a relative symlink to ../<other>/<stage>
+# (the stages read DIR/<stage>/ and check its manifest's slice hash, which matches). Only the
+# stages that differ run in OUT/<shot>/. A link whose stage no longer matches is removed when the
+# makefile is read, so a stage never writes into the other shot's folder. `make clean-shot`
+# removes the links, never the files they point at. FARM=slurm refuses such a shot.
 
 SHOT_MK     := $(lastword $(MAKEFILE_LIST))
 SHELL       := /bin/bash
@@ -34,23 +43,94 @@ STAGE_MAKE = $(MAKE) --no-print-directory -f $(SHOT_MK) SHOT=$(SHOT) OUT=$(OUT) 
              FARM_SCRIPTS=$(FARM_SCRIPTS) $(if $(THREADS),THREADS=$(THREADS)) $(if $(SHOT_CHUNK),SHOT_CHUNK=$(SHOT_CHUNK))
 RENDER_SOURCE = $(if $(filter surface,$(SHOT_STAGES)),surface,sim)
 
+# ---- /reuse: the stages shared with another shot ----------------------------------------------
+# /reuse as written in the shot file: perl drops the // and /* */ comments outside strings (the
+# shot format allows them, jq does not), jq reads the key
+SHOT_REUSE := $(shell perl -0777 -pe 's{("(?:[^"\\]|\\.)*")|//[^\n]*|/\*.*?\*/}{defined $$1 ? $$1 : ""}gse' \
+                $(SHOT_FILE) 2>/dev/null | jq -r 'if type == "object" then .reuse // empty else empty end' 2>/dev/null)
+SHOT_SHARED :=
+# the chunk sub-makes (shot-stage-*) and the farm do not link: only the make that runs the stages
+ifeq ($(filter shot-stage-% farm-%,$(MAKECMDGOALS)),)
+ifneq ($(SHOT_REUSE),)
+$(if $(filter $(SHOT),$(SHOT_REUSE)),$(error $(SHOT_FILE): /reuse = "$(SHOT_REUSE)": a shot cannot reuse itself))
+REUSE_FILE   := $(dir $(SHOT_FILE))$(SHOT_REUSE).json
+REUSE_OUT    := $(OUT)/$(SHOT_REUSE)
+REUSE_STAGES := $(shell $(BIN)/mc-shot stages $(REUSE_FILE))
+$(if $(REUSE_STAGES),,$(error $(SHOT_FILE): /reuse = "$(SHOT_REUSE)": $(REUSE_FILE) is not a valid shot (see above)))
+# shared: the leading stages both shots run whose slice files (written here, as the slice rule
+# below writes them: only on change) are byte-identical; each slice holds the earlier stages'
+# keys, so the first stage that differs ends the sharing
+SHOT_SHARED := $(shell for s in $(SHOT_STAGES); do \
+    [[ " $(REUSE_STAGES) " == *" $$s "* ]] || break; \
+    $(BIN)/mc-shot slice $(SHOT_FILE) $$s --out $(SHOT_OUT)/$$s.params.json 2>/dev/null && \
+    $(BIN)/mc-shot slice $(REUSE_FILE) $$s --out $(REUSE_OUT)/$$s.params.json 2>/dev/null && \
+    cmp -s $(SHOT_OUT)/$$s.params.json $(REUSE_OUT)/$$s.params.json || break; \
+    echo $$s; done)
+$(if $(SHOT_SHARED),,$(info mudcrack: $(SHOT): /reuse = "$(SHOT_REUSE)", but their init slices differ: nothing is shared))
+endif
+# a link left from an earlier run whose stage is not shared now: removed before anything can write
+# through it into the other shot's folder (rm of a link never touches its target)
+$(shell for s in $(filter-out $(SHOT_SHARED),init sim surface render); do \
+    if [ -L $(SHOT_OUT)/$$s ]; then echo "mudcrack: $(SHOT)/$$s: removed the link to $$(readlink $(SHOT_OUT)/$$s)" \
+    "(the stage is not shared now)" >&2; rm -f $(SHOT_OUT)/$$s; fi; done)
+endif
+
+# brings the other shot's shared stages up to date: this makefile for that shot, asked only for
+# them (shot-stages); it shares the jobserver
+.PHONY: shot-reuse-upstream shot-stages
+shot-reuse-upstream:
+	@+$(MAKE) --no-print-directory -f $(SHOT_MK) shot-stages SHOT=$(SHOT_REUSE) SHOT_FILE=$(REUSE_FILE) \
+	    SHOT_STAGES_WANTED="$(SHOT_SHARED)" OUT=$(OUT) BUILD=$(BUILD) BIN=$(BIN) FARM_SCRIPTS=$(FARM_SCRIPTS) \
+	    $(if $(THREADS),THREADS=$(THREADS)) $(if $(SHOT_CHUNK),SHOT_CHUNK=$(SHOT_CHUNK))
+
+# the stages SHOT_STAGES_WANTED of this shot, and nothing after them
+shot-stages: $(foreach s,$(SHOT_STAGES_WANTED),$(SHOT_OUT)/$(s)/manifest.json)
+	@:
+
+# a shared stage: OUT/<shot>/<stage> -> ../<other>/<stage>, (re)made when it is not that link yet
+# (a folder of this shot's own earlier run is removed: it is this shot's, and stale now)
+define shared_stage_rule
+$(SHOT_OUT)/$(1)/manifest.json: shot-reuse-upstream
+	@if [ "$$$$(readlink $(SHOT_OUT)/$(1))" != ../$(SHOT_REUSE)/$(1) ]; then \
+	    rm -rf $(SHOT_OUT)/$(1) && ln -s ../$(SHOT_REUSE)/$(1) $(SHOT_OUT)/$(1) && \
+	    echo "mudcrack: $(SHOT)/$(1) -> ../$(SHOT_REUSE)/$(1) (same slice as $(SHOT_REUSE)'s $(1): shared, not run)"; fi
+endef
+$(foreach s,$(SHOT_SHARED),$(eval $(call shared_stage_rule,$(s))))
+
 # slices: always re-derived, rewritten only on change (mtime moves only then)
 $(SHOT_OUT)/%.params.json: FORCE
 	@mkdir -p $(SHOT_OUT)
 	@$(BIN)/mc-shot slice $(SHOT_FILE) $* --out $@
 
+# the shot's own stages (those not shared)
+ifeq ($(filter init,$(SHOT_SHARED)),)
 $(SHOT_OUT)/init/manifest.json: $(SHOT_OUT)/init.params.json $(BIN)/mc-init
 	$(BIN)/mc-init $(STAGE_FLAGS)
+endif
 
+ifeq ($(filter sim,$(SHOT_SHARED)),)
 $(SHOT_OUT)/sim/manifest.json: $(SHOT_OUT)/init/manifest.json $(SHOT_OUT)/sim.params.json $(BIN)/mc-sim
 	$(BIN)/mc-sim $(STAGE_FLAGS) $(if $(wildcard $(SHOT_OUT)/sim/checkpoint.*.bin),--resume)
+endif
 
+ifeq ($(filter surface,$(SHOT_SHARED)),)
 $(SHOT_OUT)/surface/manifest.json: $(SHOT_OUT)/sim/manifest.json $(SHOT_OUT)/surface.params.json $(BIN)/mc-surface
 	@+$(STAGE_MAKE) shot-stage-surface
+endif
 
+ifeq ($(filter render,$(SHOT_SHARED)),)
 $(SHOT_OUT)/render/manifest.json: $(SHOT_OUT)/$(RENDER_SOURCE)/manifest.json \
                                   $(SHOT_OUT)/render.params.json $(BIN)/mc-render
 	@+$(STAGE_MAKE) shot-stage-render
+endif
+
+# the farm path does not link stages: a reuse shot is refused before submit.sh runs
+farm-submit: shot-farm-no-reuse
+.PHONY: shot-farm-no-reuse
+shot-farm-no-reuse:
+	@if [ -n "$(SHOT_REUSE)" ]; then \
+	    echo "mudcrack: $(SHOT): FARM=slurm does not support /reuse = \"$(SHOT_REUSE)\" (the farm does not link" \
+	         "shared stages): run it without FARM=slurm, or drop /reuse from $(SHOT_FILE)" >&2; exit 1; fi
 
 .PHONY: FORCE shot-run shot-summary
 FORCE:

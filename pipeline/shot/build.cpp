@@ -3,6 +3,8 @@
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
+#include <fstream>
+#include <sstream>
 
 #include "sim/core/log.h"
 
@@ -60,6 +62,42 @@ std::string resolve_existing(json& tree, const std::string& pointer, const std::
                    "file not found (looked for " + resolved.string() + ", relative to the shot file)");
     tree[p] = resolved.string();
     return resolved.string();
+}
+
+// /reuse names another shot file of this folder by its stem; make links the stages whose slices
+// are identical to that shot's outputs (pipeline/shot.mk), so the name must resolve to a file
+// other than this one, and that shot must not reuse a third (one level: no chains, no cycles)
+void check_reuse(const json& tree, const std::string& shot_path, Issues& issues) {
+    const json* reuse = find_value(tree, "/reuse");
+    if (!reuse) return;
+    const std::string name = reuse->get<std::string>();
+    if (name.empty() || name.find('/') != std::string::npos || name == "." || name == "..") {
+        issues.add("/reuse", value_text(reuse),
+                   "must be the name of another shot in this folder (its file's stem, no \"/\")");
+        return;
+    }
+    const fs::path self = fs::absolute(shot_path).lexically_normal();
+    const fs::path other = self.parent_path() / (name + ".json");
+    std::error_code ec;
+    if (!fs::is_regular_file(other, ec)) {
+        issues.add("/reuse", value_text(reuse),
+                   "no such shot (looked for " + other.string() + ", in the shot file's folder)");
+        return;
+    }
+    if (fs::equivalent(self, other, ec)) {
+        issues.add("/reuse", value_text(reuse), "must name another shot, not this one");
+        return;
+    }
+    std::ifstream in(other, std::ios::binary);
+    std::ostringstream text_of_other;
+    text_of_other << in.rdbuf();
+    // a malformed reused shot is reported when make validates and runs it
+    const json root = json::parse(text_of_other.str(), nullptr, /*allow_exceptions=*/false,
+                                  /*ignore_comments=*/true);
+    if (root.is_object() && root.contains("reuse"))
+        issues.add("/reuse", value_text(reuse),
+                   "must name a shot that does not set /reuse itself (" + other.string() + " reuses " +
+                       value_text(&root["reuse"]) + "; name that shot instead)");
 }
 
 bool all_less(const Vec3& a, const Vec3& b) { return (a.array() < b.array()).all(); }
@@ -235,6 +273,7 @@ void build_colliders(const json& tree, SimModel& model, Issues& issues) {
 
 InitParams build_init(json& tree, const std::string& shot_path, Issues& issues) {
     InitParams init;
+    check_reuse(tree, shot_path, issues);  // a file next to the shot, like the source paths
     const bool has_type = has(tree, "/source/type");
     init.type = has_type ? source_type(text(tree, "/source/type")) : SourceType::Box;
     init.edge_length = number(tree, "/init/edge_length");

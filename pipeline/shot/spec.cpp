@@ -60,6 +60,9 @@ std::vector<KeySpec> build_table() {
     // --- format and identity
     Key("/mudcrack", T::Integer).required().units("").doc("shot format major version; this build reads 1"),
     Key("/name", T::String).derived().units("").doc("shot name for logs and manifests; default: the file's stem"),
+    Key("/reuse", T::String).optional().units("")
+        .doc("another shot in this folder (its file's stem, e.g. \"fig8_c\"): take the stages whose slices are "
+             "identical from its outputs (pipeline/shot.mk); that shot may not set /reuse itself; in no slice"),
 
     // --- source: what mc-init builds the particles from (issue 2)
     Key("/source", T::Section).required().doc("what mc-init fills with particles"),
