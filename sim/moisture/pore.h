@@ -10,9 +10,12 @@
 namespace mudcrack {
 
 /// Saturation s = theta/eta clamped to [0, 1]; eta = 0 means s = 1 (no pores, physics.md 3.2).
+/// @note Multiplies by 1/eta (computed once per loop when eta is loop-invariant) rather than
+/// dividing: in the G2P the division sat on every particle's dependency chain. theta >= eta is
+/// exactly 1, as with the division.
 inline Real saturation_of(Real theta, Real eta) {
-    if (!(eta > 0)) return 1;
-    return std::clamp(theta / eta, Real(0), Real(1));
+    if (!(eta > 0) || theta >= eta) return 1;
+    return std::clamp(theta * (1 / eta), Real(0), Real(1));
 }
 
 /// Pore determinant J_w = (1 - eta)(1 - s) + s = 1 - eta (1 - s)  (Eq. 6).
@@ -47,18 +50,22 @@ struct PoreStep {
 /// of Fe injects elastic energy, a spurious "pop").
 inline PoreStep pore_step(Real Jw_old, Real saturation, Real eta, Real max_log_step) {
     PoreStep r;
+    // 1/Jw_old depends only on the stored state, so it is ready before the saturation is
+    const Real inv_Jw_old = 1 / Jw_old;
     const Real target = pore_jw(saturation, eta);
     r.Jw = Jw_old;
     if (target == Jw_old) return r;  // no change in saturation: nothing to do, bit for bit
-    const Real rel = target / Jw_old - 1;
+    // rel = target/Jw_old - 1 without the cancellation of the "- 1"
+    const Real rel = (target - Jw_old) * inv_Jw_old;
     if (std::abs(rel) < kPoreSeriesLimit) {
-        // the common tiny change: log1p(rel) and exp(-log/3) by their series (error < 1e-17),
-        // a third of the cost of log + cbrt in the particle loop
+        // the common tiny change: log1p(rel) and (1 + rel)^(-1/3) by their series (error
+        // < 1e-17), a third of the cost of log + cbrt, and side by side rather than one after
+        // the other: they sit on the particle loop's dependency chain
         const Real l = rel * (1 - rel * (Real(1) / 2 - rel * (Real(1) / 3 - rel * (Real(1) / 4))));
-        const Real u = -l / 3;
         r.log_ratio = l;
         r.Jw = target;
-        r.Fe_scale = 1 + u * (1 + u * (Real(1) / 2 + u * (Real(1) / 6 + u * (Real(1) / 24))));
+        r.Fe_scale =
+            1 + rel * (Real(-1) / 3 + rel * (Real(2) / 9 + rel * (Real(-14) / 81 + rel * (Real(35) / 243))));
         if (max_log_step <= 0 || std::abs(l) <= max_log_step) return r;
     }
     const Real log_ratio = std::log1p(rel);
