@@ -1,0 +1,149 @@
+// The paper's claims about its figures, as numbers (issue 6), on the shipped shots:
+// - Fig. 8: NACC alone (fig8_b, eps = 0) cracks vertically only, while the full model (fig8_c,
+//   eps = 1) curls; without porous shrinkage (fig8_a, eta = 0) nothing compacts or curls.
+// - Fig. 6: the larger the hardening rate eps, the more the soil curls and the larger its pieces.
+// Fig. 8 runs the shots as shipped (21.6K particles, 2 s). Fig. 6's shots are 233K particles, too
+// big for `make test`, so it runs a 0.5 m patch of each (same physics, same resolution, only the
+// slab's extent differs) and checks the trend on those.
+// Measures are mc-measure's (pipeline/measure/shape_measures.h): curl = 95th percentile minus
+// median of the top surface's rise; split = share of columns with a horizontal gap; surface
+// polygons = pieces of the top layer between cracks.
+#include <gtest/gtest.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <iterator>
+#include <string>
+
+#include <nlohmann/json.hpp>
+
+namespace {
+
+namespace fs = std::filesystem;
+using nlohmann::json;
+
+// Run every stage on 2 threads: results are bitwise reproducible for a fixed thread count, so
+// the numbers below do not depend on the machine's core count.
+constexpr int kThreads = 2;
+
+// What counts as "no horizontal cracks": under 1 % of the columns split, the jitter of a few
+// stray columns at a crack's edge, not a peeling layer (a peel splits tens of percent).
+constexpr double kNoSplit = 0.01;
+// Curl the eye reads as curling on a 1.2 m slab 0.2 m thick: 15 mm, 7.5 % of the thickness.
+constexpr double kVisibleCurl = 0.015;
+
+std::string slurp(const fs::path& p) {
+    std::ifstream is(p);
+    return std::string(std::istreambuf_iterator<char>(is), std::istreambuf_iterator<char>());
+}
+
+class FigureClaims : public ::testing::Test {
+protected:
+    void SetUp() override {
+        const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
+        m_dir = fs::temp_directory_path() / ("mudcrack_figures_" + std::to_string(::getpid()) + "_" + info->name());
+        fs::remove_all(m_dir);
+        fs::create_directories(m_dir);
+    }
+    void TearDown() override {
+        std::error_code ec;
+        if (!HasFailure()) fs::remove_all(m_dir, ec);
+    }
+
+    static json read_shot(const std::string& name) {
+        const fs::path path = fs::path(MUDCRACK_SOURCE_DIR) / "shots" / (name + ".json");
+        return json::parse(slurp(path), nullptr, /*allow_exceptions=*/true, /*ignore_comments=*/true);
+    }
+
+    /// Writes `shot` into the scratch folder as NAME.json.
+    fs::path write_shot(const std::string& name, json shot) const {
+        shot["name"] = name;
+        const fs::path path = m_dir / (name + ".json");
+        std::ofstream(path) << shot.dump(2);
+        return path;
+    }
+
+    /// Runs init, sim and surface of `shot` into the scratch folder, then mc-measure; returns the
+    /// measures of the last frame.
+    json run_and_measure(const fs::path& shot) const {
+        const fs::path out = m_dir / shot.stem();
+        const std::string flags = " --shot " + shot.string() + " --out " + out.string() + " --threads " +
+                                  std::to_string(kThreads) + " --quiet";
+        for (const char* stage : {"mc-init", "mc-sim", "mc-surface"}) {
+            const std::string cmd = std::string(MUDCRACK_BIN_DIR) + "/" + stage + flags + " 2>" +
+                                    (m_dir / "stderr.txt").string();
+            const int status = std::system(cmd.c_str());
+            if (!WIFEXITED(status) || WEXITSTATUS(status) != 0) {
+                ADD_FAILURE() << stage << " failed on " << shot << ": " << slurp(m_dir / "stderr.txt");
+                return json();
+            }
+        }
+        const fs::path table = out / "measure.json";
+        const std::string cmd = std::string(MUDCRACK_BIN_DIR) + "/mc-measure" + flags + " --json " + table.string();
+        const int status = std::system(cmd.c_str());
+        if (!WIFEXITED(status) || WEXITSTATUS(status) != 0) {
+            ADD_FAILURE() << "mc-measure failed on " << shot;
+            return json();
+        }
+        const json last = json::parse(slurp(table)).at("frames").back();
+        std::printf("%-14s frame %d: curl %.2f mm, median rise %.2f mm, split %.2f %%, lifted %.2f %%, %lld broken "
+                    "edges, %d surface polygons, weighted mean polygon %.4f m^2\n",
+                    shot.stem().c_str(), last.at("frame").get<int>(), 1e3 * last.at("curl").get<double>(),
+                    1e3 * last.at("top_rise_median").get<double>(), 100 * last.at("split_fraction").get<double>(),
+                    100 * last.at("lifted_fraction").get<double>(), last.at("broken_edges").get<long long>(),
+                    last.at("surface_polygons").get<int>(), last.at("weighted_mean_polygon_area").get<double>());
+        return last;
+    }
+
+    fs::path m_dir;
+};
+
+TEST_F(FigureClaims, Fig8NaccAloneCracksOnlyVerticallyWhileTheFullModelCurls) {
+    const json a = run_and_measure(write_shot("fig8_a", read_shot("fig8_a")));
+    const json b = run_and_measure(write_shot("fig8_b", read_shot("fig8_b")));
+    const json c = run_and_measure(write_shot("fig8_c", read_shot("fig8_c")));
+    ASSERT_FALSE(a.is_null() || b.is_null() || c.is_null());
+
+    // (b) NACC merely: it cracks (vertically), but no column splits horizontally
+    EXPECT_GT(b.at("broken_edges").get<long long>(), 100);
+    EXPECT_LT(b.at("split_fraction").get<double>(), kNoSplit);
+    // (c) the full model curls, visibly and more than (b)
+    EXPECT_GT(c.at("curl").get<double>(), kVisibleCurl);
+    EXPECT_GT(c.at("curl").get<double>(), 1.2 * b.at("curl").get<double>());
+    // (a) no porous shrinkage: the slab neither compacts nor curls
+    EXPECT_GT(a.at("top_rise_median").get<double>(), -0.002);
+    EXPECT_LT(a.at("curl").get<double>(), 0.2 * kVisibleCurl);
+    EXPECT_EQ(a.at("broken_edges").get<long long>(), 0);
+}
+
+TEST_F(FigureClaims, Fig6LargerHardeningRateCurlsMoreAndBreaksIntoLargerPieces) {
+    json measured[3];
+    const char* shots[3] = {"fig6_eps_0.2", "fig6_eps_0.5", "fig6_eps_1.0"};
+    for (int i = 0; i < 3; ++i) {
+        json shot = read_shot(shots[i]);
+        shot["source"]["box"]["min"] = {-0.25, 0.0, -0.25};
+        shot["source"]["box"]["max"] = {0.25, 0.05, 0.25};
+        shot.erase("render");
+        measured[i] = run_and_measure(write_shot(std::string(shots[i]) + "_patch", shot));
+        ASSERT_FALSE(measured[i].is_null());
+    }
+    // curl: the top surface's curl and the share of the slab that lifts off its bed both grow
+    for (int i = 1; i < 3; ++i) {
+        SCOPED_TRACE(std::string(shots[i - 1]) + " vs " + shots[i]);
+        EXPECT_GT(measured[i].at("curl").get<double>(), measured[i - 1].at("curl").get<double>());
+        EXPECT_GT(measured[i].at("lifted_fraction").get<double>(), measured[i - 1].at("lifted_fraction").get<double>());
+        // pieces: never smaller, never more cracks
+        EXPECT_GE(measured[i].at("weighted_mean_polygon_area").get<double>(),
+                  measured[i - 1].at("weighted_mean_polygon_area").get<double>());
+        EXPECT_LE(measured[i].at("broken_edges").get<long long>(), measured[i - 1].at("broken_edges").get<long long>());
+    }
+    // eps = 0.2 breaks the top into polygons; eps = 1 leaves pieces at least twice their size
+    EXPECT_GE(measured[0].at("surface_polygons").get<int>(), 5);
+    EXPECT_GT(measured[2].at("weighted_mean_polygon_area").get<double>(),
+              2 * measured[0].at("weighted_mean_polygon_area").get<double>());
+}
+
+}  // namespace
