@@ -73,8 +73,8 @@ protected:
         const std::string flags = " --shot " + shot.string() + " --out " + out.string() + " --threads " +
                                   std::to_string(kThreads) + " --quiet";
         for (const char* stage : {"mc-init", "mc-sim", "mc-surface"}) {
-            const std::string cmd = std::string(MUDCRACK_BIN_DIR) + "/" + stage + flags + " 2>" +
-                                    (m_dir / "stderr.txt").string();
+            const std::string cmd = std::string(MUDCRACK_BIN_DIR) + "/" + stage + flags + " >" +
+                                    (m_dir / "stdout.txt").string() + " 2>" + (m_dir / "stderr.txt").string();
             const int status = std::system(cmd.c_str());
             if (!WIFEXITED(status) || WEXITSTATUS(status) != 0) {
                 ADD_FAILURE() << stage << " failed on " << shot << ": " << slurp(m_dir / "stderr.txt");
