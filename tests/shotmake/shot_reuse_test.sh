@@ -22,26 +22,10 @@
 # SHOT_MAKE_TEST_KEEP=1 keeps the temporary folder.
 set -euo pipefail
 
-[ $# -ge 2 ] || { echo "usage: shot_reuse_test.sh SOURCE_DIR BIN_DIR [SHOT_FILE]" >&2; exit 2; }
-src=$(cd "$1" && pwd)
-bin=$(cd "$2" && pwd)
-shot_src=${3:-$src/shots/demo.json}
-
-fail() { echo "FAIL: $*" >&2; exit 1; }
-command -v jq >/dev/null || fail "jq not found (apt-get install jq): pipeline/shot.mk needs it"
+# shellcheck source=make_test_lib.sh
+. "$(dirname "${BASH_SOURCE[0]}")/make_test_lib.sh"
+make_test_setup shot_reuse_test "$@"
 command -v perl >/dev/null || fail "perl not found: pipeline/shot.mk reads /reuse with it"
-for b in mc-shot mc-init mc-sim mc-surface mc-render; do
-    [ -x "$bin/$b" ] || fail "$bin/$b: not built"
-done
-# a make run by ctest under `make -jN test` inherits the jobserver: this test sets -j itself
-unset MAKEFLAGS MFLAGS MAKELEVEL MAKEOVERRIDES
-
-tmp=$(mktemp -d "${TMPDIR:-/tmp}/mudcrack-shot-reuse-test.XXXXXX")
-cleanup() {
-    local rc=$?
-    if [ "${SHOT_MAKE_TEST_KEEP:-0}" = 1 ] || [ $rc -ne 0 ]; then echo "shot_reuse_test: kept $tmp"; else rm -rf "$tmp"; fi
-}
-trap cleanup EXIT
 mkdir -p "$tmp/shots"
 base=$tmp/shots/base.json look=$tmp/shots/look.json out=$tmp/out
 
