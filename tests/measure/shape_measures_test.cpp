@@ -5,6 +5,8 @@
 
 #include "pipeline/measure/shape_measures.h"
 #include "sim/core/error.h"
+#include "surfacing/core_topology.h"
+#include "surfacing/lattice_mesh.h"
 #include "tolerance.h"
 
 namespace mudcrack {
@@ -152,6 +154,60 @@ TEST(FragmentSizes, WeightsFragmentsByVolumeAndSkipsCulledParticles) {
     EXPECT_NEAR(s.weighted_mean_volume, (1.0 + 1.0 + 4.0) / 4.0, tol::kRoundoff);
     f.id.pop_back();
     EXPECT_THROW(measure_fragment_sizes(f, volume), InputError);
+}
+
+// Surface polygons on a 8 x 4 x 6 cell tet lattice (9 x 5 x 7 particles, spacing 0.1 m, column
+// centres off the bin edges), cut by a vertical plane between particle columns 3 and 4.
+class SurfacePolygonsTest : public ::testing::Test {
+protected:
+    static constexpr double kH = 0.1;
+    SurfacePolygonsTest()
+        : m_mesh(test::box_lattice(8, 4, 6, kH, test::LatticeUv::None, Vec3(0.5 * kH, 0, 0.5 * kH))),
+          m_topo(build_core_topology(m_mesh)),
+          m_columns(build_rest_columns(m_mesh.X, kH)) {}
+
+    /// Edges crossing x = cut, broken when both ends lie below `below_y` [m].
+    std::vector<uint8_t> cut(double below_y) const {
+        const double x = 0.5 * kH + 3.5 * kH;
+        std::vector<uint8_t> broken(m_topo.n_edges(), 0);
+        for (int32_t e = 0; e < m_topo.n_edges(); ++e) {
+            const Vec3& p = m_topo.X[m_topo.edges[e][0]];
+            const Vec3& q = m_topo.X[m_topo.edges[e][1]];
+            if ((p.x() - x) * (q.x() - x) < 0 && p.y() < below_y && q.y() < below_y) broken[e] = 1;
+        }
+        return broken;
+    }
+    double footprint() const { return m_columns.n_columns() * kH * kH; }
+
+    TetMesh m_mesh;
+    CoreTopology m_topo;
+    RestColumns m_columns;
+};
+
+TEST_F(SurfacePolygonsTest, AnIntactTopIsOnePolygonOfTheWholeFootprint) {
+    ASSERT_EQ(m_columns.n_columns(), 9 * 7);
+    const SurfacePolygons s = measure_surface_polygons(m_topo, std::vector<uint8_t>(m_topo.n_edges(), 0), m_columns, 1);
+    EXPECT_EQ(s.count, 1);
+    EXPECT_NEAR(s.largest_fraction, 1, tol::kRoundoff);
+    EXPECT_NEAR(s.weighted_mean_area, footprint(), tol::kRoundoff);
+}
+
+TEST_F(SurfacePolygonsTest, AThroughCrackCutsTheTopIntoTwoPolygonsOfTheirColumnShares) {
+    const SurfacePolygons s = measure_surface_polygons(m_topo, cut(1e9), m_columns, 1);
+    EXPECT_EQ(s.count, 2);
+    // 4 and 5 of the 9 particle columns on either side
+    EXPECT_NEAR(s.largest_fraction, 5.0 / 9.0, tol::kRoundoff);
+    EXPECT_NEAR(s.weighted_mean_area, footprint() * (16.0 + 25.0) / 81.0, tol::kRoundoff);
+}
+
+TEST_F(SurfacePolygonsTest, ACrackThatStopsBelowTheTopLayerDoesNotCutTheSurface) {
+    const SurfacePolygons s = measure_surface_polygons(m_topo, cut(0.15), m_columns, 1);
+    EXPECT_EQ(s.count, 1);
+    EXPECT_NEAR(s.weighted_mean_area, footprint(), tol::kRoundoff);
+}
+
+TEST_F(SurfacePolygonsTest, RejectsMismatchedSizes) {
+    EXPECT_THROW(measure_surface_polygons(m_topo, std::vector<uint8_t>(3, 0), m_columns, 1), InputError);
 }
 
 }  // namespace
