@@ -44,15 +44,13 @@ STAGE_MAKE = $(MAKE) --no-print-directory -f $(SHOT_MK) SHOT=$(SHOT) OUT=$(OUT) 
 RENDER_SOURCE = $(if $(filter surface,$(SHOT_STAGES)),surface,sim)
 
 # ---- /reuse: the stages shared with another shot ----------------------------------------------
-# /reuse as written in the shot file: perl drops the // and /* */ comments outside strings (the
-# shot format allows them, jq does not), jq reads the key
-SHOT_REUSE := $(shell perl -0777 -pe 's{("(?:[^"\\]|\\.)*")|//[^\n]*|/\*.*?\*/}{defined $$1 ? $$1 : ""}gse' \
-                $(SHOT_FILE) 2>/dev/null | jq -r 'if type == "object" then .reuse // empty else empty end' 2>/dev/null)
+# /reuse, as the shot loader reads (and checks) it; empty when unset or when the shot is invalid
+# (the stage rules then report the shot's errors)
+SHOT_REUSE := $(shell $(BIN)/mc-shot reuse $(SHOT_FILE) 2>/dev/null)
 SHOT_SHARED :=
 # the chunk sub-makes (shot-stage-*) and the farm do not link: only the make that runs the stages
 ifeq ($(filter shot-stage-% farm-%,$(MAKECMDGOALS)),)
 ifneq ($(SHOT_REUSE),)
-$(if $(filter $(SHOT),$(SHOT_REUSE)),$(error $(SHOT_FILE): /reuse = "$(SHOT_REUSE)": a shot cannot reuse itself))
 REUSE_FILE   := $(dir $(SHOT_FILE))$(SHOT_REUSE).json
 REUSE_OUT    := $(OUT)/$(SHOT_REUSE)
 REUSE_STAGES := $(shell $(BIN)/mc-shot stages $(REUSE_FILE))

@@ -1,6 +1,6 @@
 // mc-shot: the shot file tool (style.md 9). `validate` checks a shot, `keys` prints the spec
 // table, `slice` writes the part of a shot one stage reads, only when it changed, so make reruns
-// a stage exactly when its inputs changed; `stages` and `summary` serve pipeline/shot.mk. It has no --shot/--out, so it does not use run_stage,
+// a stage exactly when its inputs changed; `stages`, `reuse` and `summary` serve pipeline/shot.mk. It has no --shot/--out, so it does not use run_stage,
 // but follows the same exit codes: 0 ok, 1 bad input, 2 bad usage.
 #include <cmath>
 #include <cstdint>
@@ -201,6 +201,9 @@ int main(int argc, char** argv) {
     CLI::App* stages = app.add_subcommand("stages", "print the stages FILE turns on, in run order");
     stages->add_option("FILE", file, "shot file (JSON with comments)")->required();
 
+    CLI::App* reuse = app.add_subcommand("reuse", "print the shot FILE's /reuse names (nothing when unset)");
+    reuse->add_option("FILE", file, "shot file (JSON with comments)")->required();
+
     std::string out_dir;
     CLI::App* summary_cmd =
         app.add_subcommand("summary", "print what each stage wrote under OUT (from its manifest)");
@@ -220,6 +223,11 @@ int main(int argc, char** argv) {
         }
         if (stages->parsed()) {
             std::cout << stage_list(load_shot(file)) << "\n";
+            return 0;
+        }
+        if (reuse->parsed()) {
+            const Shot shot = load_shot(file);
+            if (!shot.reuse.empty()) std::cout << shot.reuse << "\n";
             return 0;
         }
         if (summary_cmd->parsed()) return run_summary(out_dir);

@@ -271,9 +271,14 @@ void build_colliders(const json& tree, SimModel& model, Issues& issues) {
 
 }  // namespace
 
+std::string build_reuse(const json& tree, const std::string& shot_path, Issues& issues) {
+    check_reuse(tree, shot_path, issues);
+    const json* reuse = find_value(tree, "/reuse");
+    return reuse ? reuse->get<std::string>() : std::string();
+}
+
 InitParams build_init(json& tree, const std::string& shot_path, Issues& issues) {
     InitParams init;
-    check_reuse(tree, shot_path, issues);  // a file next to the shot, like the source paths
     const bool has_type = has(tree, "/source/type");
     init.type = has_type ? source_type(text(tree, "/source/type")) : SourceType::Box;
     init.edge_length = number(tree, "/init/edge_length");

@@ -16,6 +16,10 @@
 
 namespace mudcrack::spec {
 
+/// /reuse: the other shot of this folder whose matching stages make shares ("" when unset).
+/// Checks it names an existing shot file other than this one that does not reuse a third.
+std::string build_reuse(const nlohmann::json& tree, const std::string& shot_path, Issues& issues);
+
 /// /source and /init. Resolves paths against the folder of `shot_path` and checks the files
 /// exist; checks box extents and the heightfield channel. Drops the unselected /source/<type>
 /// sections from `tree`.

@@ -118,6 +118,7 @@ Shot parse_shot(const std::string& text, const std::string& path) {
     shot.path = path;
     shot.name = tree.contains("name") ? tree["name"].get<std::string>()
                                       : std::filesystem::path(path).stem().string();
+    shot.reuse = spec::build_reuse(tree, path, issues);
     shot.init = spec::build_init(tree, path, issues);
     shot.sim = spec::build_sim(tree, issues);
     shot.surface = spec::build_surface(tree);

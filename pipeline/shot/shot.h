@@ -18,6 +18,7 @@ const char* stage_name(Stage stage);  // "init", "sim", "surface", "render"
 struct Shot {
     std::string path;   // the shot file as given
     std::string name;   // /name, default: the file's stem
+    std::string reuse;  // /reuse: a shot of this folder whose matching stages make shares, or ""
     InitParams init;    // /source, /init
     SimModel sim;       // /material, /plasticity, /moisture, /sim, /frames, /colliders
     std::optional<SurfaceParams> surface; // /surfacing; nullopt: no surfacing stage

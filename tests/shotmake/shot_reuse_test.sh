@@ -25,7 +25,6 @@ set -euo pipefail
 # shellcheck source=make_test_lib.sh
 . "$(dirname "${BASH_SOURCE[0]}")/make_test_lib.sh"
 make_test_setup shot_reuse_test "$@"
-command -v perl >/dev/null || fail "perl not found: pipeline/shot.mk reads /reuse with it"
 mkdir -p "$tmp/shots"
 base=$tmp/shots/base.json look=$tmp/shots/look.json out=$tmp/out
 
