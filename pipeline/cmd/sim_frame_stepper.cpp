@@ -48,6 +48,8 @@ int advance_frame(const SimModel& model, SimState& state, int frame, SimTotals& 
     const double t_end = frame_end_time(model, frame);
     const double frame_length = 1.0 / model.time.fps;
     int substeps = 0;
+    // a run resumed from this frame's checkpoint starts without it: so does this one
+    forget_step_history(state);
     while (state.time < t_end) {
         const int substep = substeps + 1;
         // the stable step, clamped to land exactly on the frame's end

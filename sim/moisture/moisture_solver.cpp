@@ -140,7 +140,7 @@ inline void add_lanes(Real* p, const Lanes& v) { Eigen::Map<Lanes>(p) += v; }
 // The evaporation pass (physics.md 4.2, 4.4): finds the boundary particles (a surface node in
 // their stencil; the containing-cell variant of physics.md 4.4 misses flat faces: with 2
 // particles per cell the last massive node lies 1.25 h above the top layer, outside its cell)
-// and scatters their evaporation: r into mg.rhs (zeroed), and lambda S w^2 into mg.diag when
+// and scatters their evaporation: r into mg.evaporation (zeroed), and lambda S w^2 into mg.diag when
 // the Robin term is implicit. Particle blocks whose window holds no surface node are skipped.
 void evaporation_pass(const MoistureParams& mp, const SparseGrid& grid, const MoistureParticles& pp, MoistureGrid& mg,
                       std::vector<std::vector<Real>>& windows) {
@@ -206,7 +206,7 @@ void evaporation_pass(const MoistureParams& mp, const SparseGrid& grid, const Mo
                 }
         }
         if (any_boundary) {
-            mpm::flush_window<1, 1>(grid, pb, rw, mg.rhs.data());
+            mpm::flush_window<1, 1>(grid, pb, rw, mg.evaporation.data());
             if (implicit_robin) mpm::flush_window<1, 1>(grid, pb, dw, mg.diag.data());
         }
     });
@@ -344,10 +344,10 @@ Real particle_area(Real volume) {
 }
 
 int64_t MoistureGrid::memory_bytes() const {
-    return capacity_bytes(W) + capacity_bytes(theta) + capacity_bytes(diag) + capacity_bytes(rhs) +
+    return capacity_bytes(W) + capacity_bytes(theta) + capacity_bytes(diag) + capacity_bytes(evaporation) +
            capacity_bytes(x) + capacity_bytes(r) + capacity_bytes(p) + capacity_bytes(Ap) +
            capacity_bytes(surface) + capacity_bytes(particle_is_boundary) + capacity_bytes(block_partial) +
-           capacity_bytes(block_face_neighbors);
+           capacity_bytes(block_face_neighbors) + history.memory_bytes();
 }
 
 void begin_moisture_p2g(MoistureGrid& mg, const SparseGrid& grid) {
@@ -379,44 +379,53 @@ MoistureSolveStats solve_moisture(const MoistureParams& mp, const MoistureSeal& 
     // surface nodes (physics.md 4.4)
     build_face_neighbors(grid, mg);
     mark_surface_nodes(grid, seal, mg);
-    resize_zero(mg.rhs, n_nodes);
+    resize_zero(mg.evaporation, n_nodes);
     mg.particle_is_boundary.resize(n_particles);
     mg.x.resize(n_nodes);
     mg.r.resize(n_nodes);
     mg.p.resize(n_nodes);
     mg.Ap.resize(n_nodes);
 
-    // evaporation r into rhs (and the implicit Robin diagonal), then the initial guess: theta^n
-    // plus the Jacobi step on the explicit evaporation, x0 = theta^n + r / diag (it takes most of
-    // the initial residual, so the CG needs about one iteration less); x holds x0 - theta^n
+    // evaporation r (and the implicit Robin diagonal), then the initial guess: theta^n
+    // plus the Jacobi step on the explicit evaporation, r / diag (it takes most of the
+    // evaporation's share of the initial residual), plus the increment dt F / W of the flux F
+    // the history predicts (most of the diffusion's share); x holds x0 - theta^n
     if (mp.lambda > 0) evaporation_pass(mp, grid, pp, mg, windows);
     else std::fill(mg.particle_is_boundary.begin(), mg.particle_is_boundary.end(), uint8_t(0));
     const bool explicit_evaporation = !mp.implicit_robin && mp.lambda > 0;
+    const bool predicted = mg.history.count > 0;
+    if (predicted) predict_moisture_flux(mg.history, grid, dt, mg.x.data());
     auto inv_diag = [&](int64_t i) { return mg.diag[i] > 0 ? 1 / mg.diag[i] : Real(0); };
     parallel_for(n_nodes, [&](int64_t i) {
-        const Real dx = explicit_evaporation && mg.W[i] > 0 ? mg.rhs[i] * inv_diag(i) : Real(0);
+        Real dx = 0;
+        if (mg.W[i] > 0) {
+            if (predicted) dx = mg.x[i] * dt / mg.W[i];
+            if (explicit_evaporation) dx += mg.evaporation[i] * inv_diag(i);
+        }
         mg.x[i] = dx;
         mg.p[i] = mg.theta[i] + dx;
     });
     apply_stiffness(mp, grid, pp, mg, mg.p.data(), mg.Ap.data(), windows);
 
-    // rhs = M theta^n + r; residual b - (M + L) x0 = r - M (x0 - theta^n) - L x0, formed from
+    // b = M theta^n + r; residual b - (M + L) x0 = r - M (x0 - theta^n) - L x0, formed from
     // the small terms (the M theta^n parts cancel exactly)
     parallel_for(n_nodes, [&](int64_t i) {
         if (mg.W[i] > 0) {
             const Real m = mg.W[i] * inv_dt;
-            mg.r[i] = mg.rhs[i] - m * mg.x[i] - mg.Ap[i];
-            mg.rhs[i] += m * mg.theta[i];
+            mg.r[i] = mg.evaporation[i] - m * mg.x[i] - mg.Ap[i];
             mg.x[i] += mg.theta[i];
         } else {
-            mg.r[i] = mg.rhs[i] = mg.x[i] = 0;
+            mg.r[i] = mg.x[i] = 0;
         }
         mg.p[i] = mg.r[i] * inv_diag(i);
     });
 
     // Jacobi-preconditioned conjugate gradients
     MoistureSolveStats stats;
-    const Real b_norm = std::sqrt(block_sum(grid, mg.block_partial, [&](int64_t i) { return mg.rhs[i] * mg.rhs[i]; }));
+    const Real b_norm = std::sqrt(block_sum(grid, mg.block_partial, [&](int64_t i) {
+        const Real b = mg.W[i] > 0 ? mg.evaporation[i] + mg.W[i] * inv_dt * mg.theta[i] : Real(0);
+        return b * b;
+    }));
     if (b_norm > 0) {
         Real rz = block_sum(grid, mg.block_partial, [&](int64_t i) { return mg.r[i] * mg.p[i]; });
         Real r_norm = std::sqrt(block_sum(grid, mg.block_partial, [&](int64_t i) { return mg.r[i] * mg.r[i]; }));
@@ -444,8 +453,19 @@ MoistureSolveStats solve_moisture(const MoistureParams& mp, const MoistureSeal& 
         stats.residual = r_norm / b_norm;
     }
 
-    // increment theta^{n+1} - theta^n for the FLIP G2P
-    parallel_for(n_nodes, [&](int64_t i) { mg.x[i] = mg.W[i] > 0 ? mg.x[i] - mg.theta[i] : Real(0); });
+    // increment theta^{n+1} - theta^n for the FLIP G2P; the history records its part beyond the
+    // evaporation's Jacobi step as a flux, (W / dt)(increment - r / diag), in the free Ap
+    parallel_for(n_nodes, [&](int64_t i) {
+        if (!(mg.W[i] > 0)) {
+            mg.x[i] = mg.Ap[i] = 0;
+            return;
+        }
+        const Real m = mg.W[i] * inv_dt;
+        mg.x[i] -= mg.theta[i];
+        const Real evaporation_step = explicit_evaporation ? mg.evaporation[i] * inv_diag(i) : Real(0);
+        mg.Ap[i] = m * (mg.x[i] - evaporation_step);
+    });
+    record_moisture_flux(mg.history, grid, mg.Ap.data(), dt);
     return stats;
 }
 

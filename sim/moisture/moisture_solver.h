@@ -10,6 +10,7 @@
 #include <vector>
 
 #include "sim/core/types.h"
+#include "sim/moisture/flux_history.h"
 #include "sim/model.h"
 #include "sim/mpm/sparse_grid.h"
 
@@ -20,13 +21,14 @@ struct MoistureGrid {
     std::vector<Real> W;        // sum_p V_p w_ip [m^3]
     std::vector<Real> theta;    // (V theta)_i after the P2G, then theta_i^n
     std::vector<Real> diag;     // sum_p V_p |grad w_ip|^2 after the P2G, then the Jacobi diagonal
-    std::vector<Real> rhs;      // M theta^n + r
+    std::vector<Real> evaporation;  // r (explicit), or r_0 = sum S lambda theta_0 w (implicit Robin)
     std::vector<Real> x;        // CG iterate; after the solve: theta^{n+1} - theta^n
     std::vector<Real> r, p, Ap; // CG residual, direction, operator times direction
     std::vector<Real> surface;  // 1 at surface nodes (physics.md 4.4), else 0
     std::vector<uint8_t> particle_is_boundary;  // per slot: evaporates this step
     std::vector<Real> block_partial;            // per-block partial sums (deterministic dots)
     std::vector<std::array<int32_t, 6>> block_face_neighbors;  // slots of the 6 face-adjacent blocks or -1
+    MoistureFluxHistory history;                // kept from solve to solve: the CG's initial guess
 
     int64_t memory_bytes() const;
 };
@@ -57,7 +59,9 @@ void begin_moisture_p2g(MoistureGrid& mg, const mpm::SparseGrid& grid);
 /// Solves one implicit moisture step of length dt after the P2G filled W, (V theta) and
 /// sum V |grad w|^2, and the mechanics grid holds the nodal masses (for the surface test).
 /// On return mg.x holds theta^{n+1} - theta^n per node (zero off the material) and
-/// mg.particle_is_boundary flags the evaporating particles.
+/// mg.particle_is_boundary flags the evaporating particles. The CG starts from theta^n plus the
+/// Jacobi step on the explicit evaporation plus the flux mg.history predicts, and this solve's
+/// flux is recorded there (flux_history.h).
 /// @param dt moisture time step [s] (k dt when solving every k MPM steps)
 /// @param windows per-thread scratch, at least 5 * 224 values each
 MoistureSolveStats solve_moisture(const MoistureParams& params, const MoistureSeal& seal,

@@ -310,6 +310,10 @@ StepStats step(const SimModel& model, SimState& state, Real dt) {
     return stats;
 }
 
+void forget_step_history(SimState& state) {
+    if (state.workspace) state.workspace->moisture.history.clear();
+}
+
 ParticleFrame state_to_frame(const SimModel& model, const SimState& state, const CacheAttributes& attrs) {
     const size_t n = state.size();
     ParticleFrame f;

@@ -68,6 +68,11 @@ Real stable_dt(const SimModel& model, const SimState& state);
 /// state; a failure throws RuntimeError naming the particle id and its state (theta, J, alpha).
 StepStats step(const SimModel& model, SimState& state, Real dt);
 
+/// Forgets what the steps carry from one to the next outside the state (the moisture CG's
+/// flux history, which only shapes its initial guess), so the steps that follow are bit for bit
+/// those of a run resumed here from a checkpoint. The frame stepper calls it at every frame.
+void forget_step_history(SimState& state);
+
 /// The cacheable view of the state in particle-id order, with only the requested attributes.
 ParticleFrame state_to_frame(const SimModel& model, const SimState& state, const CacheAttributes& attrs);
 
