@@ -34,8 +34,9 @@ inline Real cohesion_of(const NaccParams& np, Real saturation) {
     return np.beta0 * (1 - saturation) + np.beta1 * saturation;
 }
 
-/// Relative J_w changes below this use the series path of pore_step (truncation < 1e-17).
-constexpr Real kPoreSeriesLimit = 1e-4;
+/// Relative J_w changes below this use the series path of pore_step (truncation < 2e-19). It is
+/// the default cap on |log(J_w ratio)| per step: a drying surface particle's change stays near it.
+constexpr Real kPoreSeriesLimit = 1e-3;
 
 /// One step of the pore update of a particle.
 struct PoreStep {
@@ -58,14 +59,18 @@ inline PoreStep pore_step(Real Jw_old, Real saturation, Real eta, Real max_log_s
     // rel = target/Jw_old - 1 without the cancellation of the "- 1"
     const Real rel = (target - Jw_old) * inv_Jw_old;
     if (std::abs(rel) < kPoreSeriesLimit) {
-        // the common tiny change: log1p(rel) and (1 + rel)^(-1/3) by their series (error
-        // < 1e-17), a third of the cost of log + cbrt, and side by side rather than one after
-        // the other: they sit on the particle loop's dependency chain
-        const Real l = rel * (1 - rel * (Real(1) / 2 - rel * (Real(1) / 3 - rel * (Real(1) / 4))));
+        // the common small change: log1p(rel) to rel^6 and (1 + rel)^(-1/3) to rel^5 by their
+        // series (truncation < 2e-19 for |rel| < 1e-3), a fraction of the cost of log1p + cbrt,
+        // and side by side rather than one after the other: they sit on the particle loop's
+        // dependency chain
+        const Real l =
+            rel * (1 - rel * (Real(1) / 2 -
+                              rel * (Real(1) / 3 - rel * (Real(1) / 4 - rel * (Real(1) / 5 - rel * (Real(1) / 6))))));
         r.log_ratio = l;
         r.Jw = target;
-        r.Fe_scale =
-            1 + rel * (Real(-1) / 3 + rel * (Real(2) / 9 + rel * (Real(-14) / 81 + rel * (Real(35) / 243))));
+        r.Fe_scale = 1 + rel * (Real(-1) / 3 +
+                                rel * (Real(2) / 9 +
+                                       rel * (Real(-14) / 81 + rel * (Real(35) / 243 + rel * (Real(-91) / 729)))));
         if (max_log_step <= 0 || std::abs(l) <= max_log_step) return r;
     }
     const Real log_ratio = std::log1p(rel);

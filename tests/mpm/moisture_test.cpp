@@ -347,6 +347,16 @@ TEST(Pore, StepMatchesTheClosedFormAndCapsTheJump) {
                 EXPECT_NEAR(ps.Fe_scale, std::cbrt(Jw_old / target), tol::kRoundoff);
             }
         }
+    // the series path (|target / Jw_old - 1| < kPoreSeriesLimit) agrees with log1p and cbrt to
+    // a few ulps up to its limit
+    for (Real rel : {1e-6, -1e-6, 9e-5, -9e-5, 1.1e-4, -1.1e-4, 5e-4, -5e-4, 0.99e-3, -0.99e-3}) {
+        const Real Jw_old = 0.8, target = Jw_old * (1 + rel);
+        const Real s = (target - (1 - eta)) / eta;  // pore_jw(s) = target
+        const PoreStep ps = pore_step(Jw_old, s, eta, 0);
+        const Real exact_rel = (pore_jw(s, eta) - Jw_old) / Jw_old;
+        EXPECT_NEAR(ps.log_ratio, std::log1p(exact_rel), 1e-15 * std::abs(exact_rel)) << "rel " << rel;
+        EXPECT_NEAR(ps.Fe_scale, std::cbrt(Jw_old / pore_jw(s, eta)), 1e-15) << "rel " << rel;
+    }
     // a large drop is capped at max_log_step and the remainder carried
     const PoreStep capped = pore_step(1.0, 0.0, eta, 1e-3);
     EXPECT_NEAR(capped.log_ratio, -1e-3, tol::kRoundoff);
