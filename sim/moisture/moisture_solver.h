@@ -20,7 +20,7 @@ namespace mudcrack {
 struct MoistureGrid {
     std::vector<Real> W;        // sum_p V_p w_ip [m^3]
     std::vector<Real> theta;    // (V theta)_i after the P2G, then theta_i^n
-    std::vector<Real> diag;     // sum_p V_p |grad w_ip|^2 after the P2G, then the Jacobi diagonal
+    std::vector<Real> diag;     // sum_p V_p |grad w_ip|^2 after the P2G, the Jacobi diagonal, its inverse
     std::vector<Real> evaporation;  // r (explicit), or r_0 = sum S lambda theta_0 w (implicit Robin)
     std::vector<Real> x;        // CG iterate; after the solve: theta^{n+1} - theta^n
     std::vector<Real> r, p, Ap; // CG residual, direction, operator times direction

@@ -26,7 +26,9 @@ inline bool clearly_inside_yield_surface(const Mat3& Fe, Real alpha, Real beta, 
                                          const LameParams& lame) {
     const Real J = Fe.determinant();
     if (!(J > 0)) return false;
-    const Real p0 = nacc_p0(alpha, nacc.xi, lame.kappa);
+    // p0 from below (its ulps of rounding are far inside kInsideMargin): a smaller ellipse,
+    // so "clearly inside" stays on the safe side
+    const Real p0 = nacc_p0_lower_bound(alpha, nacc.xi, lame.kappa);
     const Real p = -lame.kappa / 2 * (J * J - 1);
     if (!(p < p0 && p > -beta * p0)) return false;
     const Mat3 b = Fe * Fe.transpose();

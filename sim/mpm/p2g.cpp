@@ -56,14 +56,17 @@ void p2g_impl(const SimModel& model, const SimState& state, SparseGrid& grid, Mo
             const Real da[4] = {0, Ah(0, 0), Ah(1, 0), Ah(2, 0)};
             const Real db[4] = {0, Ah(0, 1), Ah(1, 1), Ah(2, 1)};
             const Real dc[4] = {0, Ah(0, 2), Ah(1, 2), Ah(2, 2)};
-            Real V = 0, Vtheta = 0;
-            Lanes wz = Lanes::Zero(), wz2 = Lanes::Zero(), dwz2 = Lanes::Zero();
+            // the moisture rows' z profiles, scaled once per particle: V wz, V theta wz, V wz^2
+            // and V dwz^2 (each row then takes one multiply-add per field)
+            Lanes V_wz = Lanes::Zero(), Vtheta_wz = Lanes::Zero(), V_wz2 = Lanes::Zero(), V_dwz2 = Lanes::Zero();
             if constexpr (kMoisture) {
-                V = V0[p] * J[p];
-                Vtheta = V * theta[p];
-                wz << az.w[0], az.w[1], az.w[2], 0;
-                wz2 = wz * wz;
-                dwz2 << az.dw[0] * az.dw[0], az.dw[1] * az.dw[1], az.dw[2] * az.dw[2], 0;
+                const Real V = V0[p] * J[p];
+                const Lanes wz(az.w[0], az.w[1], az.w[2], 0);
+                const Lanes dwz(az.dw[0], az.dw[1], az.dw[2], 0);
+                V_wz = V * wz;
+                Vtheta_wz = theta[p] * V_wz;
+                V_wz2 = V_wz * wz;
+                V_dwz2 = (V * dwz) * dwz;
             }
 
             // scatter to the 3x3x3 stencil
@@ -83,10 +86,10 @@ void p2g_impl(const SimModel& model, const SimState& state, SparseGrid& grid, Mo
                         // ((dwx wy)^2 + (wx dwy)^2) wz^2 + (wx wy)^2 dwz^2
                         const int n = window_index(o0 + a, o1 + b, o2);
                         const Real gxy = ax.dw[a] * ay.w[b], gyx = ax.w[a] * ay.dw[b];
-                        Eigen::Map<Lanes>(mw + n) += (V * wab) * wz;
-                        Eigen::Map<Lanes>(mw + kMoistureStride + n) += (Vtheta * wab) * wz;
+                        Eigen::Map<Lanes>(mw + n) += wab * V_wz;
+                        Eigen::Map<Lanes>(mw + kMoistureStride + n) += wab * Vtheta_wz;
                         Eigen::Map<Lanes>(mw + 2 * kMoistureStride + n) +=
-                            (V * (gxy * gxy + gyx * gyx)) * wz2 + (V * wab * wab) * dwz2;
+                            (gxy * gxy + gyx * gyx) * V_wz2 + (wab * wab) * V_dwz2;
                     }
                 }
             }

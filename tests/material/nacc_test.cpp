@@ -278,6 +278,17 @@ TEST(NaccP0, FloorAndOverflowCap) {
     EXPECT_DOUBLE_EQ(nacc_p0(-std::numeric_limits<Real>::infinity(), 3, 2000), capped);
 }
 
+TEST(NaccP0, LowerBoundIsBelowAndWithin2e10) {
+    constexpr Real kappa = 2000, xi = 1;
+    for (Real x = 0; x <= kNaccMaxSinhArgument + 1; x += 1.0 / 64) {
+        const Real exact = nacc_p0(-x, xi, kappa), lower = nacc_p0_lower_bound(-x, xi, kappa);
+        // below up to a few ulps of rounding (both sides of x = 1.5)
+        EXPECT_LE(lower, exact * (1 + 8 * std::numeric_limits<Real>::epsilon())) << "x = " << x;
+        EXPECT_GE(lower, exact * (1 - 2e-10)) << "x = " << x;
+    }
+    EXPECT_EQ(nacc_p0_lower_bound(0.5, 3, kappa), kappa * 1e-5);  // alpha >= 0: the floor only
+}
+
 TEST(NaccReturnMap, ExtremeStatesStayFinite) {
     std::mt19937_64 rng(6);
     const Mat3 R = test::random_rotation(rng), Q = test::random_rotation(rng);

@@ -11,6 +11,7 @@
 
 #include "mpm_test_util.h"
 #include "sim/core/parallel.h"
+#include "sim/moisture/moisture_solver.h"
 #include "sim/moisture/pore.h"
 #include "sim/mpm/bspline.h"
 #include "sim/mpm/simulation.h"
@@ -378,6 +379,13 @@ TEST(Pore, StepMatchesTheClosedFormAndCapsTheJump) {
     np.beta1 = 1;
     EXPECT_NEAR(cohesion_of(np, 0.25), 2.5, tol::kRoundoff);
     EXPECT_EQ(saturation_of(0.2, 0.0), 1.0);
+}
+
+TEST(Moisture, ParticleAreaIsTheEquivalentSphereCrossSection) {
+    for (Real V : {1e-12, 1.25e-7, 1e-6, 0.3, 1.0, 8.0}) {
+        const Real R = std::cbrt(3 * V / (4 * M_PI));
+        EXPECT_NEAR(particle_area(V), M_PI * R * R, 1e-14 * M_PI * R * R) << "V = " << V;
+    }
 }
 
 TEST(Moisture, SolvingEveryKStepsCountsItsIterations) {

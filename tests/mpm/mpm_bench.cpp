@@ -2,8 +2,9 @@
 // falling at 2 m/s onto a sticky ground, dt = 2e-4 fixed, with and without moisture, on 1 and 2
 // threads. Reports particle-steps/s and bytes per particle of simulation state (grid included).
 //
-//   build-mpm/bin/mpm_bench                    # 404 steps per run, 3 runs each, medians
-//   MUDCRACK_BENCH_STEPS=100 build-mpm/bin/mpm_bench --benchmark_filter=NoMoisture/1
+//   build/bin/mpm_bench                        # 404 steps per run, 3 runs each, medians
+//   MUDCRACK_BENCH_STEPS=100 build/bin/mpm_bench --benchmark_filter=NoMoisture/1
+//   MUDCRACK_BENCH_REPETITIONS=1 ...           # one run per configuration
 #include <benchmark/benchmark.h>
 
 #include <cmath>
@@ -30,6 +31,12 @@ double process_cpu_seconds() {
 int bench_steps() {
     const char* env = std::getenv("MUDCRACK_BENCH_STEPS");
     return env ? std::max(1, std::atoi(env)) : kDefaultSteps;
+}
+
+// repetitions per configuration (3; tools/bench_moisture_cost.sh interleaves single runs)
+int bench_repetitions() {
+    const char* env = std::getenv("MUDCRACK_BENCH_REPETITIONS");
+    return env ? std::max(1, std::atoi(env)) : 3;
 }
 
 // moisture_interval: 0 = no moisture section, k = solve the moisture every k steps
@@ -101,11 +108,11 @@ void BM_ReferenceScene(benchmark::State& bs, int moisture_interval) {
 }
 
 BENCHMARK_CAPTURE(BM_ReferenceScene, NoMoisture, 0)
-    ->Arg(1)->Arg(2)->Iterations(1)->Repetitions(3)->UseRealTime()->Unit(benchmark::kSecond);
+    ->Arg(1)->Arg(2)->Iterations(1)->Repetitions(bench_repetitions())->UseRealTime()->Unit(benchmark::kSecond);
 BENCHMARK_CAPTURE(BM_ReferenceScene, Moisture, 1)
-    ->Arg(1)->Arg(2)->Iterations(1)->Repetitions(3)->UseRealTime()->Unit(benchmark::kSecond);
+    ->Arg(1)->Arg(2)->Iterations(1)->Repetitions(bench_repetitions())->UseRealTime()->Unit(benchmark::kSecond);
 BENCHMARK_CAPTURE(BM_ReferenceScene, MoistureEvery4Steps, 4)
-    ->Arg(1)->Arg(2)->Iterations(1)->Repetitions(3)->UseRealTime()->Unit(benchmark::kSecond);
+    ->Arg(1)->Arg(2)->Iterations(1)->Repetitions(bench_repetitions())->UseRealTime()->Unit(benchmark::kSecond);
 
 }  // namespace
 }  // namespace mudcrack
