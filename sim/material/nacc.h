@@ -63,7 +63,10 @@ inline Real nacc_p0_lower_bound(Real alpha, Real xi, Real kappa) {
     Real sinh_x;
     if (x <= kSeriesLimit) {
         const Real x2 = x * x;
-        sinh_x = x * (1 + x2 / 6 * (1 + x2 / 20 * (1 + x2 / 42 * (1 + x2 / 72 * (1 + x2 / 110 * (1 + x2 / 156))))));
+        // multiplications by the reciprocals (rounded: the few ulps above), not divisions
+        constexpr Real c3 = Real(1) / 6, c5 = Real(1) / 20, c7 = Real(1) / 42, c9 = Real(1) / 72,
+                       c11 = Real(1) / 110, c13 = Real(1) / 156;
+        sinh_x = x * (1 + x2 * c3 * (1 + x2 * c5 * (1 + x2 * c7 * (1 + x2 * c9 * (1 + x2 * c11 * (1 + x2 * c13))))));
     } else {
         const Real e = std::exp(x);
         sinh_x = Real(0.5) * (e - 1 / e);

@@ -254,8 +254,8 @@ void operator_pass(const MoistureParams& mp, const SparseGrid& grid, const Moist
         const Vec3i origin = geo.block_coord(grid.pblock_key[pb]) * kBlockWidth;
         for (int32_t first = grid.pblock_begin[pb]; first < grid.pblock_begin[pb + 1]; first += kOperatorBatch) {
             const int count = std::min<int32_t>(kOperatorBatch, grid.pblock_begin[pb + 1] - first);
-            // gather g_p = sum_j x_j grad w_jp (in units of 1/h) and s_p = sum_j w_jp x_j as z
-            // rows: contract over y (w and dw), then over x; the z weights close the sums
+            // the batch's stencils first: its 4-lane z weights are built from scalar stores, and
+            // a 4-lane load right after them stalls until they retire; a batch later they have
             for (int k = 0; k < count; ++k) {
                 const int32_t p = grid.order[first + k];
                 OperatorParticle& op = batch[k];
@@ -270,16 +270,22 @@ void operator_pass(const MoistureParams& mp, const SparseGrid& grid, const Moist
                 }
                 op.wz = Lanes(az.w[0], az.w[1], az.w[2], 0);
                 op.dwz = Lanes(az.dw[0], az.dw[1], az.dw[2], 0);
+            }
+            // gather g_p = sum_j x_j grad w_jp (in units of 1/h) and s_p = sum_j w_jp x_j as z
+            // rows: contract over y (w and dw), then over x; the z weights close the sums
+            for (int k = 0; k < count; ++k) {
+                const int32_t p = grid.order[first + k];
+                OperatorParticle& op = batch[k];
                 const Real* xrow = xw + op.offset;
                 Lanes rx = Lanes::Zero(), ry = Lanes::Zero(), rs = Lanes::Zero();
                 for (int a = 0; a < 3; ++a) {
                     const Real* plane = xrow + a * kPlane;
                     const Lanes r0 = load_lanes(plane), r1 = load_lanes(plane + kRow), r2 = load_lanes(plane + 2 * kRow);
-                    const Lanes wy_rows = ay.w[0] * r0 + ay.w[1] * r1 + ay.w[2] * r2;
-                    const Lanes dwy_rows = ay.dw[0] * r0 + ay.dw[1] * r1 + ay.dw[2] * r2;
-                    rs += ax.w[a] * wy_rows;
-                    rx += ax.dw[a] * wy_rows;
-                    ry += ax.w[a] * dwy_rows;
+                    const Lanes wy_rows = op.wy[0] * r0 + op.wy[1] * r1 + op.wy[2] * r2;
+                    const Lanes dwy_rows = op.dwy[0] * r0 + op.dwy[1] * r1 + op.dwy[2] * r2;
+                    rs += op.wx[a] * wy_rows;
+                    rx += op.dwx[a] * wy_rows;
+                    ry += op.wx[a] * dwy_rows;
                 }
                 // V D grad theta_p, the 1/h of both gradients in D_scale
                 const Real V = pp.V0[p] * pp.J[p];
