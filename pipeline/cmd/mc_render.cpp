@@ -234,9 +234,12 @@ Bounds stage_bounds(const RenderJob& job) {
 }
 
 std::unique_ptr<Renderer> make_renderer(const StageOptions& opt, const RenderJob& job) {
-    // llvmpipe takes its thread count from the environment when the first context is made
+    // llvmpipe takes its thread count from the environment when the first context is made. One
+    // thread is llvmpipe's 0: rasterize in this thread. Its 1 adds a rasterizer thread that only
+    // hands work back and forth, and under it a farm test's local render once died in malloc on
+    // a chunk of that thread's heap (heap corruption, with AddressSanitizer clean on our side).
     if (opt.threads > 0 && !std::getenv("LP_NUM_THREADS"))
-        setenv("LP_NUM_THREADS", std::to_string(opt.threads).c_str(), 1);
+        setenv("LP_NUM_THREADS", std::to_string(opt.threads == 1 ? 0 : opt.threads).c_str(), 1);
     ShadingOptions shading;
     shading.alpha0 = job.shot.sim.nacc ? float(job.shot.sim.nacc->alpha0) : 0.0f;
     return std::make_unique<Renderer>(job.params, shading);
