@@ -9,16 +9,12 @@
 
 #include "sim/core/error.h"
 #include "sim/core/parallel.h"
+#include "sim/core/stats.h"
 
 namespace mudcrack {
 namespace {
 
 [[noreturn]] void fail(const std::string& msg) { throw InputError("tet mesh: " + msg); }
-
-template <class T>
-size_t bytes_of(const std::vector<T>& v) {
-    return v.capacity() * sizeof(T);
-}
 
 /// Exclusive prefix sum of counts into offsets (size n + 1).
 std::vector<int64_t> offsets_from_counts(const std::vector<int32_t>& count) {
@@ -311,9 +307,11 @@ Vec2 triplanar_uv(const Vec3& x, int axis, Real uv_per_meter) {
 }
 
 size_t CoreTopology::memory_bytes() const {
-    return sizeof(*this) + bytes_of(X) + bytes_of(tets) + bytes_of(edges) + bytes_of(rest_length) +
-           bytes_of(tet_edges) + bytes_of(tet_faces) + bytes_of(edge_tet_begin) + bytes_of(edge_tet) +
-           bytes_of(skin_faces) + bytes_of(skin_uv_vertices);
+    const int64_t vectors = capacity_bytes(X) + capacity_bytes(tets) + capacity_bytes(edges) +
+                            capacity_bytes(rest_length) + capacity_bytes(tet_edges) + capacity_bytes(tet_faces) +
+                            capacity_bytes(edge_tet_begin) + capacity_bytes(edge_tet) + capacity_bytes(skin_faces) +
+                            capacity_bytes(skin_uv_vertices);
+    return sizeof(*this) + static_cast<size_t>(vectors);
 }
 
 CoreTopology build_core_topology(const TetMesh& mesh) {

@@ -1,7 +1,8 @@
 #pragma once
-/// Wall-clock timing and peak memory, for stage summaries and manifests.
+/// Wall-clock timing and memory, for stage summaries, manifests and bytes-per-particle reports.
 #include <chrono>
 #include <cstdint>
+#include <vector>
 
 namespace mudcrack {
 
@@ -20,5 +21,11 @@ private:
 
 /// Peak resident set size of this process so far [bytes].
 int64_t peak_rss_bytes();
+
+/// Bytes a vector holds: its capacity, not its size [bytes].
+template <class T>
+int64_t capacity_bytes(const std::vector<T>& v) {
+    return static_cast<int64_t>(v.capacity() * sizeof(T));
+}
 
 }  // namespace mudcrack

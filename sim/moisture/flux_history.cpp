@@ -4,17 +4,13 @@
 
 #include "sim/core/check.h"
 #include "sim/core/parallel.h"
+#include "sim/core/stats.h"
 
 namespace mudcrack {
 
 using mpm::kBlockNodes;
 
 namespace {
-
-template <class T>
-int64_t capacity_bytes(const std::vector<T>& v) {
-    return static_cast<int64_t>(v.capacity() * sizeof(T));
-}
 
 // remap[b] = the slot of to_keys[b] in from_keys, or -1 (both ascending)
 void map_blocks(const std::vector<uint32_t>& from_keys, const std::vector<uint32_t>& to_keys,

@@ -7,6 +7,7 @@
 #include <Eigen/Core>
 
 #include "sim/core/parallel.h"
+#include "sim/core/stats.h"
 #include "sim/mpm/bspline.h"
 
 namespace mudcrack {
@@ -18,11 +19,6 @@ using mpm::kWindowWidth;
 using mpm::SparseGrid;
 
 namespace {
-
-template <class T>
-int64_t capacity_bytes(const std::vector<T>& v) {
-    return static_cast<int64_t>(v.capacity() * sizeof(T));
-}
 
 int64_t node_count(const SparseGrid& grid) { return static_cast<int64_t>(grid.n_blocks()) * kBlockNodes; }
 

@@ -8,6 +8,7 @@
 #include "sim/core/check.h"
 #include "sim/core/error.h"
 #include "sim/core/parallel.h"
+#include "sim/core/stats.h"
 #include "sim/moisture/pore.h"
 #include "sim/mpm/transfer.h"
 #include "sim/mpm/workspace.h"
@@ -23,11 +24,6 @@ constexpr int64_t kResortInterval = 16;
 constexpr int kAutoDomainCellsBelow = 3;
 // auto domain: fraction of the particles' extent added above and around them
 constexpr Real kAutoDomainMargin = 0.5;
-
-template <class T>
-int64_t capacity_bytes(const std::vector<T>& v) {
-    return static_cast<int64_t>(v.capacity() * sizeof(T));
-}
 
 // reorders an array of Real-component elements (Real, Vec3, Mat3) so slot i takes slot order[i],
 // one component at a time through an n-Real buffer

@@ -5,6 +5,7 @@
 #include <sstream>
 
 #include "sim/core/error.h"
+#include "sim/core/stats.h"
 
 namespace mudcrack::mpm {
 
@@ -60,14 +61,12 @@ int32_t SparseGrid::find_block(uint32_t key) const {
 }
 
 int64_t SparseGrid::memory_bytes() const {
-    auto bytes = [](const auto& v) {
-        return static_cast<int64_t>(v.capacity() * sizeof(typename std::decay_t<decltype(v)>::value_type));
-    };
-    int64_t total = bytes(particle_key) + bytes(order) + bytes(pblock_key) + bytes(pblock_begin) +
-                    bytes(pblock_neighbors) + bytes(block_keys) + bytes(nodes) +
-                    bytes(sort_key_tmp) + bytes(sort_idx_tmp) + bytes(radix_count) + bytes(neighbor_keys_tmp);
-    for (const auto& c : color_pblocks) total += bytes(c);
-    for (const auto& c : color_prefix) total += bytes(c);
+    int64_t total = capacity_bytes(particle_key) + capacity_bytes(order) + capacity_bytes(pblock_key) +
+                    capacity_bytes(pblock_begin) + capacity_bytes(pblock_neighbors) + capacity_bytes(block_keys) +
+                    capacity_bytes(nodes) + capacity_bytes(sort_key_tmp) + capacity_bytes(sort_idx_tmp) +
+                    capacity_bytes(radix_count) + capacity_bytes(neighbor_keys_tmp);
+    for (const auto& c : color_pblocks) total += capacity_bytes(c);
+    for (const auto& c : color_prefix) total += capacity_bytes(c);
     return total;
 }
 

@@ -4,6 +4,7 @@
 #include <cstdint>
 #include <vector>
 
+#include "sim/core/stats.h"
 #include "sim/moisture/moisture_solver.h"
 #include "sim/mpm/sparse_grid.h"
 
@@ -16,9 +17,8 @@ struct SimWorkspace {
     std::vector<Real> permute_buffer;           // one attribute's values while reordering slots
 
     int64_t memory_bytes() const {
-        int64_t total = grid.memory_bytes() + moisture.memory_bytes() +
-                        static_cast<int64_t>(permute_buffer.capacity() * sizeof(Real));
-        for (const auto& w : windows) total += static_cast<int64_t>(w.capacity() * sizeof(Real));
+        int64_t total = grid.memory_bytes() + moisture.memory_bytes() + capacity_bytes(permute_buffer);
+        for (const auto& w : windows) total += capacity_bytes(w);
         return total;
     }
 };
