@@ -32,6 +32,10 @@ struct NaccParams {
     Real xi = 1;           // hardening factor in p0 = kappa sinh(xi max(-alpha, 0)) [-]
     Real M = 1.87;         // critical-state slope (friction) [-]
     bool hardening = true; // update alpha in the return mapping
+    /// Tensile damage (docs/physics.md, Tensile damage): the softening returns' alpha increments,
+    /// divided by this, add to a particle's damage d in [0, 1], and its cohesion is beta (1 - d).
+    /// 0: no damage (no array, no cost).
+    Real damage_strain = 0;
 };
 
 /// Pore water (Tu et al. 2023 Sections 4.1, 5.2; physics.md 3-4).
@@ -47,6 +51,10 @@ struct MoistureParams {
     int cg_max_iterations = 50;
     bool seal_colliders = true;  // faces against the ground/walls do not evaporate
     bool implicit_robin = false; // evaporation term in the matrix instead of the rhs
+    /// Grid: the paper's r term scattered from the particles whose stencil touches a surface node.
+    /// Surface: the particles of the exposed layer lose water themselves, exactly (an exponential
+    /// decay towards theta0), and the CG carries only diffusion (docs/physics.md, Evaporation).
+    enum class Evaporation { Grid, Surface } evaporation = Evaporation::Grid;
     int interval = 1;            // solve moisture every k MPM steps with dt_m = k dt
     Real max_log_jw_step = 1e-3; // cap on |log(Jw^n/Jw^{n+1})| per step (physics.md 3.2)
 };

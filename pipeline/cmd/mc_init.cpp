@@ -25,7 +25,8 @@ using nlohmann::json;
 namespace mudcrack {
 namespace {
 
-/// The particles as a points cache: P, id (= index) and the rest volume "volume0".
+/// The particles as a points cache: P, id (= index), the rest volume "volume0" and, for a
+/// heterogeneous soil, the p0 multiplier "strength" (an artist may repaint it in Houdini).
 PointCloud init_points(const InitResult& r) {
     PointCloud cloud;
     const size_t n = r.mesh.X.size();
@@ -38,6 +39,11 @@ PointCloud init_points(const InitResult& r) {
         volume0[i] = static_cast<float>(r.volume0[i]);
     }
     cloud.floats.emplace_back("volume0", std::move(volume0));
+    if (!r.strength.empty()) {
+        std::vector<float> strength(n);
+        for (size_t i = 0; i < n; ++i) strength[i] = static_cast<float>(r.strength[i]);
+        cloud.floats.emplace_back("strength", std::move(strength));
+    }
     cloud.meta_string["mudcrack:stage"] = "init";
     return cloud;
 }

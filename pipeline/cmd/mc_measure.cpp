@@ -4,6 +4,7 @@
 // share of columns split horizontally or lifted off the ground (pipeline/measure/shape_measures.h
 // says how each is defined), and the broken edges and fragment sizes of the surfacing.
 // Writes nothing into DIR; --json FILE writes the table as JSON (atomically).
+#include <algorithm>
 #include <cstdio>
 #include <filesystem>
 #include <optional>
@@ -32,6 +33,9 @@ namespace mudcrack {
 namespace {
 
 constexpr const char* kProgram = "mc-measure";
+/// Gaps whose lower particle lies within this many cells of the ground count as lift-off: the
+/// ground's nodes hold the particles whose quadratic stencil reaches them, 1.5 cells deep.
+constexpr Real kGroundBandCells = 1.5;
 
 /// The edges broken at frame n by the break history (broken at or before n).
 std::vector<uint8_t> broken_at(const BreakHistory& history, int n) {
@@ -63,6 +67,20 @@ int run_measure(const StageOptions& options, const std::string& json_file) {
     const std::vector<Real> rest_volume = particle_rest_volumes(mesh);
     const Real spacing = particle_spacing(rest_volume);
     const RestColumns columns = build_rest_columns(mesh.X, spacing);
+    // gaps within 1.5 cells of the ground are lift-off: the grid holds that band (GroundBand)
+    GroundBand ground;
+    ground.cell = shot.sim.h;
+    if (shot.sim.ground) {
+        ground.ground_y = shot.sim.ground->height;
+        ground.band = kGroundBandCells * shot.sim.h;
+    }
+    // the boundary particles (the ones a render shows), for the hardening colormap's halves
+    std::vector<int32_t> surface_particles;
+    for (const auto& tri : mesh.boundary)
+        for (int k = 0; k < 3; ++k) surface_particles.push_back(static_cast<int32_t>(tri[k]));
+    std::sort(surface_particles.begin(), surface_particles.end());
+    surface_particles.erase(std::unique(surface_particles.begin(), surface_particles.end()), surface_particles.end());
+    const Real alpha0 = shot.sim.nacc ? shot.sim.nacc->alpha0 : Real(0);
 
     // fragments only when the surfacing ran: its break history is the one source of "broken"
     std::optional<CoreTopology> topo;
@@ -85,8 +103,9 @@ int run_measure(const StageOptions& options, const std::string& json_file) {
     if (!options.quiet) {
         std::printf("%s: %s, %zu particles in %d columns of %.4g m\n", kProgram, shot.name.c_str(), mesh.X.size(),
                     columns.n_columns(), spacing);
-        std::printf("%6s %8s %11s %9s %9s %10s %8s %10s %9s %13s\n", "frame", "time[s]", "rise50[mm]", "curl[mm]",
-                    "split[%]", "lifted[%]", "broken", "fragments", "polygons", "polygon[m^2]");
+        std::printf("%6s %8s %11s %9s %9s %8s %10s %8s %10s %9s %13s %8s %6s %6s %8s %8s\n", "frame", "time[s]",
+                    "rise50[mm]", "curl[mm]", "split[%]", "splitH", "lifted[%]", "broken", "fragments", "polygons",
+                    "polygon[m^2]", "axis[%]", "T[%]", "Y[%]", "str[%]", "comp[%]");
     }
     json table = json::array();
     for (int n = first; n <= last; ++n) {
@@ -98,7 +117,7 @@ int run_measure(const StageOptions& options, const std::string& json_file) {
                              (init_dir / "tets.vtu").string() + " has " + std::to_string(mesh.X.size()));
         std::vector<Vec3> x(frame.size());
         for (size_t p = 0; p < x.size(); ++p) x[p] = frame.P[p].cast<Real>();
-        const LayerShape shape = measure_layer_shape(columns, mesh.X, x, spacing);
+        const LayerShape shape = measure_layer_shape(columns, mesh.X, x, spacing, ground);
         const double time = cloud.meta_double.count("mudcrack:time") ? cloud.meta_double.at("mudcrack:time") : 0.0;
         json row = {{"frame", n},
                     {"time", time},
@@ -106,10 +125,19 @@ int run_measure(const StageOptions& options, const std::string& json_file) {
                     {"top_rise_p95", shape.top_rise_p95},
                     {"curl", shape.curl},
                     {"split_fraction", shape.split_fraction},
+                    {"split_height_median_cells", shape.split_height_median},
+                    {"split_height_p10_cells", shape.split_height_p10},
                     {"lifted_fraction", shape.lifted_fraction}};
+        std::optional<HardeningHalves> halves;
+        if (!frame.alpha.empty()) {
+            halves = measure_hardening_halves(surface_particles, frame.alpha, alpha0);
+            row["surface_stretched_fraction"] = halves->stretched_fraction;
+            row["surface_compressed_fraction"] = halves->compressed_fraction;
+        }
         int64_t broken = -1;
         FragmentSizes sizes;
         SurfacePolygons polygons;
+        CrackNetwork network;
         if (topo) {
             broken = count_broken_edges(history->first_break, n);
             const std::vector<uint8_t> is_broken = broken_at(*history, n);
@@ -122,15 +150,27 @@ int run_measure(const StageOptions& options, const std::string& json_file) {
             row["surface_polygons"] = polygons.count;
             row["weighted_mean_polygon_area"] = polygons.weighted_mean_area;
             row["largest_polygon_fraction"] = polygons.largest_fraction;
+            network = measure_crack_network(*topo, is_broken, columns, min_particles);
+            row["crack_points"] = network.crack_points;
+            row["axis_aligned_fraction"] = network.axis_aligned_fraction;
+            row["junctions"] = network.junctions;
+            row["t_junction_fraction"] = network.t_fraction;
+            row["y_junction_fraction"] = network.y_fraction;
         }
         if (!options.quiet) {
-            std::printf("%6d %8.4f %11.2f %9.2f %9.2f %10.2f", n, time, 1e3 * shape.top_rise_median, 1e3 * shape.curl,
-                        100 * shape.split_fraction, 100 * shape.lifted_fraction);
+            std::printf("%6d %8.4f %11.2f %9.2f %9.2f %8.2f %10.2f", n, time, 1e3 * shape.top_rise_median,
+                        1e3 * shape.curl, 100 * shape.split_fraction, shape.split_height_median,
+                        100 * shape.lifted_fraction);
             if (topo)
-                std::printf(" %8lld %10d %9d %13.4g\n", static_cast<long long>(broken), sizes.count, polygons.count,
-                            polygons.weighted_mean_area);
+                std::printf(" %8lld %10d %9d %13.4g %8.1f %6.1f %6.1f", static_cast<long long>(broken), sizes.count,
+                            polygons.count, polygons.weighted_mean_area, 100 * network.axis_aligned_fraction,
+                            100 * network.t_fraction, 100 * network.y_fraction);
             else
-                std::printf(" %8s %10s %9s %13s\n", "-", "-", "-", "-");
+                std::printf(" %8s %10s %9s %13s %8s %6s %6s", "-", "-", "-", "-", "-", "-", "-");
+            if (halves)
+                std::printf(" %8.1f %8.1f\n", 100 * halves->stretched_fraction, 100 * halves->compressed_fraction);
+            else
+                std::printf(" %8s %8s\n", "-", "-");
         }
         table.push_back(std::move(row));
     }

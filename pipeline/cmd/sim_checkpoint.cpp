@@ -15,7 +15,7 @@ namespace mudcrack {
 namespace {
 
 // bump when the set or meaning of the saved arrays changes; a reader refuses other versions
-constexpr int64_t kSimCheckpointVersion = 1;
+constexpr int64_t kSimCheckpointVersion = 2;  // 2: strength and damage arrays
 
 // Eigen fixed-size types are plain arrays of their scalar (column-major, no padding), so the
 // state's arrays are copied as raw doubles: a restored state is bitwise the saved one
@@ -87,6 +87,8 @@ void write_sim_checkpoint(const fs::path& path, const SimCheckpoint& checkpoint)
     c.f64["mass"] = s.mass;
     c.f64["theta"] = s.theta;
     c.f64["Jw"] = s.Jw;
+    c.f64["strength"] = s.strength;
+    c.f64["damage"] = s.damage;
     c.f64["domain_min"] = flatten(std::vector<Vec3>{s.domain_min});
     c.f64["domain_max"] = flatten(std::vector<Vec3>{s.domain_max});
     // the run's counters, so a resumed run's manifest covers every frame
@@ -131,6 +133,8 @@ SimCheckpoint read_sim_checkpoint(const fs::path& path) {
     s.mass = unflatten<Real>(c, "mass", n, false);
     s.theta = unflatten<Real>(c, "theta", n, true);
     s.Jw = unflatten<Real>(c, "Jw", n, true);
+    s.strength = unflatten<Real>(c, "strength", n, true);
+    s.damage = unflatten<Real>(c, "damage", n, true);
     s.domain_min = unflatten<Vec3>(c, "domain_min", 1, false)[0];
     s.domain_max = unflatten<Vec3>(c, "domain_max", 1, false)[0];
     SimTotals& t = sc.totals;

@@ -33,6 +33,7 @@ constexpr int kCheckpointsKept = 2;  // the newest two: one may be mid-write whe
 struct InitParticles {
     std::vector<Vec3> X;   // rest positions [m], index = particle id
     std::vector<Real> V0;  // rest volumes [m^3]
+    std::vector<Real> strength;  // p0 multipliers of a heterogeneous soil, else empty
     nlohmann::json manifest;
 };
 
@@ -75,6 +76,15 @@ InitParticles read_init(const fs::path& init_dir, const Shot& shot) {
     for (size_t i = 0; i < cloud.P.size(); ++i) {
         init.X.push_back(cloud.P[i].cast<Real>());
         init.V0.push_back((*volume0)[i]);
+    }
+    // the heterogeneous strength is the shot's (/init/strength_field, in the init slice checked
+    // above); make_initial_state checks its values
+    if (shot.init.strength_field && shot.sim.nacc) {
+        const std::vector<float>* strength = cloud.find_float("strength");
+        if (!strength || strength->size() != cloud.P.size())
+            throw InputError(particles_file.string() + ": no strength attribute with one value per particle, "
+                             "but the shot sets /init/strength_field: re-run mc-init");
+        init.strength.assign(strength->begin(), strength->end());
     }
     return init;
 }
@@ -205,7 +215,7 @@ int run_sim_stage(const Shot& shot, const StageOptions& options, const SimStageO
         done_frame = resumed->frame;
         log::info("resuming from " + checkpoint_path(sim_dir, done_frame).string());
     } else {
-        state = make_initial_state(model, init.X, init.V0);
+        state = make_initial_state(model, init.X, init.V0, init.strength);
     }
     // the old manifest goes first, so make sees an incomplete stage until this run succeeds;
     // stale frames and checkpoints (after the resumed one) and half-written temporaries too

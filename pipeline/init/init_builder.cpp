@@ -105,6 +105,9 @@ InitResult build_init(const InitParams& params, const MesherOptions& mesher) {
             break;
         }
     }
+    // the heterogeneous strength, a function of the rest positions and the seed
+    if (params.strength_field)
+        r.strength = strength_multipliers(make_strength_field(*params.strength_field, params.seed), r.mesh.X);
     const MeshQuality& q = r.quality;
     std::ostringstream msg;
     msg << source_type_name(params.type) << ": " << q.particles << " particles, " << q.tets << " tets, "

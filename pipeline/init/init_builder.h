@@ -37,6 +37,7 @@ struct InitResult {
     Real surface_volume = 0;      // volume enclosed by the input surface (mesh source) [m^3]; 0 otherwise
     Real edge_length = 0;         // target edge length given to Mesh_3 (mesh source) [m]; 0 otherwise
     std::string uv_method;        // "transferred" (from the input's UVs) or "box projection"
+    std::vector<Real> strength;   // p0 multipliers (params.strength_field), else empty
 };
 
 /// Builds the source of `params`: a box lattice, a heightfield lattice, or a checked and

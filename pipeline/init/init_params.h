@@ -1,9 +1,11 @@
 #pragma once
 /// What mc-init builds the particles from, and how finely (issue 2). Paths are absolute
 /// (resolved against the shot file by pipeline/shot).
+#include <optional>
 #include <string>
 
 #include "sim/core/types.h"
+#include "sim/material/strength_field.h"
 
 namespace mudcrack {
 
@@ -47,7 +49,8 @@ struct InitParams {
     BoxSource box;
     HeightfieldSource heightfield;
     Real edge_length = 0;   // target tet edge length for CGAL Mesh_3 [m]; 0 = derived from h
-    unsigned seed = 1;      // jitter and mesher seed
+    unsigned seed = 1;      // jitter, mesher and strength-field seed
+    std::optional<StrengthFieldParams> strength_field;  // p0 multipliers cached per particle
 };
 
 }  // namespace mudcrack

@@ -2,8 +2,11 @@
 
 #include <algorithm>
 #include <cmath>
+#include <map>
 #include <numeric>
 #include <string>
+
+#include <Eigen/Eigenvalues>
 
 #include "sim/core/error.h"
 
@@ -52,32 +55,48 @@ Real quantile(std::vector<Real>& v, Real q) {
 }  // namespace
 
 LayerShape measure_layer_shape(const RestColumns& columns, const std::vector<Vec3>& rest,
-                               const std::vector<Vec3>& x, Real gap) {
+                               const std::vector<Vec3>& x, Real gap, const GroundBand& ground) {
     if (rest.size() != x.size())
         throw InputError("layer shape: " + std::to_string(x.size()) + " current positions for " +
                          std::to_string(rest.size()) + " rest positions");
     LayerShape shape;
     shape.columns = columns.n_columns();
     if (shape.columns == 0) return shape;
-    std::vector<Real> top_rise;
+    std::vector<Real> top_rise, split_height;
     top_rise.reserve(shape.columns);
     int32_t split = 0, lifted = 0;
     for (int32_t c = 0; c < shape.columns; ++c) {
         const int32_t b = columns.begin[c], e = columns.begin[c + 1];
         const int32_t bottom = columns.particle[b], top = columns.particle[e - 1];
         top_rise.push_back(x[top].y() - rest[top].y());
-        if (x[bottom].y() - rest[bottom].y() > gap) ++lifted;
+        bool is_lifted = x[bottom].y() - rest[bottom].y() > gap;
+        Real widest = 0, widest_height = 0;  // the widest gap above the ground band
         for (int32_t k = b + 1; k < e; ++k) {
             const int32_t lo = columns.particle[k - 1], hi = columns.particle[k];
             const Real opening = (x[hi].y() - x[lo].y()) - (rest[hi].y() - rest[lo].y());
-            if (opening > gap) {
-                ++split;
-                break;
+            if (!(opening > gap)) continue;
+            const Real height = x[lo].y() - ground.ground_y;
+            if (height < ground.band) {
+                is_lifted = true;
+            } else if (opening > widest) {
+                widest = opening;
+                widest_height = height;
             }
         }
+        if (widest > 0) {
+            ++split;
+            split_height.push_back(widest_height / ground.cell);
+        }
+        lifted += is_lifted;
     }
     shape.split_fraction = Real(split) / shape.columns;
     shape.lifted_fraction = Real(lifted) / shape.columns;
+    // with no ground the heights are measured from -inf: report none
+    if (std::isfinite(ground.ground_y)) {
+        std::vector<Real> copy = split_height;
+        shape.split_height_median = quantile(split_height, 0.5);
+        shape.split_height_p10 = quantile(copy, 0.1);
+    }
     shape.top_rise_median = quantile(top_rise, 0.5);
     shape.top_rise_p95 = quantile(top_rise, 0.95);
     shape.curl = shape.top_rise_p95 - shape.top_rise_median;
@@ -119,25 +138,31 @@ int32_t find_root(std::vector<int32_t>& parent, int32_t a) {
     return a;
 }
 
-}  // namespace
+// The top layer (the particles within two column widths of their column's top) and its
+// components through unbroken edges: root per particle (-1 off the top) and component sizes.
+struct TopLayer {
+    int32_t top_particles = 0;
+    std::vector<int32_t> root;  // (n_particles): smallest particle of the component, or -1
+    std::vector<int32_t> size;  // (n_particles): component size at its root
+};
 
-SurfacePolygons measure_surface_polygons(const CoreTopology& topo, const std::vector<uint8_t>& is_broken,
-                                         const RestColumns& columns, int min_particles) {
+TopLayer top_layer_components(const CoreTopology& topo, const std::vector<uint8_t>& is_broken,
+                              const RestColumns& columns, const char* what) {
     if (static_cast<int32_t>(is_broken.size()) != topo.n_edges())
-        throw InputError("surface polygons: " + std::to_string(is_broken.size()) + " edge flags for " +
+        throw InputError(std::string(what) + ": " + std::to_string(is_broken.size()) + " edge flags for " +
                          std::to_string(topo.n_edges()) + " edges");
     if (static_cast<int32_t>(columns.particle.size()) != topo.n_particles)
-        throw InputError("surface polygons: columns hold " + std::to_string(columns.particle.size()) +
+        throw InputError(std::string(what) + ": columns hold " + std::to_string(columns.particle.size()) +
                          " particles, the mesh " + std::to_string(topo.n_particles));
+    TopLayer layer;
     std::vector<uint8_t> on_top(topo.n_particles, 0);
-    SurfacePolygons polygons;
     for (int32_t c = 0; c < columns.n_columns(); ++c) {
         const Real top_y = topo.X[columns.particle[columns.begin[c + 1] - 1]].y();
         for (int32_t k = columns.begin[c]; k < columns.begin[c + 1]; ++k) {
             const int32_t p = columns.particle[k];
             if (topo.X[p].y() > top_y - 2 * columns.width) {
                 on_top[p] = 1;
-                ++polygons.top_particles;
+                ++layer.top_particles;
             }
         }
     }
@@ -149,9 +174,36 @@ SurfacePolygons measure_surface_polygons(const CoreTopology& topo, const std::ve
         const int32_t a = find_root(parent, p), b = find_root(parent, q);
         if (a != b) parent[std::max(a, b)] = std::min(a, b);
     }
-    std::vector<int32_t> size(topo.n_particles, 0);
+    layer.root.assign(topo.n_particles, -1);
+    layer.size.assign(topo.n_particles, 0);
     for (int32_t p = 0; p < topo.n_particles; ++p)
-        if (on_top[p]) ++size[find_root(parent, p)];
+        if (on_top[p]) ++layer.size[layer.root[p] = find_root(parent, p)];
+    return layer;
+}
+
+}  // namespace
+
+std::vector<int32_t> top_polygon_labels(const CoreTopology& topo, const std::vector<uint8_t>& is_broken,
+                                        const RestColumns& columns, int min_particles) {
+    const TopLayer layer = top_layer_components(topo, is_broken, columns, "top polygon labels");
+    const int32_t smallest = std::max(min_particles, kMinPolygonParticles);
+    std::vector<int32_t> label_of_root(topo.n_particles, -1), label(topo.n_particles, -1);
+    int32_t count = 0;
+    for (int32_t p = 0; p < topo.n_particles; ++p) {
+        const int32_t r = layer.root[p];
+        if (r < 0 || layer.size[r] < smallest) continue;
+        if (label_of_root[r] < 0) label_of_root[r] = count++;
+        label[p] = label_of_root[r];
+    }
+    return label;
+}
+
+SurfacePolygons measure_surface_polygons(const CoreTopology& topo, const std::vector<uint8_t>& is_broken,
+                                         const RestColumns& columns, int min_particles) {
+    const TopLayer layer = top_layer_components(topo, is_broken, columns, "surface polygons");
+    SurfacePolygons polygons;
+    polygons.top_particles = layer.top_particles;
+    const std::vector<int32_t>& size = layer.size;
     // each top particle stands for an equal share of the footprint (columns x width^2)
     const Real particle_area = polygons.top_particles > 0 ? columns.n_columns() * columns.width * columns.width /
                                                                 polygons.top_particles
@@ -170,6 +222,169 @@ SurfacePolygons measure_surface_polygons(const CoreTopology& topo, const std::ve
         polygons.largest_fraction = largest / sum;
     }
     return polygons;
+}
+
+namespace {
+
+constexpr Real kPi = 3.14159265358979323846;
+
+// crack points hashed on a square grid of `cell` in x-z, for the neighbour queries
+class PointGrid {
+public:
+    PointGrid(const std::vector<Vec2>& points, Real cell) : m_points(points), m_cell(cell) {
+        for (int32_t i = 0; i < static_cast<int32_t>(points.size()); ++i) m_cells[key(points[i])].push_back(i);
+    }
+    // calls fn(j) for every point j within `radius` (<= cell) of `at`
+    template <class Fn>
+    void near(const Vec2& at, Real radius, Fn&& fn) const {
+        const auto [cx, cz] = key(at);
+        for (int64_t dx = -1; dx <= 1; ++dx)
+            for (int64_t dz = -1; dz <= 1; ++dz) {
+                const auto it = m_cells.find({cx + dx, cz + dz});
+                if (it == m_cells.end()) continue;
+                for (int32_t j : it->second)
+                    if ((m_points[j] - at).squaredNorm() <= radius * radius) fn(j);
+            }
+    }
+
+private:
+    std::pair<int64_t, int64_t> key(const Vec2& p) const {
+        return {static_cast<int64_t>(std::floor(p.x() / m_cell)), static_cast<int64_t>(std::floor(p.y() / m_cell))};
+    }
+    const std::vector<Vec2>& m_points;
+    Real m_cell;
+    std::map<std::pair<int64_t, int64_t>, std::vector<int32_t>> m_cells;
+};
+
+// angle of a direction in the x-z plane, folded to [0, 180) degrees (a line has no sign)
+Real line_angle_deg(const Vec2& d) {
+    Real a = std::atan2(d.y(), d.x()) * 180 / kPi;
+    if (a < 0) a += 180;
+    return a >= 180 ? a - 180 : a;
+}
+
+}  // namespace
+
+CrackNetwork measure_crack_network(const CoreTopology& topo, const std::vector<uint8_t>& is_broken,
+                                   const RestColumns& columns, int min_particles) {
+    const std::vector<int32_t> label = top_polygon_labels(topo, is_broken, columns, min_particles);
+    // crack points: rest midpoints (x, z) of broken edges between two polygon particles, with the
+    // polygon pair (equal for a crack that has not yet cut its polygon in two)
+    std::vector<Vec2> point;
+    std::vector<std::pair<int32_t, int32_t>> pair;
+    for (int32_t e = 0; e < topo.n_edges(); ++e) {
+        if (!is_broken[e]) continue;
+        const auto [p, q] = topo.edges[e];
+        const int32_t a = label[p], b = label[q];
+        if (a < 0 || b < 0) continue;
+        const Vec3 m = (topo.X[p] + topo.X[q]) / 2;
+        point.emplace_back(m.x(), m.z());
+        pair.emplace_back(std::min(a, b), std::max(a, b));
+    }
+    CrackNetwork net;
+    net.crack_points = static_cast<int32_t>(point.size());
+    if (point.empty()) return net;
+    const Real w = columns.width;
+    const Real direction_radius = 3 * w, junction_radius = 2 * w, branch_radius = 4 * w;
+    const PointGrid grid(point, branch_radius);
+
+    // local direction: the principal axis of the crack points around each
+    int32_t aligned = 0;
+    for (const Vec2& at : point) {
+        Vec2 mean = Vec2::Zero();
+        int n = 0;
+        grid.near(at, direction_radius, [&](int32_t j) { mean += point[j], ++n; });
+        mean /= n;
+        Eigen::Matrix2d cov = Eigen::Matrix2d::Zero();
+        grid.near(at, direction_radius, [&](int32_t j) {
+            const Vec2 d = point[j] - mean;
+            cov += d * d.transpose();
+        });
+        const Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d> eig(cov);
+        const Real angle = line_angle_deg(eig.eigenvectors().col(1));  // the larger eigenvalue's
+        const Real off_axis = std::min({angle, std::abs(angle - 90), 180 - angle});
+        aligned += off_axis <= 15;
+    }
+    net.axis_aligned_fraction = Real(aligned) / point.size();
+
+    // junction candidates: crack points with three or more polygons among their neighbours'
+    // pairs; clustered greedily in index order (deterministic)
+    std::vector<uint8_t> is_candidate(point.size(), 0);
+    for (size_t i = 0; i < point.size(); ++i) {
+        std::vector<int32_t> polygons;
+        grid.near(point[i], junction_radius, [&](int32_t j) {
+            if (pair[j].first == pair[j].second) return;
+            polygons.push_back(pair[j].first);
+            polygons.push_back(pair[j].second);
+        });
+        std::sort(polygons.begin(), polygons.end());
+        is_candidate[i] = std::unique(polygons.begin(), polygons.end()) - polygons.begin() >= 3;
+    }
+    // a junction: a connected cluster of candidates (neighbours within the junction radius)
+    std::vector<uint8_t> is_taken(point.size(), 0);
+    int32_t t_count = 0, y_count = 0, branched = 0;
+    for (size_t i = 0; i < point.size(); ++i) {
+        if (!is_candidate[i] || is_taken[i]) continue;
+        std::vector<int32_t> cluster = {static_cast<int32_t>(i)};
+        is_taken[i] = 1;
+        for (size_t k = 0; k < cluster.size(); ++k)
+            grid.near(point[cluster[k]], junction_radius, [&](int32_t j) {
+                if (!is_candidate[j] || is_taken[j]) return;
+                is_taken[j] = 1;
+                cluster.push_back(j);
+            });
+        Vec2 center = Vec2::Zero();
+        for (int32_t j : cluster) center += point[j];
+        center /= static_cast<Real>(cluster.size());
+        ++net.junctions;
+        // a branch per polygon pair near the junction: towards the mean of its crack points
+        std::map<std::pair<int32_t, int32_t>, std::pair<Vec2, int>> branches;
+        grid.near(center, branch_radius, [&](int32_t j) {
+            if (pair[j].first == pair[j].second) return;  // inside a polygon: not a branch between two
+            auto& [sum, count] = branches[pair[j]];
+            if (count == 0) sum = Vec2::Zero();
+            sum += point[j] - center, ++count;
+        });
+        std::vector<Real> angles;
+        for (const auto& [key, branch] : branches) {
+            const Vec2 d = branch.first / branch.second;
+            if (d.norm() < w / 2) continue;  // a pair whose points sit on the junction: no direction
+            angles.push_back(std::atan2(d.y(), d.x()) * 180 / kPi);
+        }
+        if (angles.size() < 3) continue;
+        ++branched;
+        std::sort(angles.begin(), angles.end());
+        Real widest = angles.front() + 360 - angles.back();
+        for (size_t k = 1; k < angles.size(); ++k) widest = std::max(widest, angles[k] - angles[k - 1]);
+        if (widest >= 150)
+            ++t_count;
+        else if (angles.size() == 3)
+            ++y_count;
+    }
+    if (branched > 0) {
+        net.t_fraction = Real(t_count) / branched;
+        net.y_fraction = Real(y_count) / branched;
+    }
+    return net;
+}
+
+HardeningHalves measure_hardening_halves(const std::vector<int32_t>& surface, const std::vector<float>& alpha,
+                                         Real alpha0) {
+    HardeningHalves halves;
+    halves.surface_particles = static_cast<int32_t>(surface.size());
+    if (surface.empty()) return halves;
+    int32_t compressed = 0, stretched = 0;
+    const float a0 = static_cast<float>(alpha0);
+    for (int32_t p : surface) {
+        if (p < 0 || static_cast<size_t>(p) >= alpha.size())
+            throw InputError("hardening halves: surface particle " + std::to_string(p) + " of " +
+                             std::to_string(alpha.size()));
+        compressed += alpha[p] < a0;
+        stretched += alpha[p] > a0;
+    }
+    halves.compressed_fraction = Real(compressed) / surface.size();
+    halves.stretched_fraction = Real(stretched) / surface.size();
+    return halves;
 }
 
 }  // namespace mudcrack

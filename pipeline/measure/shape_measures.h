@@ -11,6 +11,7 @@
 /// horizontal crack opens a gap inside a column: that is what tells the two apart, with no need
 /// for crack-face normals (which on a jittered tet mesh point every way).
 #include <cstdint>
+#include <limits>
 #include <vector>
 
 #include "sim/core/types.h"
@@ -42,15 +43,31 @@ struct LayerShape {
     Real curl = 0;                // top_rise_p95 - top_rise_median: how far the highest 5 % of the
                                   // top surface (curled rims) rose above the typical surface [m]
     Real split_fraction = 0;      // fraction of columns with a gap inside (a horizontal crack)
-    Real lifted_fraction = 0;     // fraction of columns whose bottom rose off its rest height
+                                  // above the ground band
+    Real lifted_fraction = 0;     // fraction of columns whose bottom rose off its rest height, or
+                                  // that opened a gap inside the ground band
+    Real split_height_median = 0; // median height above the ground of the split columns' widest
+                                  // gap (its lower particle), in cells of GroundBand::cell [-]
+    Real split_height_p10 = 0;    // its 10th percentile [-]
+};
+
+/// Where a gap is lift-off rather than a peeling crack. A sticky (or frictional) ground holds the
+/// particles whose stencil reaches its nodes, about 1.5 cells deep: a gap right above them is the
+/// slab tearing off what the grid glued, which a render shows as lift-off, not as a crust peeling
+/// off wetter soil.
+struct GroundBand {
+    Real ground_y = -std::numeric_limits<Real>::infinity();  // the ground's height [m]; -inf: none
+    Real band = 0;   // gaps whose lower particle lies within this of the ground are lift-off [m]
+    Real cell = 1;   // grid spacing h: split heights are reported in cells [m]
 };
 
 /// Measures the current positions `x` against the rest positions `rest` (same ids). A column is
 /// split where two particles adjacent in rest order moved apart vertically by more than
-/// `gap` [m] beyond their rest distance, and lifted where its bottom particle rose more than
-/// `gap` [m]. One particle spacing is a natural gap: shrinkage only brings particles closer.
+/// `gap` [m] beyond their rest distance, above the ground band, and lifted where its bottom
+/// particle rose more than `gap` [m] or such a gap opened inside the band. One particle spacing is
+/// a natural gap: shrinkage only brings particles closer.
 LayerShape measure_layer_shape(const RestColumns& columns, const std::vector<Vec3>& rest,
-                               const std::vector<Vec3>& x, Real gap);
+                               const std::vector<Vec3>& x, Real gap, const GroundBand& ground = {});
 
 struct FragmentSizes {
     int32_t count = 0;             // fragments kept by the surfacing
@@ -79,5 +96,46 @@ struct SurfacePolygons {
 /// min_particles particles are crumbs: left out of count and areas.
 SurfacePolygons measure_surface_polygons(const CoreTopology& topo, const std::vector<uint8_t>& is_broken,
                                          const RestColumns& columns, int min_particles);
+
+/// The top layer's polygon of each particle: -1 off the top layer or in a crumb, else a label in
+/// [0, count) (the polygons measure_surface_polygons counts, in order of their smallest particle).
+std::vector<int32_t> top_polygon_labels(const CoreTopology& topo, const std::vector<uint8_t>& is_broken,
+                                        const RestColumns& columns, int min_particles);
+
+/// The look of the crack network on the top surface, seen from above (in rest positions: the
+/// pattern as it is drawn, not as it opened). A crack point is the rest midpoint of a broken edge
+/// between two particles of top-layer polygons (the same polygon's, for a crack that has not cut
+/// it in two yet).
+struct CrackNetwork {
+    int32_t crack_points = 0;
+    /// Share of crack points whose local crack direction lies within 15 degrees of the x or z axis
+    /// (the grid's): the direction is the principal axis of the crack points within three column
+    /// widths. An isotropic network gives 1/3; cracks that draw the grid, near 1.
+    Real axis_aligned_fraction = 0;
+    /// Junctions: places where three or more polygons meet. Each is classified by the angles
+    /// between its crack branches (the directions to the mean crack point of each polygon pair
+    /// within four column widths): T when the widest angle is >= 150 degrees (a crack that ended
+    /// on another), Y when three branches all lie < 150 degrees apart (cracks that split).
+    int32_t junctions = 0;
+    Real t_fraction = 0;   // of the junctions with three or more branches
+    Real y_fraction = 0;   // of the junctions with exactly three branches, and the widest < 150 deg
+};
+
+/// The crack network of the top layer at the frame `is_broken` describes.
+CrackNetwork measure_crack_network(const CoreTopology& topo, const std::vector<uint8_t>& is_broken,
+                                   const RestColumns& columns, int min_particles);
+
+/// The surface particles in each half of the hardening colormap (render/colormap.h: blue below
+/// alpha0, red above): hardened ("compressed", alpha < alpha0) and softened ("stretched",
+/// alpha > alpha0), as fractions of the surface particles.
+struct HardeningHalves {
+    int32_t surface_particles = 0;
+    Real compressed_fraction = 0;
+    Real stretched_fraction = 0;
+};
+
+/// `surface` lists the particles on the boundary (each once), `alpha` is per particle.
+HardeningHalves measure_hardening_halves(const std::vector<int32_t>& surface, const std::vector<float>& alpha,
+                                         Real alpha0);
 
 }  // namespace mudcrack

@@ -184,6 +184,7 @@ void build_plasticity(json& tree, SimModel& model) {
     nacc.xi = number(tree, "/plasticity/xi");
     nacc.M = number(tree, "/plasticity/M");
     nacc.hardening = boolean(tree, "/plasticity/hardening");
+    if (has(tree, "/plasticity/damage_strain")) nacc.damage_strain = number(tree, "/plasticity/damage_strain");
     // the shorthand is replaced by what it means, so equal settings give equal slices
     json& section = tree["plasticity"];
     section.erase("beta");
@@ -205,6 +206,12 @@ void build_moisture(json& tree, SimModel& model, Issues& issues) {
     m.cg_max_iterations = integer(tree, "/moisture/cg_max_iterations");
     m.seal_colliders = boolean(tree, "/moisture/seal_colliders");
     m.implicit_robin = boolean(tree, "/moisture/implicit_robin");
+    m.evaporation = text(tree, "/moisture/evaporation") == "surface" ? MoistureParams::Evaporation::Surface
+                                                                    : MoistureParams::Evaporation::Grid;
+    if (m.implicit_robin && m.evaporation == MoistureParams::Evaporation::Surface)
+        issues.add("/moisture/implicit_robin", issues.value_of(tree, "/moisture/implicit_robin"),
+                   "must be false with /moisture/evaporation = \"surface\" (the surface layer's decay is "
+                   "exact; the implicit Robin term belongs to the grid evaporation)");
     m.interval = integer(tree, "/moisture/interval");
     m.max_log_jw_step = number(tree, "/moisture/max_log_jw_step");
     // particles start fully saturated unless told otherwise (paper Section 7.1)
@@ -283,6 +290,16 @@ InitParams build_init(json& tree, const std::string& shot_path, Issues& issues) 
     init.type = has_type ? source_type(text(tree, "/source/type")) : SourceType::Box;
     init.edge_length = number(tree, "/init/edge_length");
     init.seed = static_cast<unsigned>(tree.at(json::json_pointer("/init/seed")).get<std::int64_t>());
+    if (has(tree, "/init/strength_field")) {
+        StrengthFieldParams field;
+        field.correlation_length = number(tree, "/init/strength_field/correlation_length");
+        field.weibull_modulus = number(tree, "/init/strength_field/weibull_modulus");
+        init.strength_field = field;
+        if (!has(tree, "/plasticity"))
+            issues.add("/init/strength_field", "(set)",
+                       "needs /plasticity: the field multiplies the NACC yield pressure p0, which pure "
+                       "elasticity does not have");
+    }
     if (!has_type) return init;  // already reported; which source settings apply is unknown
     switch (init.type) {
         case SourceType::Mesh: build_mesh(tree, shot_path, init.mesh, issues); break;

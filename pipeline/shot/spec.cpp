@@ -106,7 +106,15 @@ std::vector<KeySpec> build_table() {
     Key("/init", T::Section).def(json::object()).doc("tetrahedral initialization (mc-init)"),
     Key("/init/edge_length", T::Number).def(0.0).ge(0).units("m")
         .doc("target tet edge length for CGAL Mesh_3; 0 = derived from /sim/h by mc-init"),
-    Key("/init/seed", T::Integer).def(1).ge(0).le(4294967295.0).units("").doc("jitter and mesher seed"),
+    Key("/init/seed", T::Integer).def(1).ge(0).le(4294967295.0).units("").doc("jitter, mesher and strength-field seed"),
+    Key("/init/strength_field", T::Section).optional()
+        .doc("heterogeneous soil: a seeded random field of multipliers on the NACC yield pressure p0, "
+             "cached as the particles' \"strength\" (docs/physics.md, Heterogeneous strength); needs "
+             "/plasticity; omit for uniform soil"),
+    Key("/init/strength_field/correlation_length", T::Number).def(0.05).gt(0).units("m")
+        .doc("l of the field's covariance exp(-r^2 / (2 l^2)): the size of weak and strong patches"),
+    Key("/init/strength_field/weibull_modulus", T::Number).def(4.0).ge(0.5).le(100).units("-")
+        .doc("Weibull modulus m of the multipliers (mean 1): smaller is more varied (m = 4: cv 0.28)"),
 
     // --- material: neo-Hookean solid (Tu et al. 2023 Eq. 4-5; Table 1 (rho_s, E, nu))
     Key("/material", T::Section).required().doc("elastic solid (Eq. 4-5)"),
@@ -124,6 +132,10 @@ std::vector<KeySpec> build_table() {
     Key("/plasticity/xi", T::Number).def(1.0).ge(0).units("-").doc("hardening factor in p0 = kappa sinh(xi max(-alpha, 0)) (Table 1: 0.5-1)"),
     Key("/plasticity/M", T::Number).def(1.87).gt(0).units("-").doc("critical-state slope, friction (Table 1: 1.87-2.43)"),
     Key("/plasticity/hardening", T::Bool).def(true).units("").doc("update alpha in the return mapping"),
+    Key("/plasticity/damage_strain", T::Number).optional().gt(0).units("-")
+        .doc("permanent tensile damage: the softening a particle's tension and dry-side returns add to "
+             "alpha, summed, removes its cohesion beta linearly and for good once it reaches this "
+             "(docs/physics.md, Tensile damage); omit for none"),
 
     // --- moisture: pore water (Tu et al. 2023 Sections 4.1, 5.2; physics.md 3-4)
     Key("/moisture", T::Section).optional().doc("pore water, shrinkage and drying (Sections 4.1, 5.2); omit for none"),
@@ -138,7 +150,11 @@ std::vector<KeySpec> build_table() {
     Key("/moisture/cg_tolerance", T::Number).def(1e-6).gt(0).lt(1).units("-").doc("CG relative residual"),
     Key("/moisture/cg_max_iterations", T::Integer).def(50).ge(1).units("").doc("CG iteration cap per solve"),
     Key("/moisture/seal_colliders", T::Bool).def(true).units("").doc("faces against the ground and walls do not evaporate"),
-    Key("/moisture/implicit_robin", T::Bool).def(false).units("").doc("evaporation term in the matrix instead of the rhs"),
+    Key("/moisture/implicit_robin", T::Bool).def(false).units("").doc("evaporation term in the matrix instead of the rhs (evaporation = grid)"),
+    Key("/moisture/evaporation", T::Enum).def("grid").choices({"grid", "surface"}).units("")
+        .doc("grid: the paper's r term, from particles whose stencil touches a surface node (a drying "
+             "front about 2 cells deep); surface: the exposed particle layer loses water itself, so a "
+             "crust can be one particle layer thin when D is small (docs/physics.md, Evaporation)"),
     Key("/moisture/interval", T::Integer).def(1).ge(1).units("steps").doc("solve moisture every k MPM steps with dt_m = k dt"),
     Key("/moisture/max_log_jw_step", T::Number).def(1e-3).gt(0).units("-")
         .doc("cap on |log(Jw^n / Jw^n+1)| per step (physics.md 3.2)"),

@@ -128,13 +128,14 @@ struct NaccPrincipalReturn {
 /// Return mapping on the trial singular values (physics.md 2.2). beta = beta0 (1-s) + beta1 s
 /// comes from the caller; nacc.beta0/beta1 are not read here. With preserve_volume the case-3b
 /// result keeps det Fe_new = |J_trial| exactly, so it satisfies y = 0 exactly (see
-/// volume_preserving_sigma; off by default, as in the reference code).
+/// volume_preserving_sigma; off by default, as in the reference code). `strength` multiplies p0:
+/// the particle's share of a heterogeneous soil (sim/material/strength_field.h), 1 for uniform.
 inline NaccPrincipalReturn nacc_return_principal(const Vec3& sigma, Real alpha, Real beta,
                                                  const NaccParams& nacc, const LameParams& lame,
-                                                 bool preserve_volume = false) {
+                                                 bool preserve_volume = false, Real strength = 1) {
     constexpr Real kMax = std::numeric_limits<Real>::max();
     const Real kappa = lame.kappa, mu = lame.mu, M = nacc.M;
-    const Real p0 = nacc_p0(alpha, nacc.xi, kappa);
+    const Real p0 = strength * nacc_p0(alpha, nacc.xi, kappa);
     const Real J = nacc_safe_J(sigma(0) * sigma(1) * sigma(2));
     const Real p = -kappa / 2 * (J * J - 1);  // -inf for J^2 overflow: the tension tip
     // trial deviatoric Kirchhoff stress s_hat = mu J^(-2/3) dev(b_hat), b_hat = sigma^2
@@ -206,9 +207,9 @@ struct NaccReturn {
 /// Return mapping from a precomputed SVD of Fe_trial. Inside (case 3a) Fe is Fe_trial bitwise.
 inline NaccReturn nacc_return_map(const Svd3& trial, const Mat3& Fe_trial, Real alpha, Real beta,
                                   const NaccParams& nacc, const LameParams& lame,
-                                  bool preserve_volume = false) {
+                                  bool preserve_volume = false, Real strength = 1) {
     const NaccPrincipalReturn r =
-        nacc_return_principal(trial.sigma, alpha, beta, nacc, lame, preserve_volume);
+        nacc_return_principal(trial.sigma, alpha, beta, nacc, lame, preserve_volume, strength);
     NaccReturn out{Fe_trial, r.alpha, trial, r.yield_case};
     if (r.yield_case != kNaccInside) {
         out.svd.sigma = r.sigma;
@@ -218,11 +219,11 @@ inline NaccReturn nacc_return_map(const Svd3& trial, const Mat3& Fe_trial, Real 
 }
 
 /// Return mapping of Fe_trial with hardening state alpha and cohesion beta (the caller computes
-/// beta = beta0 (1 - s) + beta1 s). See nacc_return_principal for preserve_volume.
+/// beta = beta0 (1 - s) + beta1 s). See nacc_return_principal for preserve_volume and strength.
 inline NaccReturn nacc_return_map(const Mat3& Fe_trial, Real alpha, Real beta,
                                   const NaccParams& nacc, const LameParams& lame,
-                                  bool preserve_volume = false) {
-    return nacc_return_map(svd3(Fe_trial), Fe_trial, alpha, beta, nacc, lame, preserve_volume);
+                                  bool preserve_volume = false, Real strength = 1) {
+    return nacc_return_map(svd3(Fe_trial), Fe_trial, alpha, beta, nacc, lame, preserve_volume, strength);
 }
 
 /// Result of nacc_project: a NaccReturn without the SVD.

@@ -136,6 +136,13 @@ constexpr int kWindowStride = kWindowNodes + 8;
 inline Lanes load_lanes(const Real* p) { return Eigen::Map<const Lanes>(p); }
 inline void add_lanes(Real* p, const Lanes& v) { Eigen::Map<Lanes>(p) += v; }
 
+// Surface evaporation: a particle near an air-exposed face evaporates when the grid's volume
+// fraction at it, sum_i w_ip W_i / h^3, is below this. On a flat face it is 0.62-0.66 on the outer
+// particle layer and 0.84-0.87 on the next at 2 particles per cell and axis (over all offsets of
+// the lattice to the grid; 0.64-0.69 and 0.89-0.92 at 0.6 h spacing, the tet init's), so the
+// exposed layer is one particle thick; corners and edges lie lower still.
+constexpr Real kExposedVolumeFraction = 0.75;
+
 // The evaporation pass (physics.md 4.2, 4.4): finds the boundary particles (a surface node in
 // their stencil; the containing-cell variant of physics.md 4.4 misses flat faces: with 2
 // particles per cell the last massive node lies 1.25 h above the top layer, outside its cell)
@@ -145,6 +152,8 @@ void evaporation_pass(const MoistureParams& mp, const SparseGrid& grid, const Mo
                       std::vector<std::vector<Real>>& windows) {
     const mpm::GridGeometry& geo = grid.geo;
     const bool implicit_robin = mp.implicit_robin;
+    const bool surface_layer = mp.evaporation == MoistureParams::Evaporation::Surface;
+    const Real inv_cell_volume = geo.inv_h * geo.inv_h * geo.inv_h;
     mpm::for_each_pblock_colored(grid, [&](int t, int32_t pb) {
         Real* sw = windows[t].data();       // surface flags
         Real* rw = sw + kWindowStride;      // evaporation r
@@ -157,6 +166,8 @@ void evaporation_pass(const MoistureParams& mp, const SparseGrid& grid, const Mo
             return;
         }
         std::fill(rw, rw + 2 * kWindowStride, Real(0));
+        Real* ww = dw + kWindowStride;      // W_i (surface evaporation)
+        if (surface_layer) mpm::gather_window<1, 1, 1>(grid, pb, mg.W.data(), 0, ww);
         // which of the block's 4x4x4 stencil bases have a surface node in their 3x3x3 stencil: a
         // separable 3-wide "any" over the window, along z, then y, then x
         bool along_z[kWindowWidth][kWindowWidth][kBlockWidth], along_yz[kWindowWidth][kBlockWidth][kBlockWidth];
@@ -190,6 +201,19 @@ void evaporation_pass(const MoistureParams& mp, const SparseGrid& grid, const Mo
             const mpm::Stencil st = mpm::make_stencil(xg);
             const mpm::AxisWeights &ax = st.axis[0], &ay = st.axis[1], &az = st.axis[2];
             const int o0 = o[0], o1 = o[1], o2 = o[2];
+            if (surface_layer) {
+                // of the particles near an air-exposed face, those of the exposed layer: where the
+                // volume fraction sum_i w_ip W_i / h^3 (1 inside, ~0.64 on the outer layer of a
+                // flat face at 2 particles per cell, ~0.86 on the next) is below the threshold
+                Real fraction = 0;
+                for (int a = 0; a < 3; ++a)
+                    for (int b = 0; b < 3; ++b) {
+                        const Real* row = ww + mpm::window_index(o0 + a, o1 + b, o2);
+                        fraction += ax.w[a] * ay.w[b] * (az.w[0] * row[0] + az.w[1] * row[1] + az.w[2] * row[2]);
+                    }
+                mg.particle_is_boundary[p] = fraction * inv_cell_volume < kExposedVolumeFraction;
+                continue;
+            }
             const Real lambda_S = mp.lambda * particle_area(pp.V0[p] * pp.J[p]);
             // explicit: r_i = -S lambda (theta_p - theta_0) w_ip; implicit: r_0,i =
             // S lambda theta_0 w_ip, and S lambda w_ip^2 on the diagonal
@@ -204,7 +228,7 @@ void evaporation_pass(const MoistureParams& mp, const SparseGrid& grid, const Mo
                     if (implicit_robin) add_lanes(dw + n, (lambda_S * wab * wab) * (wz * wz));
                 }
         }
-        if (any_boundary) {
+        if (any_boundary && !surface_layer) {
             mpm::flush_window<1, 1>(grid, pb, rw, mg.evaporation.data());
             if (implicit_robin) mpm::flush_window<1, 1>(grid, pb, dw, mg.diag.data());
         }
@@ -399,7 +423,8 @@ MoistureSolveStats solve_moisture(const MoistureParams& mp, const MoistureSeal& 
     // the history predicts (most of the diffusion's share); x holds x0 - theta^n
     if (mp.lambda > 0) evaporation_pass(mp, grid, pp, mg, windows);
     else std::fill(mg.particle_is_boundary.begin(), mg.particle_is_boundary.end(), uint8_t(0));
-    const bool explicit_evaporation = !mp.implicit_robin && mp.lambda > 0;
+    const bool explicit_evaporation =
+        !mp.implicit_robin && mp.lambda > 0 && mp.evaporation == MoistureParams::Evaporation::Grid;
     const bool predicted = mg.history.count > 0;
     if (predicted) predict_moisture_flux(mg.history, grid, dt, mg.x.data());
     // from here on diag holds the inverse Jacobi diagonal (0 off the material)

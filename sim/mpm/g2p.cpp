@@ -2,6 +2,7 @@
 #include <algorithm>
 #include <cmath>
 
+#include "sim/material/damage.h"
 #include "sim/material/nacc.h"
 #include "sim/material/neo_hookean.h"
 #include "sim/moisture/pore.h"
@@ -22,13 +23,13 @@ constexpr Real kInsideMargin = 1e-9;
 // the rotation-invariant ||dev(Fe Fe^T)||. True only when the state is inside with a relative
 // margin, so the return map (which would return Fe unchanged) can be skipped; near the surface
 // and at the tips the full kernel decides.
-inline bool clearly_inside_yield_surface(const Mat3& Fe, Real alpha, Real beta, const NaccParams& nacc,
-                                         const LameParams& lame) {
+inline bool clearly_inside_yield_surface(const Mat3& Fe, Real alpha, Real beta, Real strength,
+                                         const NaccParams& nacc, const LameParams& lame) {
     const Real J = Fe.determinant();
     if (!(J > 0)) return false;
     // p0 from below (its ulps of rounding are far inside kInsideMargin): a smaller ellipse,
     // so "clearly inside" stays on the safe side
-    const Real p0 = nacc_p0_lower_bound(alpha, nacc.xi, lame.kappa);
+    const Real p0 = strength * nacc_p0_lower_bound(alpha, nacc.xi, lame.kappa);
     const Real p = -lame.kappa / 2 * (J * J - 1);
     if (!(p < p0 && p > -beta * p0)) return false;
     const Mat3 b = Fe * Fe.transpose();
@@ -43,8 +44,9 @@ inline bool clearly_inside_yield_surface(const Mat3& Fe, Real alpha, Real beta, 
 }
 
 template <bool kTheta, bool kPore, bool kNacc>
-G2PResult g2p_impl(const SimModel& model, SimState& state, const SparseGrid& grid, const Real* dtheta, Real dt,
-                   std::vector<std::vector<Real>>& windows) {
+G2PResult g2p_impl(const SimModel& model, SimState& state, const SparseGrid& grid, const MoistureUpdate& moisture,
+                   Real dt, std::vector<std::vector<Real>>& windows) {
+    const Real* dtheta = moisture.dtheta;
     const GridGeometry& geo = grid.geo;
     const Real h = geo.h;
     const Real c_scale = kInertiaInvScale * geo.inv_h * geo.inv_h;
@@ -54,6 +56,12 @@ G2PResult g2p_impl(const SimModel& model, SimState& state, const SparseGrid& gri
     const Real rho_s = model.elastic.density;
     // without pores the soil counts as saturated: beta = beta1 (physics.md 2.3)
     const Real beta_saturated = nacc.beta1;
+    const bool has_strength = kNacc && !state.strength.empty();
+    const bool has_damage = kNacc && !state.damage.empty();
+    // surface evaporation: theta - theta0 decays as exp(-lambda S_p dt_m / V_p) on the exposed
+    // layer, with S_p = c V_p^(2/3) (particle_area), so the rate is lambda c V_p^(-1/3)
+    const uint8_t* evaporating = kTheta ? moisture.evaporating : nullptr;
+    const Real evaporation_rate_dt = evaporating ? moist.lambda * moisture.dt * particle_area(1) : Real(0);
     // particles stay inside the box with a full stencil on the grid
     const Vec3 lo = geo.origin + Vec3::Constant(h);
     const Vec3 hi = geo.origin + (geo.cells.cast<Real>() - Vec3::Ones()) * h;
@@ -107,14 +115,22 @@ G2PResult g2p_impl(const SimModel& model, SimState& state, const SparseGrid& gri
             Mat3 dF = dt * Cp;
             dF.diagonal().array() += 1;
             Mat3 Fe_trial = dF * state.Fe[p];
-            state.J[p] *= dF.determinant();
+            const Real J_start = state.J[p];  // the volume the moisture solve saw
+            state.J[p] = J_start * dF.determinant();
 
             // pore update (Eq. 6, 10, 11, 12): theta, Jw, Fe compensation, mass, cohesion
             Real beta = beta_saturated;
             Real alpha = kNacc ? state.alpha[p] : Real(0);
             if constexpr (kPore) {
                 Real theta = state.theta[p];
-                if constexpr (kTheta) theta = std::clamp(theta + dth, Real(0), moist.eta);
+                if constexpr (kTheta) {
+                    theta = std::clamp(theta + dth, Real(0), moist.eta);
+                    if (evaporating && evaporating[p]) {
+                        const Real V = state.V0[p] * J_start;
+                        theta = moist.theta0 + (theta - moist.theta0) *
+                                                   std::exp(-evaporation_rate_dt * std::exp(-std::log(V) / 3));
+                    }
+                }
                 state.theta[p] = theta;
                 const Real s = saturation_of(theta, moist.eta);
                 const PoreStep ps = pore_step(state.Jw[p], s, moist.eta, moist.max_log_jw_step);
@@ -127,13 +143,18 @@ G2PResult g2p_impl(const SimModel& model, SimState& state, const SparseGrid& gri
                 state.mass[p] = moist_mass(state.V0[p], rho_s, s, moist);
             }
 
-            // plasticity: NACC return mapping, else pure elasticity
+            // plasticity: NACC return mapping with the particle's strength and damage, else pure
+            // elasticity
             if constexpr (kNacc) {
-                if (clearly_inside_yield_surface(Fe_trial, alpha, beta, nacc, lame)) {
+                const Real strength = has_strength ? state.strength[p] : Real(1);
+                if (has_damage) beta = damaged_cohesion(beta, state.damage[p]);
+                if (clearly_inside_yield_surface(Fe_trial, alpha, beta, strength, nacc, lame)) {
                     state.Fe[p] = Fe_trial;  // what the return map returns inside (case 3a)
                     state.alpha[p] = alpha;
                 } else {
-                    const NaccReturn r = nacc_return_map(Fe_trial, alpha, beta, nacc, lame);
+                    const NaccReturn r = nacc_return_map(Fe_trial, alpha, beta, nacc, lame, false, strength);
+                    if (has_damage)
+                        state.damage[p] = damage_after_return(state.damage[p], alpha, r.alpha, nacc.damage_strain);
                     state.Fe[p] = r.Fe;
                     state.alpha[p] = r.alpha;
                 }
@@ -168,19 +189,20 @@ G2PResult g2p_impl(const SimModel& model, SimState& state, const SparseGrid& gri
 }
 
 template <bool kTheta, bool kPore>
-G2PResult dispatch_nacc(const SimModel& model, SimState& state, const SparseGrid& grid, const Real* dtheta,
-                        Real dt, std::vector<std::vector<Real>>& windows) {
-    if (model.nacc) return g2p_impl<kTheta, kPore, true>(model, state, grid, dtheta, dt, windows);
-    return g2p_impl<kTheta, kPore, false>(model, state, grid, dtheta, dt, windows);
+G2PResult dispatch_nacc(const SimModel& model, SimState& state, const SparseGrid& grid,
+                        const MoistureUpdate& moisture, Real dt, std::vector<std::vector<Real>>& windows) {
+    if (model.nacc) return g2p_impl<kTheta, kPore, true>(model, state, grid, moisture, dt, windows);
+    return g2p_impl<kTheta, kPore, false>(model, state, grid, moisture, dt, windows);
 }
 
 }  // namespace
 
-G2PResult grid_to_particle(const SimModel& model, SimState& state, const SparseGrid& grid, const Real* dtheta,
-                           bool pore_update, Real dt, std::vector<std::vector<Real>>& windows) {
-    if (dtheta) return dispatch_nacc<true, true>(model, state, grid, dtheta, dt, windows);
-    if (pore_update) return dispatch_nacc<false, true>(model, state, grid, nullptr, dt, windows);
-    return dispatch_nacc<false, false>(model, state, grid, nullptr, dt, windows);
+G2PResult grid_to_particle(const SimModel& model, SimState& state, const SparseGrid& grid,
+                           const MoistureUpdate& moisture, bool pore_update, Real dt,
+                           std::vector<std::vector<Real>>& windows) {
+    if (moisture.dtheta) return dispatch_nacc<true, true>(model, state, grid, moisture, dt, windows);
+    if (pore_update) return dispatch_nacc<false, true>(model, state, grid, MoistureUpdate{}, dt, windows);
+    return dispatch_nacc<false, false>(model, state, grid, MoistureUpdate{}, dt, windows);
 }
 
 }  // namespace mudcrack::mpm

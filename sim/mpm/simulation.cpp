@@ -55,6 +55,8 @@ void permute_state(SimState& s, const std::vector<int32_t>& order, std::vector<R
     permute_components(s.mass, order, buf);
     permute_components(s.theta, order, buf);
     permute_components(s.Jw, order, buf);
+    permute_components(s.strength, order, buf);
+    permute_components(s.damage, order, buf);
 }
 
 bool is_identity(const std::vector<int32_t>& order) {
@@ -122,7 +124,8 @@ std::string find_non_finite(const SimState& s, int64_t substep) {
 
 }  // namespace
 
-SimState make_initial_state(const SimModel& model, const std::vector<Vec3>& X, const std::vector<Real>& V0) {
+SimState make_initial_state(const SimModel& model, const std::vector<Vec3>& X, const std::vector<Real>& V0,
+                            const std::vector<Real>& strength) {
     const size_t n = X.size();
     if (n == 0) throw InputError("initial particles: the particle set is empty: need at least one particle");
     if (V0.size() != n) {
@@ -134,6 +137,21 @@ SimState make_initial_state(const SimModel& model, const std::vector<Vec3>& X, c
         std::ostringstream os;
         os << "grid spacing h = " << model.h << ": must be finite and > 0 [m]";
         throw InputError(os.str());
+    }
+    if (!strength.empty()) {
+        if (!model.nacc) throw InputError("initial particles: a strength field needs plasticity (/plasticity)");
+        if (strength.size() != n) {
+            std::ostringstream os;
+            os << "initial particles: " << strength.size() << " strength values for " << n << " positions: must match";
+            throw InputError(os.str());
+        }
+        for (size_t p = 0; p < n; ++p)
+            if (!(strength[p] > 0) || !std::isfinite(strength[p])) {
+                std::ostringstream os;
+                os << "initial particles: particle " << p << " has strength " << strength[p]
+                   << ": need a finite p0 multiplier > 0";
+                throw InputError(os.str());
+            }
     }
     for (size_t p = 0; p < n; ++p) {
         if (!X[p].allFinite() || !(V0[p] > 0) || !std::isfinite(V0[p])) {
@@ -153,6 +171,8 @@ SimState make_initial_state(const SimModel& model, const std::vector<Vec3>& X, c
     s.Fe.assign(n, Mat3::Identity());
     s.J.assign(n, 1);
     if (model.nacc) s.alpha.assign(n, model.nacc->alpha0);
+    s.strength = strength;
+    if (model.nacc && model.nacc->damage_strain > 0) s.damage.assign(n, 0);
     s.V0 = V0;
     s.mass.resize(n);
     if (model.moisture) {
@@ -274,8 +294,15 @@ StepStats step(const SimModel& model, SimState& state, Real dt) {
     }
 
     // 4-8. G2P, kinematics, pore update, return mapping, advection, finite-ness
-    const mpm::G2PResult g2p = mpm::grid_to_particle(model, state, ws.grid, mg ? mg->x.data() : nullptr,
-                                                     has_pores, dt, ws.windows);
+    mpm::MoistureUpdate moisture_update;
+    if (mg) {
+        moisture_update.dtheta = mg->x.data();
+        moisture_update.dt = interval * dt;
+        if (model.moisture->evaporation == MoistureParams::Evaporation::Surface && model.moisture->lambda > 0)
+            moisture_update.evaporating = mg->particle_is_boundary.data();
+    }
+    const mpm::G2PResult g2p =
+        mpm::grid_to_particle(model, state, ws.grid, moisture_update, has_pores, dt, ws.windows);
     state.time += dt;
     state.step_count = substep;
     if (g2p.bad_slot >= 0) {
@@ -341,7 +368,8 @@ ParticleFrame state_to_frame(const SimModel& model, const SimState& state, const
 int64_t state_memory_bytes(const SimState& s) {
     int64_t total = capacity_bytes(s.id) + capacity_bytes(s.x) + capacity_bytes(s.v) + capacity_bytes(s.C) +
                     capacity_bytes(s.Fe) + capacity_bytes(s.J) + capacity_bytes(s.alpha) + capacity_bytes(s.V0) +
-                    capacity_bytes(s.mass) + capacity_bytes(s.theta) + capacity_bytes(s.Jw);
+                    capacity_bytes(s.mass) + capacity_bytes(s.theta) + capacity_bytes(s.Jw) +
+                    capacity_bytes(s.strength) + capacity_bytes(s.damage);
     if (s.workspace) total += s.workspace->memory_bytes();
     return total;
 }

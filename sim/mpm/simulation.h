@@ -34,6 +34,8 @@ struct SimState {
     std::vector<Real> mass;        // [kg]
     std::vector<Real> theta;       // water content in [0, eta] (moisture only)
     std::vector<Real> Jw;          // pore determinant 1 - eta (1 - s) (moisture only)
+    std::vector<Real> strength;    // p0 multiplier of a heterogeneous soil (empty: uniform)
+    std::vector<Real> damage;      // tensile damage in [0, 1], never decreasing (NACC with damage)
     Vec3 domain_min = Vec3::Zero(); // simulation box, fixed at t = 0 (derived once when the
     Vec3 domain_max = Vec3::Zero(); //   model's domain is auto) [m]; part of the checkpoint
     std::shared_ptr<SimWorkspace> workspace;  // scratch; recreated on demand
@@ -51,9 +53,10 @@ struct StepStats {
 };
 
 /// Initial state: particles at rest positions X with rest volumes V0 (from the tet mesh), moving
-/// at model.initial_velocity, at theta_init when the model has moisture.
+/// at model.initial_velocity, at theta_init when the model has moisture. `strength` (empty, or
+/// one positive p0 multiplier per particle) makes the soil heterogeneous; it needs model.nacc.
 SimState make_initial_state(const SimModel& model, const std::vector<Vec3>& X,
-                            const std::vector<Real>& V0);
+                            const std::vector<Real>& V0, const std::vector<Real>& strength = {});
 
 /// Sets every particle's water content to theta_of_x(x) (clamped to [0, eta]) with the matching
 /// pore determinant Jw and mass: a non-uniform initial moisture field (tests, the report).

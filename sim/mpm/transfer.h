@@ -31,12 +31,20 @@ struct G2PResult {
     int32_t bad_slot = -1;     // a slot whose state is not finite, or -1
 };
 
+/// What the moisture solve of this step hands to G2P (all null when it did not run).
+struct MoistureUpdate {
+    const Real* dtheta = nullptr;          // node field theta^{n+1} - theta^n
+    const uint8_t* evaporating = nullptr;  // per slot: the particle loses water itself (surface evaporation)
+    Real dt = 0;                           // the moisture step dt_m = k dt [s]
+};
+
 /// G2P and the particle update of physics.md 7 steps 4-8: v, C, theta (FLIP increment from
-/// dtheta, if non-null), Fe_trial = (I + dt C) Fe, J *= det(I + dt C), the pore update when
-/// `pore_update`, the NACC return mapping (when the model has plasticity), x += dt v clamped into
-/// the domain box. Checks every particle for a finite state.
-/// @param dtheta node field theta^{n+1} - theta^n, or null when moisture was not solved this step
-G2PResult grid_to_particle(const SimModel& model, SimState& state, const SparseGrid& grid, const Real* dtheta,
-                           bool pore_update, Real dt, std::vector<std::vector<Real>>& windows);
+/// moisture.dtheta, if non-null, then the exact decay of the evaporating particles), Fe_trial =
+/// (I + dt C) Fe, J *= det(I + dt C), the pore update when `pore_update`, the NACC return mapping
+/// with the particle's strength and damage (when the model has plasticity), x += dt v clamped
+/// into the domain box. Checks every particle for a finite state.
+G2PResult grid_to_particle(const SimModel& model, SimState& state, const SparseGrid& grid,
+                           const MoistureUpdate& moisture, bool pore_update, Real dt,
+                           std::vector<std::vector<Real>>& windows);
 
 }  // namespace mudcrack::mpm

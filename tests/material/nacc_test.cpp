@@ -245,6 +245,27 @@ TEST(NaccReturnMap, TensionTip) {
     }
 }
 
+TEST(NaccReturnMap, StrengthScalesTheYieldPressure) {
+    // a heterogeneous soil's multiplier s moves both tips: p0 -> s p0
+    std::mt19937_64 rng(11);
+    const Real alpha = -0.3, beta = 0.8;
+    const NaccParams n = params(1.87, 1, true);
+    const Real p0 = nacc_p0(alpha, n.xi, kLame.kappa);
+    for (Real strength : {0.25, 0.5, 2.0}) {
+        const Mat3 Fe = test::with_singular_values(rng, sigma_with(1.6, 0.05));  // far in tension
+        const NaccReturn r = nacc_return_map(Fe, alpha, beta, n, kLame, false, strength);
+        ASSERT_EQ(r.yield_case, kNaccTensionTip) << strength;
+        EXPECT_NEAR(r.Fe.determinant(), std::sqrt(1 + 2 * beta * strength * p0 / kLame.kappa), tol::kRoundoff)
+            << strength;
+        // and a state inside the stronger ellipse is outside the weaker one
+        const Real J_between = std::sqrt(1 + 2 * beta * 0.75 * strength * p0 / kLame.kappa) * 1.0;
+        const Mat3 F_mid = test::with_singular_values(rng, sigma_with(J_between, 0));
+        EXPECT_EQ(nacc_return_map(F_mid, alpha, beta, n, kLame, false, strength).yield_case, kNaccInside) << strength;
+        EXPECT_EQ(nacc_return_map(F_mid, alpha, beta, n, kLame, false, strength / 2).yield_case, kNaccTensionTip)
+            << strength;
+    }
+}
+
 TEST(NaccReturnMap, WetSideHardensDrySideSoftens) {
     std::mt19937_64 rng(5);
     const Real alpha = -0.3, beta = 0.5;

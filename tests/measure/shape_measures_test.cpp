@@ -136,6 +136,41 @@ TEST(LayerShape, AColumnOffTheGroundIsLiftedNotSplit) {
     EXPECT_EQ(s.split_fraction, 0);
 }
 
+TEST(LayerShape, AGapInTheGroundBandIsLiftOffAGapAboveIsASplitAtItsHeight) {
+    const std::vector<Vec3> rest = lattice();
+    std::vector<Vec3> x = rest;
+    // half the columns open a gap above their bottom particle (inside a 1.5-spacing band over the
+    // ground at y = 0), the other half above their fourth particle (3.5 spacings up)
+    for (int k = 0; k < kN; ++k)
+        for (int i = 0; i < kN; ++i) {
+            const int first_lifted = k < kN / 2 ? 1 : 4;
+            for (int j = first_lifted; j < kLayers; ++j) x[index(i, j, k)].y() += 2 * kSpacing;
+        }
+    GroundBand ground;
+    ground.ground_y = 0;
+    ground.band = 1.5 * kSpacing;
+    ground.cell = 2 * kSpacing;  // heights reported in cells of twice the spacing
+    const LayerShape s = measure_layer_shape(build_rest_columns(rest, kSpacing), rest, x, kSpacing, ground);
+    EXPECT_NEAR(s.lifted_fraction, 0.5, tol::kRoundoff);
+    EXPECT_NEAR(s.split_fraction, 0.5, tol::kRoundoff);
+    // the split's lower particle sits at 3.5 spacings = 1.75 cells
+    EXPECT_NEAR(s.split_height_median, 1.75, tol::kRoundoff);
+    EXPECT_NEAR(s.split_height_p10, 1.75, tol::kRoundoff);
+    // without a ground band every gap is a split
+    const LayerShape no_band = measure_layer_shape(build_rest_columns(rest, kSpacing), rest, x, kSpacing);
+    EXPECT_NEAR(no_band.split_fraction, 1.0, tol::kRoundoff);
+    EXPECT_EQ(no_band.lifted_fraction, 0);
+}
+
+TEST(HardeningHalves, CountsSurfaceParticlesOnEachSideOfAlpha0) {
+    const std::vector<float> alpha = {-0.5f, -0.1f, -0.1f, 0.2f, 0.0f, 3.0f};
+    const HardeningHalves h = measure_hardening_halves({0, 2, 3, 4, 5}, alpha, -0.1);
+    EXPECT_EQ(h.surface_particles, 5);
+    EXPECT_NEAR(h.compressed_fraction, 1.0 / 5, tol::kRoundoff);
+    EXPECT_NEAR(h.stretched_fraction, 3.0 / 5, tol::kRoundoff);
+    EXPECT_THROW(measure_hardening_halves({6}, alpha, 0), InputError);
+}
+
 TEST(LayerShape, RejectsMismatchedSizes) {
     const std::vector<Vec3> rest = lattice();
     std::vector<Vec3> x(rest.begin(), rest.end() - 1);
@@ -208,6 +243,65 @@ TEST_F(SurfacePolygonsTest, ACrackThatStopsBelowTheTopLayerDoesNotCutTheSurface)
 
 TEST_F(SurfacePolygonsTest, RejectsMismatchedSizes) {
     EXPECT_THROW(measure_surface_polygons(m_topo, std::vector<uint8_t>(3, 0), m_columns, 1), InputError);
+}
+
+// The crack network of a 30 x 2 x 30 cell tet lattice cut by vertical planes through chosen
+// lines of the x-z plane (segments from a to b): the answer is known from the lines drawn.
+class CrackNetworkTest : public ::testing::Test {
+protected:
+    static constexpr double kH = 0.1;
+    CrackNetworkTest()
+        : m_mesh(test::box_lattice(30, 2, 30, kH, test::LatticeUv::None, Vec3(0.5 * kH, 0, 0.5 * kH))),
+          m_topo(build_core_topology(m_mesh)),
+          m_columns(build_rest_columns(m_mesh.X, kH)) {}
+
+    /// Breaks the edges that cross the segment a-b (x-z) into `broken`.
+    void cut(Vec2 a, Vec2 b, std::vector<uint8_t>& broken) const {
+        auto side = [](const Vec2& o, const Vec2& d, const Vec2& p) { return d.x() * (p.y() - o.y()) - d.y() * (p.x() - o.x()); };
+        for (int32_t e = 0; e < m_topo.n_edges(); ++e) {
+            const Vec3& p3 = m_topo.X[m_topo.edges[e][0]];
+            const Vec3& q3 = m_topo.X[m_topo.edges[e][1]];
+            const Vec2 p(p3.x(), p3.z()), q(q3.x(), q3.z());
+            if (side(a, b - a, p) * side(a, b - a, q) < 0 && side(p, q - p, a) * side(p, q - p, b) < 0) broken[e] = 1;
+        }
+    }
+    std::vector<uint8_t> none() const { return std::vector<uint8_t>(m_topo.n_edges(), 0); }
+
+    TetMesh m_mesh;
+    CoreTopology m_topo;
+    RestColumns m_columns;
+};
+
+TEST_F(CrackNetworkTest, CracksAlongTheGridAreAxisAlignedOnesAcrossItAreNot) {
+    std::vector<uint8_t> along = none(), across = none();
+    cut(Vec2(1.53, -1), Vec2(1.53, 4), along);                // x = const
+    cut(Vec2(0.2, 0.1), Vec2(2.8, 0.1 + 2.6 * std::tan(0.52)), across);  // 30 degrees, ending inside
+    const CrackNetwork a = measure_crack_network(m_topo, along, m_columns, 1);
+    const CrackNetwork b = measure_crack_network(m_topo, across, m_columns, 1);
+    ASSERT_GT(a.crack_points, 20);
+    ASSERT_GT(b.crack_points, 20);
+    EXPECT_GT(a.axis_aligned_fraction, 0.95);
+    EXPECT_LT(b.axis_aligned_fraction, 0.1);
+    EXPECT_EQ(a.junctions, 0);
+}
+
+TEST_F(CrackNetworkTest, ACrackEndingOnAnotherIsATJunctionThreeFromAPointAreAY) {
+    std::vector<uint8_t> t = none(), y = none();
+    cut(Vec2(1.53, -1), Vec2(1.53, 4), t);      // a through crack
+    cut(Vec2(1.53, 1.47), Vec2(4, 1.47), t);    // one that ends on it
+    const Vec2 c(1.53, 1.47);
+    for (int k = 0; k < 3; ++k) {
+        const double angle = 0.3 + k * 2 * 3.14159265358979 / 3;
+        cut(c, c + 3 * Vec2(std::cos(angle), std::sin(angle)), y);
+    }
+    const CrackNetwork nt = measure_crack_network(m_topo, t, m_columns, 1);
+    const CrackNetwork ny = measure_crack_network(m_topo, y, m_columns, 1);
+    ASSERT_EQ(nt.junctions, 1);
+    EXPECT_EQ(nt.t_fraction, 1);
+    EXPECT_EQ(nt.y_fraction, 0);
+    ASSERT_EQ(ny.junctions, 1);
+    EXPECT_EQ(ny.y_fraction, 1);
+    EXPECT_EQ(ny.t_fraction, 0);
 }
 
 }  // namespace

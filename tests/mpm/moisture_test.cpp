@@ -406,3 +406,69 @@ TEST(Moisture, SolvingEveryKStepsCountsItsIterations) {
 
 }  // namespace
 }  // namespace mudcrack
+
+namespace mudcrack {
+namespace {
+
+// Surface evaporation at D = 0: only the exposed particle layer dries, exactly as
+// theta0 + (theta - theta0) exp(-lambda S_p t / V_p); the layer under it keeps every drop.
+TEST(SurfaceEvaporation, AtZeroDiffusivityOnlyTheExposedLayerDriesExactly) {
+    SimModel model = still_model(0.1);
+    model.ground = GroundParams{};
+    model.moisture->D = 0;
+    model.moisture->lambda = 0.2;
+    model.moisture->theta0 = 0.05;
+    model.moisture->evaporation = MoistureParams::Evaporation::Surface;
+    const Real spacing = 0.05;  // 2 particles per cell and axis
+    const test::Lattice l = make_lattice(Vec3::Zero(), Vec3i(12, 10, 12), spacing);
+    SimState s = make_initial_state(model, l.X, l.V0);
+    const Real dt = 2e-3;
+    const int steps = 50;
+    for (int i = 0; i < steps; ++i) step(model, s, dt);
+    const Real eta = model.moisture->eta, theta0 = model.moisture->theta0;
+    const Real V = spacing * spacing * spacing;  // the still model keeps J = 1 to round-off
+    const Real expected_top = theta0 + (eta - theta0) * std::exp(-model.moisture->lambda * particle_area(V) / V * dt * steps);
+    const Real top_y = spacing * 9.5, second_y = spacing * 8.5;
+    int top = 0, second = 0;
+    for (size_t p = 0; p < s.size(); ++p) {
+        const Vec3& x = s.x[p];
+        const bool inner = x.x() > 2 * spacing && x.x() < 9 * spacing && x.z() > 2 * spacing && x.z() < 9 * spacing;
+        if (!inner) continue;  // the side faces are exposed too
+        if (std::abs(x.y() - top_y) < spacing / 4) {
+            EXPECT_NEAR(s.theta[p], expected_top, 1e-9) << "top-layer particle " << s.id[p];
+            ++top;
+        } else if (x.y() < second_y + spacing / 4) {
+            EXPECT_EQ(s.theta[p], eta) << "particle " << s.id[p] << " at y = " << x.y() << " under the exposed layer";
+            ++second;
+        }
+    }
+    EXPECT_GT(top, 20);
+    EXPECT_GT(second, 200);
+    EXPECT_LT(expected_top, eta - 0.05) << "the test must dry the top layer visibly";
+}
+
+// The same with D > 0: the water the top layer loses is replaced from below, so the front moves
+// in; the total water lost equals what the exposed particles' decay removed (no grid r term).
+TEST(SurfaceEvaporation, DiffusionCarriesTheFrontInward) {
+    SimModel model = still_model(0.1);
+    model.ground = GroundParams{};
+    model.moisture->D = 0.01;
+    model.moisture->lambda = 0.2;
+    model.moisture->evaporation = MoistureParams::Evaporation::Surface;
+    const Real spacing = 0.05;
+    const test::Lattice l = make_lattice(Vec3::Zero(), Vec3i(8, 12, 8), spacing);
+    SimState s = make_initial_state(model, l.X, l.V0);
+    for (int i = 0; i < 100; ++i) step(model, s, 2e-3);
+    const Real eta = model.moisture->eta;
+    Real second_layer = 0;
+    int n = 0;
+    for (size_t p = 0; p < s.size(); ++p)
+        if (std::abs(s.x[p].y() - spacing * 10.5) < spacing / 4 && s.x[p].x() > 2 * spacing && s.x[p].x() < 6 * spacing &&
+            s.x[p].z() > 2 * spacing && s.x[p].z() < 6 * spacing)
+            second_layer += s.theta[p], ++n;
+    ASSERT_GT(n, 0);
+    EXPECT_LT(second_layer / n, eta - 1e-3) << "diffusion must draw water from the second layer";
+}
+
+}  // namespace
+}  // namespace mudcrack

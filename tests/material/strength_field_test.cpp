@@ -1,0 +1,118 @@
+// The heterogeneous strength field: its multipliers have the requested mean and spread, its
+// Gaussian field the requested variance and correlation length (measured on samples), a seed
+// gives one field bit for bit and another seed another one; the Weibull map is the quantile.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <vector>
+
+#include "sim/material/strength_field.h"
+
+namespace mudcrack {
+namespace {
+
+// a lattice of n^3 points at `spacing`
+std::vector<Vec3> lattice(int n, Real spacing) {
+    std::vector<Vec3> x;
+    for (int i = 0; i < n; ++i)
+        for (int j = 0; j < n; ++j)
+            for (int k = 0; k < n; ++k) x.emplace_back(i * spacing, j * spacing, k * spacing);
+    return x;
+}
+
+Real mean_of(const std::vector<Real>& v) {
+    Real s = 0;
+    for (Real a : v) s += a;
+    return s / v.size();
+}
+
+Real variance_of(const std::vector<Real>& v) {
+    const Real m = mean_of(v);
+    Real s = 0;
+    for (Real a : v) s += (a - m) * (a - m);
+    return s / v.size();
+}
+
+TEST(StrengthField, GaussianFieldHasUnitVarianceAndTheRequestedCorrelationLength) {
+    // averaged over 8 seeds: one realisation's sample covariance scatters by ~(l / L)^(3/2)
+    const Real l = 0.1;
+    StrengthFieldParams params;
+    params.correlation_length = l;
+    const std::vector<Vec3> x = lattice(24, l / 2);  // 12 correlation lengths a side
+    Real variance = 0, corr_l = 0, corr_2l = 0;
+    const int seeds = 8;
+    for (int seed = 1; seed <= seeds; ++seed) {
+        const StrengthField f = make_strength_field(params, static_cast<uint64_t>(seed));
+        std::vector<Real> g(x.size());
+        for (size_t i = 0; i < x.size(); ++i) g[i] = strength_field_gaussian(f, x[i]);
+        const Real m = mean_of(g), v = variance_of(g);
+        variance += v / seeds;
+        // correlation at lags l and 2l along each axis: target exp(-1/2) and exp(-2)
+        auto correlation = [&](int lag) {
+            Real c = 0;
+            int n = 0;
+            auto at = [](int i, int j, int k) { return (i * 24 + j) * 24 + k; };
+            for (int i = 0; i < 24; ++i)
+                for (int j = 0; j < 24; ++j)
+                    for (int k = 0; k < 24; ++k) {
+                        const Real ga = g[at(i, j, k)] - m;
+                        if (i + lag < 24) c += ga * (g[at(i + lag, j, k)] - m), ++n;
+                        if (j + lag < 24) c += ga * (g[at(i, j + lag, k)] - m), ++n;
+                        if (k + lag < 24) c += ga * (g[at(i, j, k + lag)] - m), ++n;
+                    }
+            return c / n / v;
+        };
+        corr_l += correlation(2) / seeds;
+        corr_2l += correlation(4) / seeds;
+    }
+    EXPECT_NEAR(variance, 1.0, 0.1);
+    EXPECT_NEAR(corr_l, std::exp(-0.5), 0.08) << "correlation at one correlation length";
+    EXPECT_NEAR(corr_2l, std::exp(-2.0), 0.08) << "correlation at two correlation lengths";
+    // the correlation length a fit of exp(-r^2 / (2 l^2)) to the lag-l value gives
+    EXPECT_NEAR(l / std::sqrt(-2 * std::log(corr_l)), l, 0.15 * l);
+}
+
+TEST(StrengthField, MultipliersHaveMeanOneAndTheWeibullSpread) {
+    for (Real modulus : {2.0, 4.0, 8.0}) {
+        StrengthFieldParams params;
+        params.correlation_length = 0.02;
+        params.weibull_modulus = modulus;
+        // many correlation lengths, so the sample is close to the distribution
+        const std::vector<Real> m = strength_multipliers(make_strength_field(params, 7), lattice(40, 0.02));
+        EXPECT_NEAR(mean_of(m), 1.0, 0.05) << "modulus " << modulus;
+        EXPECT_NEAR(std::sqrt(variance_of(m)), weibull_cv(modulus), 0.2 * weibull_cv(modulus)) << "modulus " << modulus;
+        for (Real v : m) ASSERT_GT(v, 0);
+    }
+    EXPECT_NEAR(weibull_cv(4), 0.2805, 1e-3);  // the tabulated value
+}
+
+TEST(StrengthField, WeibullQuantileOfTheNormalCdf) {
+    // g = 0 is the median: scale (log 2)^(1/m)
+    EXPECT_NEAR(weibull_of_gaussian(0, 4, 1), std::pow(std::log(2.0), 0.25), 1e-14);
+    // monotone, and the upper tail keeps its digits
+    Real last = 0;
+    for (Real g = -6; g <= 8; g += 0.5) {
+        const Real v = weibull_of_gaussian(g, 3, 1);
+        EXPECT_GT(v, last) << g;
+        EXPECT_TRUE(std::isfinite(v)) << g;
+        last = v;
+    }
+}
+
+TEST(StrengthField, SameSeedSameBitsOtherSeedOtherField) {
+    StrengthFieldParams params;
+    const std::vector<Vec3> x = lattice(10, 0.03);
+    const std::vector<Real> a = strength_multipliers(make_strength_field(params, 3), x);
+    const std::vector<Real> b = strength_multipliers(make_strength_field(params, 3), x);
+    const std::vector<Real> c = strength_multipliers(make_strength_field(params, 4), x);
+    ASSERT_EQ(a.size(), b.size());
+    int same_as_other = 0;
+    for (size_t i = 0; i < a.size(); ++i) {
+        EXPECT_EQ(a[i], b[i]);
+        same_as_other += a[i] == c[i];
+    }
+    EXPECT_EQ(same_as_other, 0);
+}
+
+}  // namespace
+}  // namespace mudcrack
