@@ -152,6 +152,7 @@ int run_measure(const StageOptions& options, const std::string& json_file) {
             row["largest_polygon_fraction"] = polygons.largest_fraction;
             network = measure_crack_network(*topo, is_broken, columns, min_particles);
             row["crack_points"] = network.crack_points;
+            row["oriented_crack_points"] = network.oriented_points;
             row["axis_aligned_fraction"] = network.axis_aligned_fraction;
             row["junctions"] = network.junctions;
             row["t_junction_fraction"] = network.t_fraction;

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <map>
+#include <set>
 #include <numeric>
 #include <string>
 
@@ -227,6 +228,11 @@ SurfacePolygons measure_surface_polygons(const CoreTopology& topo, const std::ve
 namespace {
 
 constexpr Real kPi = 3.14159265358979323846;
+// crack points line up where their neighbourhood's covariance has one eigenvalue this many times
+// the other (a straight row of points: infinitely many; a filled disc: 1)
+constexpr Real kLineAnisotropy = 4;
+// crack points within this many column widths of the footprint's edge are the rim's
+constexpr int64_t kRimColumns = 6;
 
 // crack points hashed on a square grid of `cell` in x-z, for the neighbour queries
 class PointGrid {
@@ -285,12 +291,31 @@ CrackNetwork measure_crack_network(const CoreTopology& topo, const std::vector<u
     net.crack_points = static_cast<int32_t>(point.size());
     if (point.empty()) return net;
     const Real w = columns.width;
-    const Real direction_radius = 3 * w, junction_radius = 2 * w, branch_radius = 4 * w;
+    const Real direction_radius = 4 * w, junction_radius = 2 * w, branch_radius = 4 * w;
     const PointGrid grid(point, branch_radius);
 
-    // local direction: the principal axis of the crack points around each
-    int32_t aligned = 0;
+    // the footprint's column cells (rest x-z bins of one width), to leave out the rim: cracks
+    // along the slab's own edges follow its outline, not the grid, and a box's outline runs
+    // along the grid axes
+    std::set<std::pair<int64_t, int64_t>> footprint;
+    for (int32_t c = 0; c < columns.n_columns(); ++c) {
+        const Vec3& r = topo.X[columns.particle[columns.begin[c]]];
+        footprint.insert({static_cast<int64_t>(std::floor(r.x() / w)), static_cast<int64_t>(std::floor(r.z() / w))});
+    }
+    auto is_inland = [&](const Vec2& at) {
+        const int64_t cx = static_cast<int64_t>(std::floor(at.x() / w)), cz = static_cast<int64_t>(std::floor(at.y() / w));
+        for (int64_t dx = -kRimColumns; dx <= kRimColumns; ++dx)
+            for (int64_t dz = -kRimColumns; dz <= kRimColumns; ++dz)
+                if (!footprint.count({cx + dx, cz + dz})) return false;
+        return true;
+    };
+
+    // local direction: the principal axis of the crack points around each, where they line up
+    // (an isotropic cloud, the rubble of a wide crack band or a junction, has no direction: an
+    // eigen solver would hand back a coordinate axis for it)
+    int32_t aligned = 0, oriented = 0;
     for (const Vec2& at : point) {
+        if (!is_inland(at)) continue;
         Vec2 mean = Vec2::Zero();
         int n = 0;
         grid.near(at, direction_radius, [&](int32_t j) { mean += point[j], ++n; });
@@ -301,11 +326,14 @@ CrackNetwork measure_crack_network(const CoreTopology& topo, const std::vector<u
             cov += d * d.transpose();
         });
         const Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d> eig(cov);
+        if (!(eig.eigenvalues()(1) >= kLineAnisotropy * eig.eigenvalues()(0))) continue;
+        ++oriented;
         const Real angle = line_angle_deg(eig.eigenvectors().col(1));  // the larger eigenvalue's
         const Real off_axis = std::min({angle, std::abs(angle - 90), 180 - angle});
         aligned += off_axis <= 15;
     }
-    net.axis_aligned_fraction = Real(aligned) / point.size();
+    net.oriented_points = oriented;
+    if (oriented > 0) net.axis_aligned_fraction = Real(aligned) / oriented;
 
     // junction candidates: crack points with three or more polygons among their neighbours'
     // pairs; clustered greedily in index order (deterministic)

@@ -108,9 +108,14 @@ std::vector<int32_t> top_polygon_labels(const CoreTopology& topo, const std::vec
 /// it in two yet).
 struct CrackNetwork {
     int32_t crack_points = 0;
-    /// Share of crack points whose local crack direction lies within 15 degrees of the x or z axis
-    /// (the grid's): the direction is the principal axis of the crack points within three column
-    /// widths. An isotropic network gives 1/3; cracks that draw the grid, near 1.
+    /// Crack points whose neighbours (within four column widths) line up: the principal axis of
+    /// their positions has at least 4 times the variance of the other. Wide bands of broken
+    /// edges and junctions have no direction and are left out, and so is the rim (within six
+    /// column widths of the footprint's edge): cracks there follow the slab's outline, which for
+    /// a box runs along the grid axes whatever the cracks inside do.
+    int32_t oriented_points = 0;
+    /// Share of the oriented crack points whose local direction lies within 15 degrees of the x or
+    /// z axis (the grid's). An isotropic network gives 1/3; cracks that draw the grid, near 1.
     Real axis_aligned_fraction = 0;
     /// Junctions: places where three or more polygons meet. Each is classified by the angles
     /// between its crack branches (the directions to the mean crack point of each polygon pair

@@ -2,6 +2,8 @@
 // - Fig. 8: NACC alone (fig8_b, eps = 0) cracks vertically only, while the full model (fig8_c,
 //   eps = 1) curls; without porous shrinkage (fig8_a, eta = 0) nothing compacts or curls.
 // - Fig. 6: the larger the hardening rate eps, the more the soil curls and the larger its pieces.
+// - The demo: a crack network that wanders (not along the grid) and peels, and another seed draws
+//   another network of the same statistics.
 // Fig. 8 runs the shots as shipped (21.6K particles, 2 s). Fig. 6's shots are 233K particles, too
 // big for `make test`, so it runs a 0.5 m patch of each (same physics, same resolution, only the
 // slab's extent differs) and checks the trend on those.
@@ -32,8 +34,22 @@ constexpr int kThreads = 2;
 // What counts as "no horizontal cracks": under 1 % of the columns split, the jitter of a few
 // stray columns at a crack's edge, not a peeling layer (a peel splits tens of percent).
 constexpr double kNoSplit = 0.01;
-// Curl the eye reads as curling on a 1.2 m slab 0.2 m thick: 15 mm, 7.5 % of the thickness.
+// Curl the eye reads as curling on a 1.2 m slab: 15 mm.
 constexpr double kVisibleCurl = 0.015;
+// A peeling crust: at least 10 % of the columns split by a horizontal crack whose median height is
+// at least 2 cells above the ground (the ground's nodes hold the bottom 1.5 cells: a gap there is
+// lift-off, which mc-measure counts apart), with at most 2 % of the footprint lifted off.
+constexpr double kPeel = 0.10;
+constexpr double kPeelAboveGroundCells = 2.0;
+constexpr double kMaxLiftOff = 0.02;
+// The demo: at least 6 crack polygons, at least 5 % of the columns peeled above the glued cells,
+// and a crack network that does not draw the grid: the share of its inland crack length within 15
+// degrees of the grid axes is 33 % for an isotropic network, 95 % on the uniform slab the demo
+// was before the strength field, 42 % now (2 threads). The target is 40 %; this bound guards the
+// gain.
+constexpr int kDemoPolygons = 6;
+constexpr double kMaxAxisAligned = 0.50;
+constexpr double kDemoPeel = 0.05;
 
 std::string slurp(const fs::path& p) {
     std::ifstream is(p);
@@ -89,12 +105,14 @@ protected:
             return json();
         }
         const json last = json::parse(slurp(table)).at("frames").back();
-        std::printf("%-14s frame %d: curl %.2f mm, median rise %.2f mm, split %.2f %%, lifted %.2f %%, %lld broken "
-                    "edges, %d surface polygons, weighted mean polygon %.4f m^2\n",
+        std::printf("%-14s frame %d: curl %.2f mm, median rise %.2f mm, split %.2f %% (%.2f cells up), lifted %.2f %%, "
+                    "%lld broken edges, %d surface polygons, weighted mean polygon %.4f m^2, axis-aligned %.1f %%\n",
                     shot.stem().c_str(), last.at("frame").get<int>(), 1e3 * last.at("curl").get<double>(),
                     1e3 * last.at("top_rise_median").get<double>(), 100 * last.at("split_fraction").get<double>(),
-                    100 * last.at("lifted_fraction").get<double>(), last.at("broken_edges").get<long long>(),
-                    last.at("surface_polygons").get<int>(), last.at("weighted_mean_polygon_area").get<double>());
+                    last.at("split_height_median_cells").get<double>(), 100 * last.at("lifted_fraction").get<double>(),
+                    last.at("broken_edges").get<long long>(), last.at("surface_polygons").get<int>(),
+                    last.at("weighted_mean_polygon_area").get<double>(),
+                    100 * last.at("axis_aligned_fraction").get<double>());
         return last;
     }
 
@@ -107,16 +125,40 @@ TEST_F(FigureClaims, Fig8NaccAloneCracksOnlyVerticallyWhileTheFullModelCurls) {
     const json c = run_and_measure(write_shot("fig8_c", read_shot("fig8_c")));
     ASSERT_FALSE(a.is_null() || b.is_null() || c.is_null());
 
-    // (b) NACC merely: it cracks (vertically), but no column splits horizontally
+    // (b) NACC merely: it cracks vertically into polygons, but no column splits horizontally
     EXPECT_GT(b.at("broken_edges").get<long long>(), 100);
+    EXPECT_GE(b.at("surface_polygons").get<int>(), 3);
     EXPECT_LT(b.at("split_fraction").get<double>(), kNoSplit);
-    // (c) the full model curls, visibly and more than (b)
+    // (c) the full model peels: a horizontal crack under the crust, clear of the cells the
+    // ground holds, with the slab still on its ground, and the rims curl up visibly, more than (b)
+    EXPECT_GE(c.at("split_fraction").get<double>(), kPeel);
+    EXPECT_GE(c.at("split_height_median_cells").get<double>(), kPeelAboveGroundCells);
+    EXPECT_LE(c.at("lifted_fraction").get<double>(), kMaxLiftOff);
     EXPECT_GT(c.at("curl").get<double>(), kVisibleCurl);
     EXPECT_GT(c.at("curl").get<double>(), 1.2 * b.at("curl").get<double>());
     // (a) no porous shrinkage: the slab neither compacts nor curls
     EXPECT_GT(a.at("top_rise_median").get<double>(), -0.002);
     EXPECT_LT(a.at("curl").get<double>(), 0.2 * kVisibleCurl);
     EXPECT_EQ(a.at("broken_edges").get<long long>(), 0);
+}
+
+TEST_F(FigureClaims, DemoCracksIntoAWanderingNetworkThatPeelsAndAnotherSeedDrawsAnother) {
+    // the shot as shipped and with /init/seed 2 (the seed of the lattice jitter and the strength
+    // field): the statistics of the two are printed; only what holds for any seed is asserted
+    const json one = run_and_measure(write_shot("demo", read_shot("demo")));
+    json reseeded = read_shot("demo");
+    reseeded["init"]["seed"] = 2;
+    const json two = run_and_measure(write_shot("demo_seed2", reseeded));
+    ASSERT_FALSE(one.is_null() || two.is_null());
+    // the poster effect: plates between cracks that do not draw the grid, whose rims peel
+    EXPECT_GE(one.at("surface_polygons").get<int>(), kDemoPolygons);
+    EXPECT_LE(one.at("axis_aligned_fraction").get<double>(), kMaxAxisAligned);
+    EXPECT_GE(one.at("split_fraction").get<double>(), kDemoPeel);
+    EXPECT_GE(one.at("split_height_median_cells").get<double>(), kPeelAboveGroundCells);
+    // another seed: another network (other edges break) that also cracks into plates and peels
+    EXPECT_NE(one.at("broken_edges").get<long long>(), two.at("broken_edges").get<long long>());
+    EXPECT_GE(two.at("surface_polygons").get<int>(), kDemoPolygons / 2);
+    EXPECT_GE(two.at("split_fraction").get<double>(), kDemoPeel);
 }
 
 TEST_F(FigureClaims, Fig6LargerHardeningRateCurlsMoreAndBreaksIntoLargerPieces) {

@@ -39,7 +39,7 @@ edit() {
 cp "$shot_src" "$base"
 edit "$base" 's/"name": "demo"/"name": "base"/' "the name"
 edit "$base" 's/"spacing": 0.03,/"spacing": 0.06,/' "the box spacing"
-edit "$base" 's/"end": 36,/"end": 4,/' "the frame range"
+edit "$base" 's/"end": 48,/"end": 4,/' "the frame range"
 edit "$base" 's/"resolution": \[640, 360\]/"resolution": [160, 90]/' "the resolution"
 edit "$base" 's/"views": 24/"views": 4/' "the turntable"
 # the look: the same shot in the hardening colors, reusing base (the key right after the name)
@@ -144,7 +144,7 @@ done
 [ "$(base_files)" = "$before" ] || fail "make shot cut changed base's files"
 
 echo "== a sim key edited in both shots: base's sim and surfacing, then look's render (make -j2)"
-for f in "$base" "$look"; do edit "$f" 's/"D": 0.02,/"D": 0.024,/' "the diffusivity"; done
+for f in "$base" "$look"; do edit "$f" 's/"D": 0.002,/"D": 0.0024,/' "the diffusivity"; done
 base_render=$(stat -c %Y.%y "$out/base/render/manifest.json")
 shot_make look -j2 || { cat "$tmp/make.txt"; fail "make -j2 after the sim edit failed"; }
 got=$(ran)
@@ -157,7 +157,7 @@ for stage in init sim surface; do is_link_to_base $stage || fail "look/$stage is
   "$(jq -r .shot_slice_hash "$out/base/surface/manifest.json")" ] || fail "look's render did not read base's new surfacing"
 
 echo "== a sim key edited in look only: its sim is its own again"
-edit "$look" 's/"D": 0.024,/"D": 0.022,/' "the diffusivity"
+edit "$look" 's/"D": 0.0024,/"D": 0.0022,/' "the diffusivity"
 before=$(base_files)
 shot_make look || { cat "$tmp/make.txt"; fail "make after the look-only sim edit failed"; }
 [ "$(ran)" = "look:mc-sim,look:mc-surface,look:mc-render," ] ||

@@ -47,6 +47,8 @@ void expect_same_state(const SimState& a, const SimState& b) {
     EXPECT_TRUE(same_bits(a.mass, b.mass));
     EXPECT_TRUE(same_bits(a.theta, b.theta));
     EXPECT_TRUE(same_bits(a.Jw, b.Jw));
+    EXPECT_TRUE(same_bits(a.strength, b.strength));
+    EXPECT_TRUE(same_bits(a.damage, b.damage));
     EXPECT_TRUE(same_bits(a.domain_min, b.domain_min));
     EXPECT_TRUE(same_bits(a.domain_max, b.domain_max));
 }
@@ -67,7 +69,11 @@ SimState random_state(size_t n, bool has_moisture, bool has_plasticity, unsigned
         s.J.push_back(1 + u(rng) * 1e-13);
         s.V0.push_back(1e-6 * (1 + u(rng)));
         s.mass.push_back(2e-6 * (1 + u(rng)));
-        if (has_plasticity) s.alpha.push_back(std::log(0.99) + u(rng) * 1e-3);
+        if (has_plasticity) {
+            s.alpha.push_back(std::log(0.99) + u(rng) * 1e-3);
+            s.strength.push_back(1 + 0.5 * u(rng));
+            s.damage.push_back(0.5 + 0.5 * u(rng));
+        }
         if (has_moisture) {
             s.theta.push_back(0.25 + 0.2 * u(rng));
             s.Jw.push_back(0.5 + 0.5 * u(rng));
@@ -165,7 +171,7 @@ TEST(SimCheckpoint, RoundTripIsBitwise) {
 TEST(SimCheckpoint, SavesEveryStateField) {
     // SimState's size changes when a field is added; the checkpoint must then save it too
     // (sim_checkpoint.cpp), or a resumed run silently diverges. Update this number with it.
-    constexpr size_t kVectors = 11, kVec3s = 2;
+    constexpr size_t kVectors = 13, kVec3s = 2;
     constexpr size_t kExpected = sizeof(double) + sizeof(int64_t) + kVectors * sizeof(std::vector<Real>) +
                                  kVec3s * sizeof(Vec3) + sizeof(std::shared_ptr<SimWorkspace>);
     EXPECT_EQ(sizeof(SimState), kExpected) << "SimState gained or lost a field: update sim_checkpoint.cpp";
