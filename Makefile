@@ -21,7 +21,8 @@ APT_PACKAGES := cmake make g++ pkg-config \
 CGAL_DATA  := /usr/share/doc/libcgal-dev/data.tar.gz
 BUNNY      := shots/assets/bunny00.off
 
-.PHONY: help deps test-deps configure build build-stages demo test bench clean assets shot shots clean-shot
+.PHONY: help deps test-deps configure build build-stages demo test bench clean assets shot shots clean-shot \
+        blender-addon blender-still
 
 # What only `make test` needs: Debian's Blender 3.4 (the add-on's playback test runs it headless).
 # `make demo` never installs it.
@@ -35,6 +36,8 @@ help:
 	@echo "make farm-status SHOT=x    queued/running/done/failed tasks of a Slurm run"
 	@echo "make report                accuracy against run time and the stability matrix (out/report)"
 	@echo "make bench                 build and run the benchmarks"
+	@echo "make blender-addon         the Blender add-on as $(BUILD)/mudcrack_blender.zip (tools/blender)"
+	@echo "make blender-still         the demo's last frame rendered by Blender next to mc-render's (docs/blender)"
 	@echo "make clean                 remove the build tree"
 
 # install_missing(packages): one apt-get line for those not installed; nothing when all are
@@ -78,6 +81,16 @@ build-stages: deps configure
 
 test: test-deps build assets
 	cd $(BUILD) && ctest --output-on-failure -j $(JOBS) --timeout 900
+
+# the README's Blender still of a shot's last frame next to mc-render's (tools/blender_still.sh)
+blender-still: test-deps
+	@$(MAKE) --no-print-directory shot SHOT=$(or $(SHOT),demo)
+	tools/blender_still.sh $(OUT) $(or $(SHOT),demo)
+
+blender-addon: configure
+	@cmake --build $(BUILD) --target help 2>/dev/null | grep -q mudcrack_blender_zip || cmake $(BUILD) >/dev/null
+	cmake --build $(BUILD) --target mudcrack_blender_zip
+	@echo "mudcrack: $(BUILD)/mudcrack_blender.zip: Blender > Preferences > Add-ons > Install..."
 
 bench: build assets
 	@for b in $(BUILD)/bin/*_bench; do echo "== $$b"; $$b --benchmark_counters_tabular=true || exit 1; done
