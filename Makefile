@@ -21,7 +21,12 @@ APT_PACKAGES := cmake make g++ pkg-config \
 CGAL_DATA  := /usr/share/doc/libcgal-dev/data.tar.gz
 BUNNY      := shots/assets/bunny00.off
 
-.PHONY: help deps configure build demo test bench clean assets shot shots clean-shot
+.PHONY: help deps test-deps configure build build-stages demo test bench clean assets shot shots clean-shot \
+        blender-addon blender-still
+
+# What only `make test` needs: Debian's Blender 3.4 (the add-on's playback test runs it headless).
+# `make demo` never installs it.
+TEST_PACKAGES := blender
 
 help:
 	@echo "make demo                  install missing packages, build, run the demo shot end to end"
@@ -31,6 +36,8 @@ help:
 	@echo "make farm-status SHOT=x    queued/running/done/failed tasks of a Slurm run"
 	@echo "make report                accuracy against run time and the stability matrix (out/report)"
 	@echo "make bench                 build and run the benchmarks"
+	@echo "make blender-addon         the Blender add-on as $(BUILD)/mudcrack_blender.zip (tools/blender)"
+	@echo "make blender-still         the demo's last frame rendered by Blender next to mc-render's (docs/blender)"
 	@echo "make clean                 remove the build tree"
 
 # install_missing(packages): one apt-get line for those not installed; nothing when all are
@@ -48,6 +55,9 @@ endef
 deps:
 	$(call install_missing,$(APT_PACKAGES))
 
+test-deps: deps
+	$(call install_missing,$(TEST_PACKAGES))
+
 assets: $(BUNNY)
 $(BUNNY): | deps
 	@mkdir -p $(dir $@)
@@ -59,21 +69,38 @@ $(BUILD)/CMakeCache.txt: | deps
 
 configure: $(BUILD)/CMakeCache.txt
 
+# everything: libraries, stage binaries, tests, benchmarks, tools, the Blender add-on's zip
 build: deps configure
 	cmake --build $(BUILD) -j $(JOBS)
 
-test: build assets
+# only what a shot runs (the CMake target mudcrack_stages: mc-shot, mc-init, mc-sim, mc-surface,
+# mc-render): `make demo` and `make shot` build no test, benchmark or tool
+build-stages: deps configure
+	@cmake --build $(BUILD) --target help 2>/dev/null | grep -q mudcrack_stages || cmake $(BUILD) >/dev/null
+	cmake --build $(BUILD) -j $(JOBS) --target mudcrack_stages
+
+test: test-deps build assets
 	cd $(BUILD) && ctest --output-on-failure -j $(JOBS) --timeout 900
+
+# the README's Blender still of a shot's last frame next to mc-render's (tools/blender_still.sh)
+blender-still: test-deps
+	@$(MAKE) --no-print-directory shot SHOT=$(or $(SHOT),demo)
+	tools/blender_still.sh $(OUT) $(or $(SHOT),demo)
+
+blender-addon: configure
+	@cmake --build $(BUILD) --target help 2>/dev/null | grep -q mudcrack_blender_zip || cmake $(BUILD) >/dev/null
+	cmake --build $(BUILD) --target mudcrack_blender_zip
+	@echo "mudcrack: $(BUILD)/mudcrack_blender.zip: Blender > Preferences > Add-ons > Install..."
 
 bench: build assets
 	@for b in $(BUILD)/bin/*_bench; do echo "== $$b"; $$b --benchmark_counters_tabular=true || exit 1; done
 	tools/bench_init.sh $(BUILD)
 
-demo: build assets
+demo: build-stages assets
 	@$(MAKE) --no-print-directory shot SHOT=demo
 
 # one shot end to end: only what changed runs (pipeline/shot.mk)
-shot: build assets
+shot: build-stages assets
 	@test -n "$(SHOT)" || { echo "usage: make shot SHOT=<name of shots/<name>.json>"; exit 2; }
 	@test -f shots/$(SHOT).json || { echo "mudcrack: shots/$(SHOT).json: no such shot"; exit 1; }
 	@$(BUILD)/bin/mc-shot validate shots/$(SHOT).json >/dev/null
@@ -81,7 +108,7 @@ shot: build assets
 	    $(if $(filter slurm,$(FARM)),farm-submit,shot-run shot-summary) SHOT=$(SHOT)
 
 SHOTS ?= $(filter-out bench_%,$(basename $(notdir $(wildcard shots/*.json))))
-shots: build assets
+shots: build-stages assets
 	@for s in $(SHOTS); do $(MAKE) --no-print-directory shot SHOT=$$s || exit 1; done
 
 clean-shot:

@@ -258,8 +258,9 @@ int run_surface_stage(const StageOptions& options, const std::string& mode_flag,
     m["length_consistent"] = params.length_consistent;
     m["cracks"] = params.cracks;
     m["min_fragment_particles"] = params.min_fragment_particles;
+    // fps: the shot's (/frames/fps), so a DCC importer sets its scene's rate from this manifest alone
     m["frames"] = {{"first", frames.begin()->first}, {"last", frames.rbegin()->first}, {"count", frames.size()},
-                   {"this_run", {{"first", first}, {"last", last}}}};
+                   {"fps", shot.sim.time.fps}, {"this_run", {{"first", first}, {"last", last}}}};
     m["particles"] = topo.n_particles;
     m["tets"] = topo.n_tets();
     m["edges"] = topo.n_edges();

@@ -169,7 +169,7 @@ surface_merge() {
           else . end
         | [range($first; $last + 1) | $by_frame[tostring]] as $per_frame
         | $base
-        | .frames = {first: $first, last: $last, count: ($last - $first + 1),
+        | .frames = {first: $first, last: $last, count: ($last - $first + 1), fps: $base.frames.fps,
                      this_run: {first: $first, last: $last}}
         | .per_frame = $per_frame
         | .surfacing_seconds = ([$per_frame[].surfacing_seconds // 0] | add)

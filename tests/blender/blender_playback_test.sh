@@ -1,0 +1,127 @@
+#!/usr/bin/env bash
+# Issue 15: the Blender add-on (tools/blender/mudcrack_blender) in real Blender, headless, on the
+# demo shot's output:
+#
+#   blender_playback_test.sh SOURCE_DIR BIN_DIR ADDON_ZIP [SHOT_FILE]   (SHOT_FILE default: demo.json)
+#
+# 1. mc-init, mc-sim and mc-surface run the shot's frames 1-BLENDER_TEST_FRAMES (default 12: the
+#    demo's cracks open at frame 5) into a temporary folder, one thread each; all of its frames
+#    when those have no frame without cracks and one with cracks before the last;
+# 2. mc-surface writes the same frames as .obj too; blender_test_mesh_info (pipeline/io's assimp
+#    reader, not the add-on's) reads every mesh file, glb and obj, of three frames: the first
+#    without a crack file, the first with one, and the last;
+# 3. cli.py, run as a plain script (blender --python), imports the shot and saves a .blend;
+#    a bad folder makes it exit 1 naming the problem;
+# 4. playback_check.py installs the add-on from ADDON_ZIP into a private Blender config, imports
+#    the shot (glb, then obj) with the operator and checks the evaluated meshes at those frames
+#    against step 2, the empty crack mesh, materials, frame range, fps, y-up, the cache, and the
+#    CLI's .blend.
+# FAILS (does not skip) when blender is not installed: `make test` installs it.
+# BLENDER_TEST_KEEP=1 keeps the temporary folder.
+set -euo pipefail
+
+fail() { echo "FAIL: $*" >&2; exit 1; }
+[ $# -ge 3 ] || { echo "usage: blender_playback_test.sh SOURCE_DIR BIN_DIR ADDON_ZIP [SHOT_FILE]" >&2; exit 2; }
+src=$(cd "$1" && pwd)
+bin=$(cd "$2" && pwd)
+zip=$3
+shot=${4:-$src/shots/demo.json}
+here=$(cd "$(dirname "${BASH_SOURCE[0]}")" && pwd)
+frames=${BLENDER_TEST_FRAMES:-12}
+
+command -v blender >/dev/null ||
+    fail "blender not found: the add-on's test needs Debian's Blender (make test installs it: apt-get install blender)"
+command -v jq >/dev/null || fail "jq not found (apt-get install jq)"
+[ -f "$zip" ] || fail "$zip: not built (cmake --build BUILD --target mudcrack_blender_zip, or make blender-addon)"
+for b in mc-init mc-sim mc-surface blender_test_mesh_info; do
+    [ -x "$bin/$b" ] || fail "$bin/$b: not built"
+done
+
+tmp=$(mktemp -d "${TMPDIR:-/tmp}/mudcrack-blender.XXXXXX")
+cleanup() {
+    local rc=$?
+    if [ "${BLENDER_TEST_KEEP:-0}" = 1 ] || [ $rc -ne 0 ]; then echo "blender_playback_test: kept $tmp"; else rm -rf "$tmp"; fi
+}
+trap cleanup EXIT
+out=$tmp/$(basename "$shot" .json)
+# a private Blender config: the add-on installs there, never in the user's ~/.config/blender
+export BLENDER_USER_SCRIPTS=$tmp/blender-scripts BLENDER_USER_CONFIG=$tmp/blender-config
+mkdir -p "$BLENDER_USER_SCRIPTS" "$BLENDER_USER_CONFIG"
+blender_run() { blender -b --factory-startup --python-exit-code 1 "$@"; }
+
+# run_stages [N]: mc-init, mc-sim and mc-surface over frames 1-N (all of the shot's without N)
+run_stages() {
+    rm -rf "$out"
+    echo "== mc-init, mc-sim, mc-surface: frames ${1:+1-}${1:-all}"
+    local stage flags
+    for stage in init sim surface; do
+        flags=(--shot "$shot" --out "$out" --threads 1 --quiet)
+        [ "$stage" = init ] || [ -z "${1:-}" ] || flags+=(--frames "1-$1")
+        "$bin/mc-$stage" "${flags[@]}" >"$tmp/$stage.txt" 2>&1 || { cat "$tmp/$stage.txt"; fail "mc-$stage failed"; }
+    done
+}
+manifest=$out/surface/manifest.json
+# the frames to look at: the first without a crack file, the first with one, the last
+pick_frames() {
+    no_crack=$(jq -r '[.per_frame[] | select(.crack.file == null) | .frame] | first // empty' "$manifest")
+    with_crack=$(jq -r '[.per_frame[] | select(.crack.file != null) | .frame] | first // empty' "$manifest")
+    last=$(jq -r '.frames.last' "$manifest")
+    [ -n "$no_crack" ] && [ -n "$with_crack" ] && [ "$with_crack" != "$last" ]
+}
+run_stages "$frames"
+if ! pick_frames; then
+    # the shot's cracks open later than frame $frames now: the whole shot then
+    echo "   frames 1-$frames lack a frame without and one with cracks before the last: all frames"
+    run_stages
+    pick_frames || fail "$manifest: the test needs a frame without a crack file and one with cracks before the last" \
+        "(no_crack='$no_crack' with_crack='$with_crack' last=$last)"
+fi
+jq -e '.frames.fps > 0' "$manifest" >/dev/null || fail "$manifest: no /frames/fps"
+echo "   frames: $no_crack (no crack file), $with_crack (first cracks), $last (last)"
+
+# the same frames surfaced as .obj (init/ and sim/ shared), for the add-on's obj reader
+first=$(jq -r .frames.first "$manifest")
+obj_out=$tmp/obj/$(basename "$out")
+mkdir -p "$obj_out"
+ln -s "$out/init" "$obj_out/init"
+ln -s "$out/sim" "$obj_out/sim"
+sed 's/"format": "glb"/"format": "obj"/' "$shot" >"$tmp/obj/shot.json"
+grep -q '"format": "obj"' "$tmp/obj/shot.json" || fail "$shot: no '\"format\": \"glb\"' to turn into obj"
+"$bin/mc-surface" --shot "$tmp/obj/shot.json" --out "$obj_out" --frames "$first-$last" --threads 1 --quiet \
+    >"$tmp/surface_obj.txt" 2>&1 || { cat "$tmp/surface_obj.txt"; fail "mc-surface --format obj failed"; }
+
+# expected counts, read with the pipeline's own reader
+files=()
+for f in "$no_crack" "$with_crack" "$last"; do
+    for dir in "$out" "$obj_out"; do
+        while IFS= read -r name; do files+=("$dir/surface/$name"); done < <(
+            jq -r --argjson f "$f" '.per_frame[] | select(.frame == $f) | .boundary.file, (.crack.file // empty)' \
+                "$dir/surface/manifest.json")
+    done
+done
+"$bin/blender_test_mesh_info" "${files[@]}" >"$tmp/expected.json" || fail "blender_test_mesh_info failed"
+jq -e 'to_entries | all(.value.vertices > 0 and .value.faces > 0 and .value.uvs and .value.colors)' \
+    "$tmp/expected.json" >/dev/null || fail "$tmp/expected.json: a mesh file without faces, UVs or colors"
+
+echo "== cli.py as a plain script"
+cli=$src/tools/blender/mudcrack_blender/cli.py
+blender_run --python "$cli" -- "$out" --frame last --save "$tmp/cli.blend" >"$tmp/cli.txt" 2>&1 ||
+    { cat "$tmp/cli.txt"; fail "cli.py failed on $out"; }
+grep -q "^mudcrack_blender: $(basename "$out"): frames $(jq -r .frames.first "$manifest")-$last at " "$tmp/cli.txt" || { cat "$tmp/cli.txt"; fail "cli.py did not report the shot"; }
+[ -f "$tmp/cli.blend" ] || fail "cli.py --save wrote no $tmp/cli.blend"
+mkdir -p "$tmp/not_a_shot"
+set +e
+blender_run --python "$cli" -- "$tmp/not_a_shot" >"$tmp/cli_bad.txt" 2>&1
+rc=$?
+set -e
+[ $rc -eq 1 ] || { cat "$tmp/cli_bad.txt"; fail "cli.py on a folder without a manifest exited $rc, expected 1"; }
+grep -q "^mudcrack_blender: error: $tmp/not_a_shot: .*manifest.json" "$tmp/cli_bad.txt" ||
+    { cat "$tmp/cli_bad.txt"; fail "cli.py on a folder without a manifest: no clear error"; }
+
+echo "== the add-on, installed from $zip"
+blender_run --python "$here/playback_check.py" -- --zip "$zip" --shot "$out" --expected "$tmp/expected.json" \
+    --frames "$no_crack,$with_crack,$last" --blend "$tmp/cli.blend" --obj-shot "$obj_out" >"$tmp/check.txt" 2>&1 ||
+    { cat "$tmp/check.txt"; fail "playback_check.py failed"; }
+grep "^playback_check:" "$tmp/check.txt"
+grep -q "^playback_check: all checks passed" "$tmp/check.txt" || { cat "$tmp/check.txt"; fail "playback_check.py did not finish"; }
+echo "PASS"
