@@ -135,6 +135,30 @@ TEST_F(InitCli, BadShotExitsOneNamingTheKeyAndLeavesNoOutput) {
     expect_no_output(out);
 }
 
+TEST_F(InitCli, QuietPrintsNothingOnSuccess) {
+    const fs::path shot = write("box.json", kTinyBox), out = m_dir / "out";
+    ASSERT_EQ(run("--quiet --shot " + shot.string() + " --out " + out.string()), 0) << m_stderr;
+    EXPECT_TRUE(fs::exists(out / "init" / "manifest.json"));
+    EXPECT_EQ(m_stdout, "") << "--quiet prints errors and warnings only";
+    EXPECT_EQ(m_stderr, "");
+}
+
+// refused before any work, in the format of every other error: file, key, value, expectation
+TEST_F(InitCli, TooManyParticlesNamesFileKeyAndAWholeCount) {
+    const fs::path shot = write("huge.json", R"({
+      "mudcrack": 1,
+      "source": { "type": "box", "box": { "min": [0, 0, 0], "max": [1, 1, 1], "spacing": 0.001 } },
+      "material": {}
+    })");
+    const fs::path out = m_dir / "out";
+    EXPECT_EQ(run("--shot " + shot.string() + " --out " + out.string()), 1);
+    const std::string expected = "mc-init: error: " + shot.string() +
+                                 ": /source/box/spacing = 0.001: gives 1003003001 particles; expected at most 50000000";
+    EXPECT_NE(m_stderr.find(expected), std::string::npos) << m_stderr;
+    EXPECT_EQ(m_stderr.find(".000000"), std::string::npos) << m_stderr;
+    expect_no_output(out);
+}
+
 TEST_F(InitCli, OpenMeshExitsOneNamingTheBorderEdgesAndLeavesNoOutput) {
     // a unit cube without its z = 0 side (two triangles): a square hole of 4 border edges
     write("open_cube.off", R"(OFF
