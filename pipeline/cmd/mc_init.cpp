@@ -105,7 +105,13 @@ int run_init(const StageOptions& opt, bool parallel_mesh) {
 
     // build everything in memory first: a bad source fails before any folder exists
     WallTimer build_timer;
-    const InitResult r = build_init(params, mesher);
+    const InitResult r = [&] {
+        try {
+            return build_init(params, mesher);
+        } catch (const ShotValueError& e) {
+            throw InputError(opt.shot + ": " + e.what());  // the builders name the key, not the file
+        }
+    }();
     const double build_seconds = build_timer.seconds();
 
     StagingDir staging(fs::path(opt.out) / "init", opt.keep_partial);
@@ -117,7 +123,7 @@ int run_init(const StageOptions& opt, bool parallel_mesh) {
     manifest["peak_memory_bytes"] = peak_rss_bytes();
     write_manifest(staging.path(), manifest);  // last: its presence means the stage completed
     staging.commit();
-    print_summary(params, r, build_seconds, wall.seconds(), staging.final_path());
+    if (!opt.quiet) print_summary(params, r, build_seconds, wall.seconds(), staging.final_path());
     return 0;
 }
 

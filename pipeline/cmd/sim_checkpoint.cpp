@@ -100,6 +100,7 @@ void write_sim_checkpoint(const fs::path& path, const SimCheckpoint& checkpoint)
     c.meta_int["totals.active_nodes_max"] = t.active_nodes_max;
     c.meta_int["totals.allocated_nodes_max"] = t.allocated_nodes_max;
     c.meta_double["totals.max_speed"] = t.max_speed;
+    c.meta_int["totals.retries"] = t.retries;
     write_checkpoint(path, c);
 }
 
@@ -146,6 +147,8 @@ SimCheckpoint read_sim_checkpoint(const fs::path& path) {
     t.active_nodes_max = c.require_int("totals.active_nodes_max");
     t.allocated_nodes_max = c.require_int("totals.allocated_nodes_max");
     t.max_speed = c.require_double("totals.max_speed");
+    // written since issue 17; an older checkpoint's run retried nothing
+    t.retries = c.meta_int.count("totals.retries") ? c.meta_int.at("totals.retries") : 0;
     return sc;
 }
 

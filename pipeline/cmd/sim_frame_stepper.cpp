@@ -6,6 +6,7 @@
 #include <string>
 
 #include "sim/core/error.h"
+#include "sim/core/log.h"
 
 namespace mudcrack {
 namespace {
@@ -43,17 +44,21 @@ std::string fastest_particle(const SimState& state) {
 
 double frame_end_time(const SimModel& model, int frame) { return double(frame) / model.time.fps; }
 
-int advance_frame(const SimModel& model, SimState& state, int frame, SimTotals& totals,
+int advance_frame(const SimModel& model, SimState& state, int frame, RetryingStepper& stepper, SimTotals& totals,
                   const SubstepCallback& on_substep) {
     const double t_end = frame_end_time(model, frame);
     const double frame_length = 1.0 / model.time.fps;
     int substeps = 0;
     // a run resumed from this frame's checkpoint starts without it: so does this one
     forget_step_history(state);
+    stepper.restart(state);
+    // what a rollback returns to besides the state: the counters at the rollback point
+    int substeps_at_rollback_point = substeps;
+    SimTotals totals_at_rollback_point = totals;
     while (state.time < t_end) {
         const int substep = substeps + 1;
-        // the stable step, clamped to land exactly on the frame's end
-        double dt = stable_dt(model, state);
+        // the stable step (reduced while retries are in force), clamped to land exactly on the frame's end
+        double dt = stable_dt(model, state) * stepper.dt_scale();
         if (!std::isfinite(dt) || dt < kCollapsedDtFraction * frame_length)
             throw RuntimeError(step_context(frame, substep, state.time, dt) +
                                "the stable time step collapsed: " + fastest_particle(state) +
@@ -68,12 +73,24 @@ int advance_frame(const SimModel& model, SimState& state, int frame, SimTotals& 
         const double t_next = is_last ? t_end : t_start + dt;
         const int64_t count_before = state.step_count;
 
-        StepStats stats;
+        StepAttempt attempt;
         try {
-            stats = step(model, state, dt);
+            attempt = stepper.attempt(model, state, dt);
         } catch (const RuntimeError& e) {
             throw RuntimeError(step_context(frame, substep, t_start, dt) + e.what());
         }
+        if (!attempt.is_accepted) {
+            const int64_t retries = totals.retries + 1;
+            substeps = substeps_at_rollback_point;
+            totals = totals_at_rollback_point;
+            totals.retries = retries;
+            char redo[160];
+            std::snprintf(redo, sizeof redo, ": rolled back to t = %.9g s, going on from there at %g of the stable dt",
+                          state.time, double(stepper.dt_scale()));
+            log::info("retry: " + step_context(frame, substep, t_start, dt) + attempt.failure + redo);
+            continue;
+        }
+        const StepStats& stats = attempt.stats;
         // pin the clock: the frame ends at exactly k/fps whatever rounding step() did
         state.time = t_next;
         if (state.step_count == count_before) ++state.step_count;
@@ -88,6 +105,10 @@ int advance_frame(const SimModel& model, SimState& state, int frame, SimTotals& 
         totals.active_nodes_max = std::max(totals.active_nodes_max, stats.active_nodes);
         totals.allocated_nodes_max = std::max(totals.allocated_nodes_max, stats.allocated_nodes);
         totals.max_speed = std::max<double>(totals.max_speed, stats.max_speed);
+        if (attempt.is_rollback_point) {
+            substeps_at_rollback_point = substeps;
+            totals_at_rollback_point = totals;
+        }
         if (on_substep) on_substep(substeps);
     }
     return substeps;

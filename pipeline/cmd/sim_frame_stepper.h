@@ -7,6 +7,7 @@
 
 #include "sim/model.h"
 #include "sim/mpm/simulation.h"
+#include "sim/mpm/step_retry.h"
 
 namespace mudcrack {
 
@@ -21,6 +22,7 @@ struct SimTotals {
     int64_t active_nodes_max = 0; // most grid nodes with mass in one substep
     int64_t allocated_nodes_max = 0;  // most grid nodes allocated in one substep
     double max_speed = 0;         // fastest particle seen [m/s]
+    int64_t retries = 0;          // substeps that failed their checks and were redone at a smaller dt
 };
 
 /// End time of frame k: k / fps [s] (frame 0 ends at t = 0, the initial state).
@@ -31,11 +33,15 @@ using SubstepCallback = std::function<void(int frame_substeps)>;
 
 /// Advances `state` from its current time to the end of `frame` (state.time must lie before it).
 /// The last substep lands exactly on k/fps; a step that would leave a sliver shorter than half a
-/// stable step is split into two equal halves instead. Returns the number of substeps taken.
-/// @throws RuntimeError "frame K substep S (t = ..., dt = ...): <step's message>" when step()
-///         reports a non-finite state, or when the stable dt collapses (non-finite, or below
-///         1e-9 of the frame length, which would never finish).
-int advance_frame(const SimModel& model, SimState& state, int frame, SimTotals& totals,
+/// stable step is split into two equal halves instead. A substep that fails its checks is rolled
+/// back and redone at a smaller dt by `stepper` (sim/mpm/step_retry.h; a fixed /sim/dt is halved
+/// the same way and grows back to its value), each retry logged; the stepper restarts at the
+/// frame's start, so a frame's steps do not depend on how the run got there. Returns the number
+/// of substeps taken (accepted).
+/// @throws RuntimeError "frame K substep S (t = ..., dt = ...): <step's message>; retried ..."
+///         when a substep still fails at the retries' floor, or when the stable dt collapses
+///         (non-finite, or below 1e-9 of the frame length, which would never finish).
+int advance_frame(const SimModel& model, SimState& state, int frame, RetryingStepper& stepper, SimTotals& totals,
                   const SubstepCallback& on_substep = {});
 
 }  // namespace mudcrack

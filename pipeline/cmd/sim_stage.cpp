@@ -226,7 +226,9 @@ int run_sim_stage(const Shot& shot, const StageOptions& options, const SimStageO
     WallTimer step_timer;
     double step_seconds = 0;          // in advance_frame only: the rate's denominator
     const int64_t substeps_before = totals.substeps;
+    const int64_t retries_before = totals.retries;
     std::vector<std::string> cached_attributes;
+    RetryingStepper stepper;
     int64_t state_bytes = state_memory_bytes(state);
     for (int frame = done_frame + 1; frame <= last; ++frame) {
         if (frame == sim_options.inject_nan_at_frame) {
@@ -238,7 +240,7 @@ int run_sim_stage(const Shot& shot, const StageOptions& options, const SimStageO
         int frame_substeps = 0;
         try {
             step_timer.reset();
-            frame_substeps = advance_frame(model, state, frame, totals, [&](int k) {
+            frame_substeps = advance_frame(model, state, frame, stepper, totals, [&](int k) {
                 progress.substep(frame, k, state.time, totals.substeps - substeps_before,
                                  step_seconds + step_timer.seconds());
             });
@@ -252,7 +254,7 @@ int run_sim_stage(const Shot& shot, const StageOptions& options, const SimStageO
                                               : std::string()) +
                                " (no manifest written)");
         }
-        state_bytes = std::max(state_bytes, state_memory_bytes(state));
+        state_bytes = std::max(state_bytes, state_memory_bytes(state) + stepper.memory_bytes());
 
         // the frame's cache (frames before the requested range are simulated, not written)
         if (frame >= first) {
@@ -311,6 +313,7 @@ int run_sim_stage(const Shot& shot, const StageOptions& options, const SimStageO
     m["substeps"] = totals.substeps;
     m["dt"] = {{"min", totals.dt_min}, {"max", totals.dt_max}};
     m["max_speed"] = totals.max_speed;
+    m["retries"] = totals.retries;
     m["grid_nodes"] = {{"active_max", totals.active_nodes_max}, {"allocated_max", totals.allocated_nodes_max}};
     m["moisture"] = model.moisture.has_value();
     m["cg_iterations"] = {{"mean_per_substep", cg_mean}, {"max", totals.cg_max}, {"total", totals.cg_iterations}};
@@ -328,9 +331,11 @@ int run_sim_stage(const Shot& shot, const StageOptions& options, const SimStageO
     m["checkpoints"] = checkpoints;
     write_manifest(sim_dir, m);
 
-    char line[200];
-    std::snprintf(line, sizeof line, "frames %d-%d: %lld substeps, %.3g M particle-steps/s, %.0f bytes/particle",
-                  first, last, (long long)run_substeps, rate * 1e-6, double(state_bytes) / double(n));
+    char line[240];
+    std::snprintf(line, sizeof line,
+                  "frames %d-%d: %lld substeps, %lld retried, %.3g M particle-steps/s, %.0f bytes/particle",
+                  first, last, (long long)run_substeps, (long long)(totals.retries - retries_before), rate * 1e-6,
+                  double(state_bytes) / double(n));
     log::info(line);
     return 0;
 }

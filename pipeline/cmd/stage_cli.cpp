@@ -1,6 +1,9 @@
 #include "pipeline/cmd/stage_cli.h"
 
+#include <unistd.h>
+
 #include <cstdio>
+#include <cstdlib>
 #include <exception>
 #include <regex>
 
@@ -10,6 +13,23 @@
 #include "sim/core/stats.h"
 
 namespace mudcrack {
+namespace {
+
+// OpenMP threads that spin at barriers (libgomp spins 300,000 times before it sleeps) take the
+// cores the working threads need whenever other jobs share the node, and a stage then runs many
+// times slower (README, Reliability: 145 s instead of 8 s for six demo frames on a loaded node).
+// libgomp reads its wait policy once, when it is loaded, before main runs, so setting it here
+// would come too late: a stage whose user set neither variable re-executes itself, once, with
+// OMP_WAIT_POLICY=passive. A user's own OMP_WAIT_POLICY or GOMP_SPINCOUNT is kept as it is.
+void reexec_with_passive_openmp_threads(char** argv) {
+    if (std::getenv("OMP_WAIT_POLICY") || std::getenv("GOMP_SPINCOUNT")) return;
+    if (setenv("OMP_WAIT_POLICY", "passive", /*overwrite=*/0) != 0) return;
+    execv("/proc/self/exe", argv);
+    // no exec (no /proc?): run on with libgomp's spinning threads, only slower under load
+    unsetenv("OMP_WAIT_POLICY");
+}
+
+}  // namespace
 
 FrameRange parse_frame_range(const std::string& text) {
     static const std::regex range(R"(^\s*(\d+)\s*(?:-\s*(\d+))?\s*$)");
@@ -38,6 +58,7 @@ void report_error_lines(const std::string& message) {
 int run_stage(const std::string& program, const std::string& description, int argc, char** argv,
               const std::function<void(CLI::App&)>& add_flags,
               const std::function<int(const StageOptions&)>& body) {
+    reexec_with_passive_openmp_threads(argv);
     WallTimer timer;
     log::set_program(program);
     StageOptions opt;

@@ -38,7 +38,10 @@ void report_error_lines(const std::string& message);
 
 /// Runs a stage main: builds the CLI with the common flags plus `add_flags`, parses (usage
 /// errors exit 2, --help/--version exit 0), applies threads/log level, calls body, and maps
-/// InputError/RuntimeError to one "program: error: ..." line and exit 1.
+/// InputError/RuntimeError to one "program: error: ..." line and exit 1. First, when the
+/// environment sets neither OMP_WAIT_POLICY nor GOMP_SPINCOUNT, re-executes the binary once with
+/// OMP_WAIT_POLICY=passive, so idle OpenMP threads sleep instead of spinning on a shared node.
+/// @param argv main's argv (null-terminated), passed on unchanged to the re-executed binary
 int run_stage(const std::string& program, const std::string& description, int argc, char** argv,
               const std::function<void(CLI::App&)>& add_flags,
               const std::function<int(const StageOptions&)>& body);

@@ -63,15 +63,16 @@ Real riverbed_height(const HeightfieldSource& hf, Real x, Real z) {
 
 TetMesh make_heightfield_tets(const HeightfieldSource& hf) {
     if (!(hf.size.x() > 0) || !(hf.size.z() > 0))
-        throw InputError("/source/heightfield/size = [" + num(hf.size.x()) + ", " + num(hf.size.z()) +
-                         "]: both extents must be > 0 [m]");
+        throw ShotValueError("/source/heightfield/size = [" + num(hf.size.x()) + ", " + num(hf.size.z()) +
+                             "]: both extents must be > 0 [m]");
     if (!(hf.spacing > 0))
-        throw InputError("/source/heightfield/spacing = " + num(hf.spacing) + ": must be > 0 [m]");
+        throw ShotValueError("/source/heightfield/spacing = " + num(hf.spacing) + ": must be > 0 [m]");
     const Real x0 = -0.5 * hf.size.x(), z0 = -0.5 * hf.size.z();
     const int nx = lattice_cells(hf.size.x(), hf.spacing), nz = lattice_cells(hf.size.z(), hf.spacing);
     if (double(nx + 1) * (nz + 1) > kMaxInitParticles)
-        throw InputError("/source/heightfield/spacing = " + num(hf.spacing) + ": gives " +
-                         num(double(nx + 1) * (nz + 1)) + " columns; expected at most " + num(kMaxInitParticles));
+        throw ShotValueError("/source/heightfield/spacing = " + num(hf.spacing) + ": gives " +
+                             count_text(double(nx + 1) * (nz + 1)) + " columns; expected at most " +
+                             count_text(kMaxInitParticles) + ": raise the spacing");
 
     // the top height per column
     std::vector<Real> top(static_cast<size_t>(nx + 1) * (nz + 1));
@@ -79,9 +80,9 @@ TetMesh make_heightfield_tets(const HeightfieldSource& hf) {
     auto column_z = [&](int k) { return z0 + hf.size.z() * k / nz; };
     if (hf.image.empty()) {
         if (!(hf.channel_depth + hf.amplitude < hf.base))
-            throw InputError("/source/heightfield: channel_depth (" + num(hf.channel_depth) +
-                             ") + amplitude (" + num(hf.amplitude) + ") >= base (" + num(hf.base) +
-                             "): the channel would cut through the floor; expected their sum < base [m]");
+            throw ShotValueError("/source/heightfield: channel_depth (" + num(hf.channel_depth) +
+                                 ") + amplitude (" + num(hf.amplitude) + ") >= base (" + num(hf.base) +
+                                 "): the channel would cut through the floor; expected their sum < base [m]");
         for (int k = 0; k <= nz; ++k)
             for (int i = 0; i <= nx; ++i)
                 top[i + (nx + 1) * k] = riverbed_height(hf, column_x(i), column_z(k));
@@ -107,8 +108,8 @@ TetMesh make_heightfield_tets(const HeightfieldSource& hf) {
     const int ny = std::max(1, static_cast<int>(std::ceil(tallest / hf.spacing - 1e-9)));
     const double points = double(nx + 1) * (ny + 1) * (nz + 1);
     if (points > kMaxInitParticles)
-        throw InputError("/source/heightfield/spacing = " + num(hf.spacing) + ": gives " + num(points) +
-                         " particles; expected at most " + num(kMaxInitParticles));
+        throw ShotValueError("/source/heightfield/spacing = " + num(hf.spacing) + ": gives " + count_text(points) +
+                             " particles; expected at most " + count_text(kMaxInitParticles) + ": raise the spacing");
 
     return make_column_lattice_tets(x0, z0, hf.size.x(), hf.size.z(), nx, ny, nz, top);
 }

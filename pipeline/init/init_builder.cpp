@@ -75,22 +75,22 @@ InitResult build_init(const InitParams& params, const MesherOptions& mesher) {
             break;
         case SourceType::Mesh: {
             if (params.mesh.path.empty())
-                throw InputError("/source/mesh/path: missing: a mesh source needs a surface file");
+                throw ShotValueError("/source/mesh/path: missing: a mesh source needs a surface file");
             const InputSurface surface = load_placed_surface(params.mesh);
             const Real surface_volume = check_input_surface(surface, params.mesh.path);
             Vec3 lo = surface.positions[0], hi = lo;
             for (const Vec3& x : surface.positions) lo = lo.cwiseMin(x), hi = hi.cwiseMax(x);
             if (mesher.edge_length > (hi - lo).maxCoeff())
-                throw InputError("/init/edge_length = " + num(mesher.edge_length) + " m: larger than " +
-                                 params.mesh.path + " itself (largest extent " + num((hi - lo).maxCoeff()) +
-                                 " m after scaling); expected a fraction of it");
+                throw ShotValueError("/init/edge_length = " + num(mesher.edge_length) + " m: larger than " +
+                                     params.mesh.path + " itself (largest extent " + num((hi - lo).maxCoeff()) +
+                                     " m after scaling); expected a fraction of it");
             // a quality Mesh_3 mesh has about one vertex per 0.55 L^3 (see default_edge_length)
             const double expected = surface_volume / (0.55 * std::pow(mesher.edge_length, 3));
             if (expected > kMaxInitParticles)
-                throw InputError("/init/edge_length = " + num(mesher.edge_length) + " m: would make ~" +
-                                 num(expected) + " particles from " + params.mesh.path + " (volume " +
-                                 num(surface_volume) + " m^3); expected at most " + num(kMaxInitParticles) +
-                                 ": raise the edge length (or /sim/h when it is derived)");
+                throw ShotValueError("/init/edge_length = " + num(mesher.edge_length) + " m: would make ~" +
+                                     count_text(expected) + " particles from " + params.mesh.path + " (volume " +
+                                     num(surface_volume) + " m^3); expected at most " +
+                                     count_text(kMaxInitParticles) + ": raise the edge length (or /sim/h when it is derived)");
             log::info("input surface " + params.mesh.path + ": " + std::to_string(surface.positions.size()) +
                       " vertices, " + std::to_string(surface.faces.size()) + " triangles, volume " +
                       num(surface_volume) + " m^3");
@@ -122,7 +122,7 @@ InitResult build_init(const InitParams& params, const MesherOptions& mesher) {
 }
 
 InitResult build_init(const InitParams& params, Real h) {
-    if (!(h > 0)) throw InputError("/sim/h = " + num(h) + ": must be > 0 [m]");
+    if (!(h > 0)) throw ShotValueError("/sim/h = " + num(h) + ": must be > 0 [m]");
     return build_init(params, mesher_options(params, h));
 }
 

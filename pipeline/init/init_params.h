@@ -4,6 +4,7 @@
 #include <optional>
 #include <string>
 
+#include "sim/core/error.h"
 #include "sim/core/types.h"
 #include "sim/material/strength_field.h"
 
@@ -41,6 +42,14 @@ struct HeightfieldSource {
     std::string image;                // optional grayscale PNG; overrides the formula
     Real image_height = 0.3;          // height of a white pixel [m]
     Real spacing = 0.05;              // lattice spacing [m]
+};
+
+/// A shot value the builders refuse, as "<pointer> = <value>: <expectation>": they see the values,
+/// not the shot file, so mc-init puts the file's name in front and the message reads like every
+/// other bad-input error (style.md 5).
+class ShotValueError : public InputError {
+public:
+    using InputError::InputError;
 };
 
 struct InitParams {

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <random>
 #include <sstream>
 
@@ -41,6 +42,12 @@ VertexTets vertex_tets(size_t n_vertices, const std::vector<Tet>& tets) {
     return vt;
 }
 
+std::string num(Real v) {
+    std::ostringstream s;
+    s << v;
+    return s.str();
+}
+
 std::string vec_text(const Vec3& v) {
     std::ostringstream s;
     s << "[" << v.x() << ", " << v.y() << ", " << v.z() << "]";
@@ -48,6 +55,12 @@ std::string vec_text(const Vec3& v) {
 }
 
 }  // namespace
+
+std::string count_text(double count) {
+    char text[64];
+    std::snprintf(text, sizeof text, "%.0f", count);
+    return text;
+}
 
 int lattice_cells(Real extent, Real spacing) {
     return std::max(1, static_cast<int>(std::lround(extent / spacing)));
@@ -80,17 +93,17 @@ std::vector<Tet> kuhn_tets(int nx, int ny, int nz) {
 TetMesh make_box_tets(const BoxSource& box, unsigned seed) {
     const Vec3 extent = box.max - box.min;
     if (!(extent.minCoeff() > 0))
-        throw InputError("/source/box: min = " + vec_text(box.min) + ", max = " + vec_text(box.max) +
-                         ": max must exceed min on every axis");
+        throw ShotValueError("/source/box: min = " + vec_text(box.min) + ", max = " + vec_text(box.max) +
+                             ": max must exceed min on every axis");
     if (!(box.spacing > 0))
-        throw InputError("/source/box/spacing = " + std::to_string(box.spacing) + ": must be > 0 [m]");
+        throw ShotValueError("/source/box/spacing = " + num(box.spacing) + ": must be > 0 [m]");
     const int n[3] = {lattice_cells(extent.x(), box.spacing), lattice_cells(extent.y(), box.spacing),
                       lattice_cells(extent.z(), box.spacing)};
     const double points = double(n[0] + 1) * (n[1] + 1) * (n[2] + 1);
     if (points > kMaxInitParticles)
-        throw InputError("/source/box/spacing = " + std::to_string(box.spacing) + ": gives " +
-                         std::to_string(points) + " particles; expected at most " +
-                         std::to_string(kMaxInitParticles));
+        throw ShotValueError("/source/box/spacing = " + num(box.spacing) + ": gives " + count_text(points) +
+                             " particles; expected at most " + count_text(kMaxInitParticles) +
+                             ": raise the spacing or shrink the box");
     const Vec3 step(extent.x() / n[0], extent.y() / n[1], extent.z() / n[2]);
 
     TetMesh mesh;

@@ -2,6 +2,7 @@
 /// Procedural tet meshes on lattices: the box slab (regular or jittered) and the column-mapped
 /// lattice under a heightfield. Cells are split into 6 tets with the Kuhn (Freudenthal) split,
 /// which conforms across neighbouring cells, so particle counts are exact: prod(n_i + 1).
+#include <string>
 #include <vector>
 
 #include "pipeline/init/init_params.h"
@@ -12,6 +13,10 @@ namespace mudcrack {
 /// Sources refuse to make more particles than this (a typo in a spacing or edge length should
 /// be an error message, not an out-of-memory kill): 50 million.
 constexpr double kMaxInitParticles = 5e7;
+
+/// A particle count, computed in double so that a typo cannot overflow it, as a whole number
+/// ("2710806301") for messages.
+std::string count_text(double count);
 
 /// Cells per axis of a box of the given extent: round(extent / spacing), at least 1. The
 /// spacing is then stretched per axis to extent / cells so the box stays exact.
@@ -29,7 +34,7 @@ std::vector<Tet> kuhn_tets(int nx, int ny, int nz);
 /// A box slab: regular lattice, or jittered (interior points moved by up to
 /// jitter * spacing, seeded; a move that would leave an incident tet with less than a fifth of
 /// its rest volume is re-drawn, and after a few tries the point stays put, so every tet stays
-/// positive). Throws InputError naming /source/box/... keys for an empty box or bad spacing.
+/// positive). Throws ShotValueError naming /source/box/... keys for an empty box or bad spacing.
 TetMesh make_box_tets(const BoxSource& box, unsigned seed);
 
 /// The column-mapped lattice over the rectangle [x0, x0 + sx] x [z0, z0 + sz] in XZ: columns

@@ -1,17 +1,18 @@
-// Loading a shot: parse (comments allowed), check against the spec table, build the typed
-// parameters, check across keys, then cut the canonical tree into per-stage slices.
+// Loading a shot: parse (comments allowed, duplicate keys refused), check against the spec
+// table, build the typed parameters, check across keys, then cut the canonical tree into
+// per-stage slices.
 #include <algorithm>
 #include <cinttypes>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
-#include <regex>
 #include <sstream>
 
 #include <nlohmann/json.hpp>
 
 #include "pipeline/shot/build.h"
 #include "pipeline/shot/shot.h"
+#include "pipeline/shot/shot_json.h"
 #include "pipeline/shot/spec.h"
 #include "pipeline/shot/validate.h"
 #include "sim/core/error.h"
@@ -23,21 +24,6 @@ using nlohmann::json;
 
 /// The shot format major version this build reads.
 constexpr std::int64_t kFormatVersion = 1;
-
-json parse_json(const std::string& text, const std::string& path) {
-    try {
-        return json::parse(text, nullptr, /*allow_exceptions=*/true, /*ignore_comments=*/true);
-    } catch (const json::parse_error& e) {
-        // nlohmann says "[json.exception.parse_error.101] parse error at line 3, column 5: ..."
-        static const std::regex where(R"(line (\d+), column (\d+): (.*))");
-        const std::string what = e.what();
-        std::smatch m;
-        if (std::regex_search(what, m, where))
-            throw InputError(path + ":" + m[1].str() + ":" + m[2].str() + ": malformed JSON (line " +
-                             m[1].str() + ", column " + m[2].str() + "): " + m[3].str());
-        throw InputError(path + ": malformed JSON: " + what);
-    }
-}
 
 // `tree` is the checked tree: a missing or mistyped version was reported already
 void check_version(const json& tree, spec::Issues& issues) {
@@ -105,10 +91,9 @@ std::string Shot::slice_hash(Stage stage) const {
 }
 
 Shot parse_shot(const std::string& text, const std::string& path) {
-    const json root = parse_json(text, path);
-
-    // every per-key and cross-key problem is collected, then reported in one InputError
+    // every duplicate key, per-key and cross-key problem is collected, then reported in one InputError
     spec::Issues issues(path);
+    const json root = spec::read_shot_json(text, issues);
     issues.set_written(root);
     json tree = spec::check_and_fill(root, issues);
     if (!root.is_object()) issues.throw_if_any();  // nothing else can be checked

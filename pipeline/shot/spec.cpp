@@ -164,7 +164,8 @@ std::vector<KeySpec> build_table() {
     Key("/sim/h", T::Number).def(0.05).gt(0).units("m").doc("grid cell size (Table 1 'Grid Res.': 0.02-0.2)"),
     Key("/sim/dt_max", T::Number).def(1e-3).gt(0).units("s").doc("largest step; adaptive steps obey both CFL bounds (Table 1: 1e-3)"),
     Key("/sim/dt", T::Number).optional().gt(0).units("s")
-        .doc("fixed step; refused if above C_E h / c_p; omit for adaptive steps"),
+        .doc("fixed step; refused if above C_E h / c_p; a substep failing its checks is redone at halves of it, "
+             "growing back to it; omit for adaptive steps"),
     Key("/sim/cfl_velocity", T::Number).def(0.6).gt(0).le(1).units("-").doc("C_v: dt <= C_v h / max|v|"),
     Key("/sim/cfl_elastic", T::Number).def(0.5).gt(0).le(1).units("-").doc("C_E: dt <= C_E h / c_p, c_p = sqrt((lambda + 2 mu) / rho)"),
     Key("/sim/gravity", T::Vec3).def(vec(0, -9.81, 0)).units("m/s^2").doc("gravitational acceleration (y is up)"),

@@ -17,17 +17,6 @@ std::string last_component(const std::string& pointer) {
     return pointer.substr(pointer.rfind('/') + 1);
 }
 
-// JSON pointer escaping (RFC 6901): a key may hold '~' or '/'
-std::string escape_key(const std::string& key) {
-    std::string out;
-    for (char c : key) {
-        if (c == '~') out += "~0";
-        else if (c == '/') out += "~1";
-        else out += c;
-    }
-    return out;
-}
-
 // how far apart two names may be and still be a plausible typo
 bool is_close(const std::string& typed, int distance) {
     return distance <= std::max<int>(2, static_cast<int>(typed.size()) / 3);
@@ -172,6 +161,16 @@ json* section_at(json& root, const std::string& pointer) {
 }
 
 }  // namespace
+
+std::string escape_key(const std::string& key) {
+    std::string out;
+    for (char c : key) {
+        if (c == '~') out += "~0";
+        else if (c == '/') out += "~1";
+        else out += c;
+    }
+    return out;
+}
 
 void Issues::add(const std::string& pointer, const std::string& value, const std::string& expectation,
                  const std::string& units) {

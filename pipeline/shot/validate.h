@@ -37,6 +37,9 @@ private:
     nlohmann::json m_written;
 };
 
+/// A key as a JSON pointer token (RFC 6901: a key may hold '~' or '/', written ~0 and ~1).
+std::string escape_key(const std::string& key);
+
 /// How a value appears in a message: its JSON text (shortened if long), or "(missing)".
 std::string value_text(const nlohmann::json* value);
 

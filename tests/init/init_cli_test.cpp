@@ -43,10 +43,13 @@ protected:
     }
 
     /// Runs mc-init with `args`; returns the exit code, stderr in m_stderr, stdout in m_stdout.
-    int run(const std::string& args) {
+    int run(const std::string& args) { return run_with_env("", args); }
+
+    /// Same, under `env_command` (e.g. "env A=1"), which prefixes the command line.
+    int run_with_env(const std::string& env_command, const std::string& args) {
         const fs::path out = m_dir / "stdout.txt", err = m_dir / "stderr.txt";
-        const std::string cmd = std::string(MUDCRACK_BIN_DIR) + "/mc-init " + args + " >" + out.string() + " 2>" +
-                                err.string();
+        const std::string cmd = env_command + " " + std::string(MUDCRACK_BIN_DIR) + "/mc-init " + args + " >" +
+                                out.string() + " 2>" + err.string();
         const int status = std::system(cmd.c_str());
         m_stdout = slurp(out);
         m_stderr = slurp(err);
@@ -132,6 +135,50 @@ TEST_F(InitCli, BadShotExitsOneNamingTheKeyAndLeavesNoOutput) {
     const fs::path out = m_dir / "out";
     EXPECT_EQ(run("--shot " + shot.string() + " --out " + out.string()), 1);
     EXPECT_NE(m_stderr.find("/source/box/spacing"), std::string::npos) << m_stderr;
+    expect_no_output(out);
+}
+
+// the shared stage CLI (pipeline/cmd/stage_cli.cpp) through mc-init: OpenMP threads sleep at
+// barriers unless the user chose otherwise; libgomp prints what it runs with (OMP_DISPLAY_ENV)
+TEST_F(InitCli, OpenMpThreadsSleepAtBarriersUnlessTheUserChoosesOtherwise) {
+    auto openmp_settings = [&](const std::string& env) {
+        EXPECT_EQ(run_with_env("env -u OMP_WAIT_POLICY -u GOMP_SPINCOUNT OMP_DISPLAY_ENV=verbose " + env, "--version"), 0)
+            << m_stderr;
+        return m_stderr;
+    };
+    // the default: re-executed once with OMP_WAIT_POLICY=passive (spin count 0)
+    const std::string by_default = openmp_settings("");
+    EXPECT_NE(by_default.find("GOMP_SPINCOUNT = '0'"), std::string::npos) << by_default;
+    // the user's own setting, either variable, is kept
+    const std::string active = openmp_settings("OMP_WAIT_POLICY=active");
+    EXPECT_NE(active.find("OMP_WAIT_POLICY = 'ACTIVE'"), std::string::npos) << active;
+    EXPECT_EQ(active.find("PASSIVE"), std::string::npos) << active;
+    const std::string spin = openmp_settings("GOMP_SPINCOUNT=12345");
+    EXPECT_NE(spin.find("GOMP_SPINCOUNT = '12345'"), std::string::npos) << spin;
+    EXPECT_EQ(spin.find("GOMP_SPINCOUNT = '0'"), std::string::npos) << spin;
+}
+
+TEST_F(InitCli, QuietPrintsNothingOnSuccess) {
+    const fs::path shot = write("box.json", kTinyBox), out = m_dir / "out";
+    ASSERT_EQ(run("--quiet --shot " + shot.string() + " --out " + out.string()), 0) << m_stderr;
+    EXPECT_TRUE(fs::exists(out / "init" / "manifest.json"));
+    EXPECT_EQ(m_stdout, "") << "--quiet prints errors and warnings only";
+    EXPECT_EQ(m_stderr, "");
+}
+
+// refused before any work, in the format of every other error: file, key, value, expectation
+TEST_F(InitCli, TooManyParticlesNamesFileKeyAndAWholeCount) {
+    const fs::path shot = write("huge.json", R"({
+      "mudcrack": 1,
+      "source": { "type": "box", "box": { "min": [0, 0, 0], "max": [1, 1, 1], "spacing": 0.001 } },
+      "material": {}
+    })");
+    const fs::path out = m_dir / "out";
+    EXPECT_EQ(run("--shot " + shot.string() + " --out " + out.string()), 1);
+    const std::string expected = "mc-init: error: " + shot.string() +
+                                 ": /source/box/spacing = 0.001: gives 1003003001 particles; expected at most 50000000";
+    EXPECT_NE(m_stderr.find(expected), std::string::npos) << m_stderr;
+    EXPECT_EQ(m_stderr.find(".000000"), std::string::npos) << m_stderr;
     expect_no_output(out);
 }
 

@@ -1,6 +1,7 @@
 // The issue-3 reference scene: a 0.49 m cube of 125,000 NACC particles (2x2x2 per cell, h = 0.02)
 // falling at 2 m/s onto a sticky ground, dt = 2e-4 fixed, with and without moisture, on 1 and 2
-// threads. Reports particle-steps/s and bytes per particle of simulation state (grid included).
+// threads, stepped as mc-sim steps (through sim/mpm/step_retry.h). Reports particle-steps/s and
+// bytes per particle of simulation state (grid and the rollback copy included).
 //
 //   build/bin/mpm_bench                        # 404 steps per run, 3 runs each, medians
 //   MUDCRACK_BENCH_STEPS=100 build/bin/mpm_bench --benchmark_filter=NoMoisture/1
@@ -14,6 +15,7 @@
 #include "sim/core/parallel.h"
 #include "sim/core/stats.h"
 #include "sim/mpm/simulation.h"
+#include "sim/mpm/step_retry.h"
 
 namespace mudcrack {
 namespace {
@@ -93,11 +95,19 @@ void BM_ReferenceScene(benchmark::State& bs, int moisture_interval) {
         SimState state = make_initial_state(model, X, V0);
         bs.ResumeTiming();
         const double cpu0 = process_cpu_seconds();
+        // mc-sim's step loop: through the rollback and retry of failed substeps
+        RetryingStepper stepper;
+        stepper.restart(state);
         int cg = 0;
-        for (int i = 0; i < steps; ++i) cg += step(model, state, stable_dt(model, state)).cg_iterations;
+        for (int i = 0; i < steps;) {
+            const StepAttempt a = stepper.attempt(model, state, stable_dt(model, state) * stepper.dt_scale());
+            if (!a.is_accepted) continue;
+            cg += a.stats.cg_iterations;
+            ++i;
+        }
         cpu_seconds += process_cpu_seconds() - cpu0;
         particle_steps += static_cast<int64_t>(state.size()) * steps;
-        bytes_per_particle = static_cast<double>(state_memory_bytes(state)) / state.size();
+        bytes_per_particle = static_cast<double>(state_memory_bytes(state) + stepper.memory_bytes()) / state.size();
         cg_iterations = static_cast<double>(cg) / steps;
     }
     bs.counters["particle_steps_per_s"] = benchmark::Counter(static_cast<double>(particle_steps), benchmark::Counter::kIsRate);
@@ -106,6 +116,25 @@ void BM_ReferenceScene(benchmark::State& bs, int moisture_interval) {
     bs.counters["cg_iters_per_step"] = cg_iterations;
     bs.counters["peak_rss_MB"] = static_cast<double>(peak_rss_bytes()) / (1 << 20);
 }
+
+// the rollback point of sim/mpm/step_retry.h: a copy of the reference state (moisture arrays
+// included), taken at every frame start and every 64 steps; its cost per particle against a
+// step's is what rollback and retry add to a run where nothing fails
+void BM_RollbackPoint(benchmark::State& bs) {
+    const SimModel model = reference_model(1);
+    std::vector<Vec3> X;
+    std::vector<Real> V0;
+    reference_particles(X, V0);
+    SimState state = make_initial_state(model, X, V0);
+    RetryingStepper stepper;
+    stepper.restart(state);  // the first copy allocates; the ones measured reuse the arrays
+    for (auto _ : bs) stepper.restart(state);
+    bs.counters["ns_per_particle"] = benchmark::Counter(
+        static_cast<double>(state.size()), benchmark::Counter::kIsIterationInvariantRate | benchmark::Counter::kInvert);
+    bs.counters["bytes_per_particle"] = static_cast<double>(stepper.memory_bytes()) / state.size();
+}
+
+BENCHMARK(BM_RollbackPoint)->Unit(benchmark::kMillisecond);
 
 BENCHMARK_CAPTURE(BM_ReferenceScene, NoMoisture, 0)
     ->Arg(1)->Arg(2)->Iterations(1)->Repetitions(bench_repetitions())->UseRealTime()->Unit(benchmark::kSecond);

@@ -156,6 +156,24 @@ TEST_F(ShotTest, MalformedJsonNamesFileLineAndColumn) {
     expect_contains(msg, {"shots/x.json:3:", "line 3", "malformed JSON"});
 }
 
+TEST_F(ShotTest, DuplicateKeysNameFilePointerAndBothValues) {
+    const std::string msg = error_of(R"({"mudcrack": 1, "source": {"type": "box"},
+        "material": {"density": 1, "youngs_modulus": 2000, "density": 5},
+        "render": {"camera": {"fov": 40, "fov": 50}}})", "shots/dup.json");
+    expect_contains(msg, {"shots/dup.json: /material/density = 5: duplicate key: the same object sets it earlier to 1",
+                          "shots/dup.json: /render/camera/fov = 50: duplicate key: the same object sets it earlier to 40"});
+    EXPECT_EQ(line_count(msg), 2) << msg;
+    // a whole section written twice, and a key whose name needs escaping in a pointer
+    expect_contains(error_of(R"({"mudcrack": 1, "source": {"type": "box"}, "material": {},
+        "sim": {"h": 0.04}, "sim": {"h": 0.02}})"),
+                    {"/sim = {\"h\":0.02}: duplicate key: the same object sets it earlier to {\"h\":0.04}"});
+    expect_contains(error_of(R"({"mudcrack": 1, "source": {"type": "box"}, "material": {}, "a/b": 1, "a/b": 2})"),
+                    {"/a~1b = 2: duplicate key: the same object sets it earlier to 1"});
+    // the same key in different objects is no duplicate; comments are still allowed
+    EXPECT_EQ(error_of(R"({"mudcrack": 1, "source": {"type": "box", "box": {"min": [0, 0, 0]}}, /* note */
+        "material": {}, "colliders": {"domain": {"min": [-1, -1, -1]}}})"), "");
+}
+
 TEST_F(ShotTest, MissingVersionIsAnError) {
     expect_contains(error_of(R"({"source": {"type": "box"}, "material": {}})"),
                     {"shots/t.json: /mudcrack = (missing): required"});

@@ -126,6 +126,7 @@ TEST_F(McSimCli, SameShotTwiceGivesByteIdenticalCaches) {
     EXPECT_EQ(m["frames"]["first"], 1);
     EXPECT_EQ(m["frames"]["last"], 3);
     EXPECT_GE(m["substeps"].get<int>(), 3);
+    EXPECT_EQ(m["retries"], 0);
     EXPECT_GT(m["particle_steps_per_second"].get<double>(), 0);
     EXPECT_GT(m["dt"]["min"].get<double>(), 0);
     EXPECT_LE(m["dt"]["min"].get<double>(), m["dt"]["max"].get<double>());
@@ -202,9 +203,12 @@ TEST_F(McSimCli, UnstableShotStopsWithFrameAndParticle) {
     EXPECT_EQ(run("mc-sim", "--threads 1 --shot " + shot.string() + " --out " + out.string()), 1);
     EXPECT_NE(m_stderr.find("error: frame 1 substep 1"), std::string::npos) << m_stderr;
     EXPECT_NE(m_stderr.find("particle "), std::string::npos) << m_stderr;
-    // either the velocity-CFL guard or the finite-ness check stops it, with a reason
+    // either the velocity-CFL guard or the finite-ness check stops it, with a reason, once the
+    // retries at half the dt each (each one logged) reach their floor
     EXPECT_TRUE(m_stderr.find("non-finite") != std::string::npos ||
                 m_stderr.find("unstable") != std::string::npos) << m_stderr;
+    EXPECT_NE(m_stderr.find("mc-sim: retry: frame 1 substep 1"), std::string::npos) << m_stderr;
+    EXPECT_NE(m_stderr.find("halved 10 times"), std::string::npos) << m_stderr;
     EXPECT_FALSE(fs::exists(out / "sim" / "manifest.json"));
     EXPECT_TRUE(frame_files(out / "sim").empty());
 }

@@ -98,6 +98,7 @@ SimCheckpoint sample_checkpoint(bool has_moisture, bool has_plasticity) {
     c.totals.active_nodes_max = 5000;
     c.totals.allocated_nodes_max = 8192;
     c.totals.max_speed = 2.5;
+    c.totals.retries = 3;
     return c;
 }
 
@@ -162,6 +163,7 @@ TEST(SimCheckpoint, RoundTripIsBitwise) {
             EXPECT_EQ(read.totals.active_nodes_max, saved.totals.active_nodes_max);
             EXPECT_EQ(read.totals.allocated_nodes_max, saved.totals.allocated_nodes_max);
             EXPECT_EQ(read.totals.max_speed, saved.totals.max_speed);
+            EXPECT_EQ(read.totals.retries, saved.totals.retries);
             EXPECT_FALSE(fs::exists(file.string() + ".tmp"));
         }
     }
@@ -222,8 +224,9 @@ TEST_F(SimFrameStepper, FramesEndExactlyOnTheFrameTime) {
     const SimModel model = small_model();
     SimState state = small_state(model);
     SimTotals totals;
+    RetryingStepper stepper;
     for (int frame = 1; frame <= 3; ++frame) {
-        const int substeps = advance_frame(model, state, frame, totals);
+        const int substeps = advance_frame(model, state, frame, stepper, totals);
         EXPECT_GE(substeps, 1);
         EXPECT_EQ(state.time, double(frame) / model.time.fps) << "frame " << frame;
     }
@@ -241,7 +244,8 @@ TEST_F(SimFrameStepper, FixedStepSplitsTheRemainderInsteadOfASliver) {
     model.time.dt_fixed = frame_length / 2.5;
     SimState state = small_state(model);
     SimTotals totals;
-    EXPECT_EQ(advance_frame(model, state, 1, totals), 3);
+    RetryingStepper stepper;
+    EXPECT_EQ(advance_frame(model, state, 1, stepper, totals), 3);
     EXPECT_EQ(totals.dt_max, model.time.dt_fixed);
     EXPECT_NEAR(totals.dt_min, 0.75 * model.time.dt_fixed, 1e-12 * frame_length);
     EXPECT_EQ(state.time, frame_length);
@@ -256,7 +260,8 @@ TEST_F(SimFrameStepper, CollapsedStepNamesFrameAndParticle) {
     while (state.id[slot] != 17) ++slot;
     state.v[slot] = Vec3(0, 1e300, 0);
     try {
-        advance_frame(model, state, 1, totals);
+        RetryingStepper stepper;
+        advance_frame(model, state, 1, stepper, totals);
         ADD_FAILURE() << "a collapsed time step went unnoticed";
     } catch (const RuntimeError& e) {
         const std::string msg = e.what();
@@ -270,23 +275,27 @@ void expect_bitwise_resume(const SimModel& model, const fs::path& dir) {
     // uninterrupted: frames 1-3
     SimState straight = small_state(model);
     SimTotals straight_totals;
-    for (int frame = 1; frame <= 3; ++frame) advance_frame(model, straight, frame, straight_totals);
+    RetryingStepper straight_stepper;
+    for (int frame = 1; frame <= 3; ++frame) advance_frame(model, straight, frame, straight_stepper, straight_totals);
 
     // interrupted after frame 1: saved, read back into a fresh state (no workspace), continued
     SimState first_part = small_state(model);
     SimCheckpoint saved;
-    advance_frame(model, first_part, 1, saved.totals);
+    RetryingStepper first_stepper;
+    advance_frame(model, first_part, 1, first_stepper, saved.totals);
     saved.frame = 1;
     saved.state = first_part;
     write_sim_checkpoint(checkpoint_path(dir, 1), saved);
     SimCheckpoint resumed = read_sim_checkpoint(checkpoint_path(dir, 1));
     EXPECT_EQ(resumed.state.workspace, nullptr);
-    for (int frame = 2; frame <= 3; ++frame) advance_frame(model, resumed.state, frame, resumed.totals);
+    RetryingStepper resumed_stepper;
+    for (int frame = 2; frame <= 3; ++frame) advance_frame(model, resumed.state, frame, resumed_stepper, resumed.totals);
 
     EXPECT_GT(straight.step_count, 32);
     expect_same_state(straight, resumed.state);
     EXPECT_EQ(resumed.totals.substeps, straight_totals.substeps);
     EXPECT_EQ(resumed.totals.dt_min, straight_totals.dt_min);
+    EXPECT_EQ(resumed.totals.retries, straight_totals.retries);
     fs::remove_all(dir);
 }
 
@@ -300,4 +309,36 @@ TEST_F(SimFrameStepper, ResumeFromCheckpointIsBitwiseIdentical) {
         if (moisture) model.moisture = MoistureParams{};
         expect_bitwise_resume(model, temp_dir(moisture ? "resume_moist" : "resume"));
     }
+}
+
+// a fixed dt 3x the elastic bound (what the shot loader refuses) inverts particles: the failed
+// substeps are rolled back and redone at a smaller dt, and the run completes; the retries
+// restart with every frame, so a run resumed from a checkpoint takes the same steps
+TEST_F(SimFrameStepper, FailedSubstepsAreRetriedAndResumeStaysBitwise) {
+    SimModel model = small_model();
+    model.time.dt_fixed = 3 * elastic_dt_bound(model);
+    model.time.fps = 1 / (20 * model.time.dt_fixed);  // 20 fixed steps a frame
+
+    // without retries the run stops: the case is one that needs them
+    SimState plain = small_state(model);
+    EXPECT_THROW(
+        for (int i = 0; i < 60; ++i) step(model, plain, stable_dt(model, plain)), RuntimeError);
+
+    SimState state = small_state(model);
+    SimTotals totals;
+    RetryingStepper stepper;
+    for (int frame = 1; frame <= 3; ++frame) {
+        advance_frame(model, state, frame, stepper, totals);
+        EXPECT_EQ(state.time, double(frame) / model.time.fps) << "frame " << frame;
+    }
+    EXPECT_GT(totals.retries, 0);
+    EXPECT_EQ(totals.retries, stepper.retries());
+    EXPECT_LE(totals.dt_min, model.time.dt_fixed / 2);  // halved
+    EXPECT_EQ(totals.dt_max, model.time.dt_fixed);      // and grown back
+    EXPECT_EQ(state.step_count, totals.substeps);       // rolled-back steps are not counted
+    for (size_t p = 0; p < state.size(); ++p) {
+        ASSERT_TRUE(state.x[p].allFinite() && state.J[p] > 0) << "particle " << state.id[p];
+    }
+
+    expect_bitwise_resume(model, temp_dir("resume_retried"));
 }

@@ -60,7 +60,8 @@ struct StabilityResult {
     std::string name;
     Outcome outcome = Outcome::Crashed;
     std::string message;       // the error text (refused / stopped) or what went wrong
-    int64_t steps = 0;         // substeps taken
+    int64_t steps = 0;         // substeps taken (accepted)
+    int64_t retries = 0;       // substeps that failed their checks and were retried at a smaller dt
     double sim_time = 0;       // simulated time reached [s]
     Real max_speed = 0;        // max |v| over the run [m/s]
     Real energy_drift = 0;     // (E_end - E_0) / E_scale

@@ -6,6 +6,7 @@
 #include <sstream>
 
 #include "sim/core/error.h"
+#include "sim/mpm/step_retry.h"
 #include "tools/report/format.h"
 
 namespace mudcrack::report {
@@ -184,16 +185,20 @@ std::string report_markdown(const ReportContent& c, const std::vector<Figure>& f
        << " s of wall time (plus 30 s grace before the process is killed). Energy = kinetic + gravitational "
           "(from the ground) + Neo-Hookean elastic; drift = (E_end - E_0)/E_scale and growth = (max E - E_0)/E_scale "
           "with E_scale the largest |E| seen. Moisture cases change the particle masses, so their energy is not "
-          "conserved even by an exact integrator. Sticky ground impacts dissipate energy (negative drift).\n\n"
-       << "| case | group | setup | outcome | steps | sim time [s] | max abs v [m/s] | energy drift | energy growth "
-          "| wall [s] | message |\n|---|---|---|---|---|---|---|---|---|---|---|\n";
+          "conserved even by an exact integrator. Sticky ground impacts dissipate energy (negative drift). A substep "
+          "that fails its checks (J <= 0, a non-finite state, more than 2 cells in one step) is rolled back and "
+          "redone at half the time step, as mc-sim does (sim/mpm/step_retry.h); `retries` counts them, and a case "
+          "stops with an error only when the step would fall below 1/"
+       << (1 << RetryPolicy{}.max_halvings) << " of the stable one.\n\n"
+       << "| case | group | setup | outcome | steps | retries | sim time [s] | max abs v [m/s] | energy drift "
+          "| energy growth | wall [s] | message |\n|---|---|---|---|---|---|---|---|---|---|---|---|\n";
     for (size_t i = 0; i < c.stability.size(); ++i) {
         const StabilityResult& r = c.stability[i];
         const StabilityCase* info = i < c.cases.size() ? &c.cases[i] : nullptr;
         const bool ran = r.outcome == Outcome::Completed || r.outcome == Outcome::StoppedWithError ||
                          r.outcome == Outcome::SilentNaN || r.outcome == Outcome::Diverged;
         md << "| " << r.name << " | " << (info ? info->group : "") << " | " << table_cell(info ? info->description : "")
-           << " | " << outcome_name(r.outcome) << " | " << r.steps << " | " << sci(r.sim_time) << " | "
+           << " | " << outcome_name(r.outcome) << " | " << r.steps << " | " << r.retries << " | " << sci(r.sim_time) << " | "
            << (ran ? sci(r.max_speed) : "-") << " | " << (ran ? sci(r.energy_drift) : "-") << " | "
            << (ran ? sci(r.energy_growth) : "-") << " | " << format("%.2f", r.wall_s) << " | "
            << table_cell(r.message) << " |\n";

@@ -21,6 +21,7 @@
 #include "sim/core/error.h"
 #include "sim/core/tet_mesh.h"
 #include "sim/mpm/simulation.h"
+#include "sim/mpm/step_retry.h"
 #include "tools/report/energy.h"
 #include "tools/report/format.h"
 #include "tools/report/scenes.h"
@@ -317,34 +318,50 @@ StabilityResult run_stability_case(const std::string& name, Scale scale, const S
     }
     SimState& s = *state;
 
-    // the energy scale: the largest total seen (gravity measured from the ground, so >= 0)
-    const Real e0 = state_energy(c.model, s).total();
-    Real e_scale = std::abs(e0), e_max = e0, e_last = e0;
-    auto sample_energy = [&] {
-        e_last = state_energy(c.model, s).total();
-        e_max = std::max(e_max, e_last);
-        e_scale = std::max(e_scale, std::abs(e_last));
+    // what the accepted steps add up to; a rollback returns to the tally of its rollback point
+    struct Tally {
+        int64_t steps = 0;
+        Real max_speed = 0;
+        Real e_scale = 0, e_max = 0, e_last = 0;  // energy: largest |total| seen, largest, last
     };
-    for (const Vec3& v : s.v) r.max_speed = std::max(r.max_speed, v.norm());
+    Tally tally;
+    const Real e0 = state_energy(c.model, s).total();  // gravity from the ground, so >= 0
+    tally.e_scale = std::abs(e0);
+    tally.e_max = tally.e_last = e0;
+    auto sample_energy = [&] {
+        tally.e_last = state_energy(c.model, s).total();
+        tally.e_max = std::max(tally.e_max, tally.e_last);
+        tally.e_scale = std::max(tally.e_scale, std::abs(tally.e_last));
+    };
+    for (const Vec3& v : s.v) tally.max_speed = std::max(tally.max_speed, v.norm());
 
+    // failed substeps are retried as in mc-sim (sim/mpm/step_retry.h), from the state at t = 0
+    RetryingStepper stepper;
+    stepper.restart(s);
+    Tally at_rollback_point = tally;
     r.outcome = Outcome::Completed;
     try {
-        while (r.steps < limits.max_steps) {
+        while (tally.steps < limits.max_steps) {
             if (clock.seconds() > limits.max_wall_s) {
                 r.outcome = Outcome::Hang;
                 r.message = format("exceeded %.0f s of wall time after %lld steps", limits.max_wall_s,
-                                   static_cast<long long>(r.steps));
+                                   static_cast<long long>(tally.steps));
                 break;
             }
-            const StepStats st = step(c.model, s, stable_dt(c.model, s));
-            ++r.steps;
+            const StepAttempt a = stepper.attempt(c.model, s, stable_dt(c.model, s) * stepper.dt_scale());
+            if (!a.is_accepted) {
+                tally = at_rollback_point;
+                continue;
+            }
+            ++tally.steps;
             if (has_non_finite(s)) {
                 r.outcome = Outcome::SilentNaN;
-                r.message = format("non-finite state after step %lld and no error", static_cast<long long>(r.steps));
+                r.message = format("non-finite state after step %lld and no error", static_cast<long long>(tally.steps));
                 break;
             }
-            r.max_speed = std::max(r.max_speed, st.max_speed);
-            if (r.steps % 5 == 0 || r.steps == limits.max_steps) sample_energy();
+            tally.max_speed = std::max(tally.max_speed, a.stats.max_speed);
+            if (tally.steps % 5 == 0 || tally.steps == limits.max_steps) sample_energy();
+            if (a.is_rollback_point) at_rollback_point = tally;
         }
     } catch (const RuntimeError& e) {
         r.outcome = Outcome::StoppedWithError;
@@ -356,6 +373,9 @@ StabilityResult run_stability_case(const std::string& name, Scale scale, const S
         r.outcome = Outcome::Crashed;
         r.message = one_line(std::string("unexpected exception: ") + e.what());
     }
+    r.steps = tally.steps;
+    r.retries = stepper.retries();
+    r.max_speed = tally.max_speed;
     // an error without a message is not a clear error
     if (r.outcome == Outcome::StoppedWithError && r.message.empty()) {
         r.outcome = Outcome::Crashed;
@@ -363,11 +383,11 @@ StabilityResult run_stability_case(const std::string& name, Scale scale, const S
     }
     r.sim_time = s.time;
     if (r.outcome == Outcome::Completed) sample_energy();
-    const Real denom = e_scale > 0 ? e_scale : Real(1);
-    const bool is_energy_finite = std::isfinite(e_last) && std::isfinite(e_max) && std::isfinite(denom);
+    const Real denom = tally.e_scale > 0 ? tally.e_scale : Real(1);
+    const bool is_energy_finite = std::isfinite(tally.e_last) && std::isfinite(tally.e_max) && std::isfinite(denom);
     const Real inf = std::numeric_limits<Real>::infinity();
-    r.energy_drift = is_energy_finite ? (e_last - e0) / denom : inf;
-    r.energy_growth = is_energy_finite ? (e_max - e0) / denom : inf;
+    r.energy_drift = is_energy_finite ? (tally.e_last - e0) / denom : inf;
+    r.energy_growth = is_energy_finite ? (tally.e_max - e0) / denom : inf;
     if (r.outcome == Outcome::Completed && !(r.energy_growth <= kDivergedEnergyGrowth)) {
         r.outcome = Outcome::Diverged;
         int inverted = 0;
@@ -381,8 +401,9 @@ StabilityResult run_stability_case(const std::string& name, Scale scale, const S
 }
 
 std::string serialize_result(const StabilityResult& r) {
-    return format("%s%s\t%d\t%lld\t%.17g\t%.17g\t%.17g\t%.17g\t%.17g\t%s", result_line_tag(), r.name.c_str(),
-                  static_cast<int>(r.outcome), static_cast<long long>(r.steps), r.sim_time, r.max_speed,
+    return format("%s%s\t%d\t%lld\t%lld\t%.17g\t%.17g\t%.17g\t%.17g\t%.17g\t%s", result_line_tag(), r.name.c_str(),
+                  static_cast<int>(r.outcome), static_cast<long long>(r.steps), static_cast<long long>(r.retries),
+                  r.sim_time, r.max_speed,
                   r.energy_drift, r.energy_growth, r.wall_s, one_line(r.message).c_str());
 }
 
@@ -392,8 +413,8 @@ bool parse_result(const std::string& line, StabilityResult& r) {
     std::vector<std::string> f;
     std::stringstream ss(line.substr(tag.size()));
     std::string field;
-    while (f.size() < 8 && std::getline(ss, field, '\t')) f.push_back(field);
-    if (f.size() < 8) return false;
+    while (f.size() < 9 && std::getline(ss, field, '\t')) f.push_back(field);
+    if (f.size() < 9) return false;
     std::getline(ss, r.message);
     try {
         r.name = f[0];
@@ -401,11 +422,12 @@ bool parse_result(const std::string& line, StabilityResult& r) {
         if (outcome < 0 || outcome > static_cast<int>(Outcome::Diverged)) return false;
         r.outcome = static_cast<Outcome>(outcome);
         r.steps = std::stoll(f[2]);
-        r.sim_time = std::stod(f[3]);
-        r.max_speed = std::stod(f[4]);
-        r.energy_drift = std::stod(f[5]);
-        r.energy_growth = std::stod(f[6]);
-        r.wall_s = std::stod(f[7]);
+        r.retries = std::stoll(f[3]);
+        r.sim_time = std::stod(f[4]);
+        r.max_speed = std::stod(f[5]);
+        r.energy_drift = std::stod(f[6]);
+        r.energy_growth = std::stod(f[7]);
+        r.wall_s = std::stod(f[8]);
     } catch (const std::exception&) {
         return false;
     }

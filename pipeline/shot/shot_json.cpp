@@ -1,0 +1,135 @@
+#include "pipeline/shot/shot_json.h"
+
+#include <regex>
+#include <utility>
+#include <vector>
+
+#include "sim/core/error.h"
+
+namespace mudcrack::spec {
+namespace {
+
+using nlohmann::json;
+
+// Builds the tree from nlohmann's SAX events, as its own DOM parser does, and in addition knows
+// each value's JSON pointer, so a key seen twice in one object is reported with both values.
+class DuplicateKeyCheckingBuilder {
+public:
+    explicit DuplicateKeyCheckingBuilder(Issues& issues) : m_issues(issues) {}
+
+    json take_root() { return std::move(m_root); }
+
+    // SAX events (nlohmann::json_sax)
+    bool null() { return add(json(nullptr)); }
+    bool boolean(bool v) { return add(json(v)); }
+    bool number_integer(json::number_integer_t v) { return add(json(v)); }
+    bool number_unsigned(json::number_unsigned_t v) { return add(json(v)); }
+    bool number_float(json::number_float_t v, const json::string_t&) { return add(json(v)); }
+    bool string(json::string_t& v) { return add(json(std::move(v))); }
+    bool binary(json::binary_t& v) { return add(json(std::move(v))); }
+    bool start_object(std::size_t) { return open(json::object()); }
+    bool start_array(std::size_t) { return open(json::array()); }
+    bool end_object() { return close(); }
+    bool end_array() { return close(); }
+
+    bool key(json::string_t& name) {
+        Container& c = m_open.back();
+        c.key = name;
+        const auto earlier = c.value->find(name);
+        c.is_duplicate_key = earlier != c.value->end();
+        c.earlier_text = c.is_duplicate_key ? value_text(&*earlier) : std::string();
+        return true;
+    }
+
+    // rethrown with its own type, so the caller's catch of json::parse_error sees it
+    template <class Exception>
+    bool parse_error(std::size_t, const std::string&, const Exception& e) {
+        throw e;
+    }
+
+private:
+    struct Container {
+        json* value = nullptr;       // the object or array being filled
+        std::string pointer;         // its JSON pointer ("" for the root)
+        std::string key;             // object: the key of the member being read
+        bool is_duplicate_key = false;
+        std::string earlier_text;    // the value the object already holds at `key`
+    };
+
+    // places a value in the innermost open container (or as the root); returns where it lives
+    json* place(json v) {
+        if (m_open.empty()) {
+            m_root = std::move(v);
+            return &m_root;
+        }
+        Container& c = m_open.back();
+        if (c.value->is_array()) {
+            c.value->push_back(std::move(v));
+            return &c.value->back();
+        }
+        json& member = (*c.value)[c.key];
+        member = std::move(v);
+        return &member;
+    }
+
+    // a member's value is complete: report it if its key was already set in this object
+    void finish_member(const json& v) {
+        if (m_open.empty()) return;
+        const Container& c = m_open.back();
+        if (!c.value->is_object() || !c.is_duplicate_key) return;
+        m_issues.add(c.pointer + "/" + escape_key(c.key), value_text(&v),
+                     "duplicate key: the same object sets it earlier to " + c.earlier_text +
+                         ", and only one value can hold; write the key once");
+    }
+
+    bool add(json v) {
+        finish_member(*place(std::move(v)));
+        return true;
+    }
+
+    bool open(json empty) {
+        std::string pointer;
+        if (!m_open.empty()) {
+            const Container& parent = m_open.back();
+            pointer = parent.pointer + "/" +
+                      (parent.value->is_array() ? std::to_string(parent.value->size()) : escape_key(parent.key));
+        }
+        Container c;
+        c.value = place(std::move(empty));
+        c.pointer = std::move(pointer);
+        m_open.push_back(std::move(c));
+        return true;
+    }
+
+    bool close() {
+        const json* done = m_open.back().value;
+        m_open.pop_back();
+        finish_member(*done);
+        return true;
+    }
+
+    Issues& m_issues;
+    json m_root;
+    std::vector<Container> m_open;  // the containers being read, outermost first
+};
+
+}  // namespace
+
+json read_shot_json(const std::string& text, Issues& issues) {
+    DuplicateKeyCheckingBuilder builder(issues);
+    try {
+        json::sax_parse(text, &builder, json::input_format_t::json, /*strict=*/true, /*ignore_comments=*/true);
+    } catch (const json::parse_error& e) {
+        // nlohmann says "[json.exception.parse_error.101] parse error at line 3, column 5: ..."
+        static const std::regex where(R"(line (\d+), column (\d+): (.*))");
+        const std::string what = e.what();
+        std::smatch m;
+        if (std::regex_search(what, m, where))
+            throw InputError(issues.file() + ":" + m[1].str() + ":" + m[2].str() + ": malformed JSON (line " +
+                             m[1].str() + ", column " + m[2].str() + "): " + m[3].str());
+        throw InputError(issues.file() + ": malformed JSON: " + what);
+    }
+    return builder.take_root();
+}
+
+}  // namespace mudcrack::spec
