@@ -79,9 +79,10 @@ MovieEncoder::MovieEncoder(fs::path path, int width, int height, double fps)
     char rate[32];
     std::snprintf(rate, sizeof rate, "%.6g", fps);
     const std::string size = std::to_string(width) + "x" + std::to_string(height);
-    // H.264 needs even dimensions for yuv420p: pad odd sizes by one pixel
+    // H.264 needs even dimensions for yuv420p: pad odd sizes by one pixel. -xerror: without it
+    // ffmpeg 5.1 exits 0 when it cannot write the file's end (a full disk), leaving a broken movie
     const std::vector<std::string> args = {
-        ffmpeg, "-hide_banner", "-loglevel", "error", "-nostdin", "-y",
+        ffmpeg, "-hide_banner", "-loglevel", "error", "-xerror", "-nostdin", "-y",
         "-f", "rawvideo", "-pix_fmt", "rgba", "-s", size, "-framerate", rate, "-i", "pipe:0",
         "-vf", "pad=ceil(iw/2)*2:ceil(ih/2)*2", "-c:v", "libx264", "-preset", "veryfast",
         "-crf", "18", "-pix_fmt", "yuv420p", "-movflags", "+faststart", "-f", "mp4", m_tmp.string()};
@@ -135,8 +136,12 @@ void MovieEncoder::finish() {
     std::error_code ec;
     if (!WIFEXITED(status) || WEXITSTATUS(status) != 0 || m_frames == 0) {
         fs::remove(m_tmp, ec);
-        throw RuntimeError(m_path.string() + ": ffmpeg failed (status " + std::to_string(status) +
-                           ", " + std::to_string(m_frames) + " frames sent)");
+        // ffmpeg's own message (a full disk: "No space left on device") is the line above
+        const std::string how = WIFEXITED(status)     ? "exit code " + std::to_string(WEXITSTATUS(status))
+                                : WIFSIGNALED(status) ? "signal " + std::to_string(WTERMSIG(status))
+                                                      : "status " + std::to_string(status);
+        throw RuntimeError(m_path.string() + ": ffmpeg failed (" + how + ", " + std::to_string(m_frames) +
+                           " frames sent)");
     }
     fs::rename(m_tmp, m_path, ec);
     if (ec) {

@@ -117,6 +117,28 @@ void clear_sim_dir(const fs::path& sim_dir, int keep_through) {
     }
 }
 
+// what a failed run leaves for --resume, appended to its one-line error
+std::string kept_frames_note(int first, int kept, const fs::path& sim_dir) {
+    return (kept >= first ? "; frames " + std::to_string(first) + "-" + std::to_string(kept) + " are kept in " +
+                                sim_dir.string()
+                          : std::string()) +
+           " (no manifest written)";
+}
+
+// a frame cache that exists and reads back whole: frames are renamed into place only once written
+// and checked, but a cache damaged since (or left by a build that did not check its writes) must
+// not be kept by a resume
+bool is_complete_frame(const fs::path& file) {
+    if (!fs::exists(file)) return false;
+    try {
+        read_points_metadata(file);  // checks the layout against the file's size
+        return true;
+    } catch (const InputError& e) {
+        log::warn("bad frame cache", std::string(e.what()) + ": the checkpoints after it are not used");
+        return false;
+    }
+}
+
 // the newest checkpoint that is intact, made from this shot's sim slice, for these particles,
 // not past the last frame, and whose in-range frames are all on disk
 std::optional<SimCheckpoint> find_resume_checkpoint(const fs::path& sim_dir, const Shot& shot,
@@ -150,9 +172,9 @@ std::optional<SimCheckpoint> find_resume_checkpoint(const fs::path& sim_dir, con
         }
         bool has_frames = true;
         for (int f = first; f <= c && has_frames; ++f)
-            has_frames = fs::exists(frame_path(sim_dir, "particles", f, "vdb"));
+            has_frames = is_complete_frame(frame_path(sim_dir, "particles", f, "vdb"));
         if (!has_frames) {
-            log::info(file.string() + ": some frames before it are missing, not used");
+            log::info(file.string() + ": some frames before it are missing or damaged, not used");
             continue;
         }
         if (checkpoint.threads != thread_count())
@@ -247,12 +269,7 @@ int run_sim_stage(const Shot& shot, const StageOptions& options, const SimStageO
             step_seconds += step_timer.seconds();
         } catch (const RuntimeError& e) {
             progress.finish();
-            const int kept = frame - 1;
-            throw RuntimeError(std::string(e.what()) +
-                               (kept >= first ? "; frames " + std::to_string(first) + "-" +
-                                                    std::to_string(kept) + " are kept in " + sim_dir.string()
-                                              : std::string()) +
-                               " (no manifest written)");
+            throw RuntimeError(std::string(e.what()) + kept_frames_note(first, frame - 1, sim_dir));
         }
         state_bytes = std::max(state_bytes, state_memory_bytes(state) + stepper.memory_bytes());
 
@@ -267,7 +284,12 @@ int run_sim_stage(const Shot& shot, const StageOptions& options, const SimStageO
             cloud.meta_int["mudcrack:frame"] = frame;
             cloud.meta_int["mudcrack:substeps"] = frame_substeps;
             cloud.meta_double["mudcrack:time"] = state.time;
-            write_points(frame_path(sim_dir, "particles", frame, "vdb"), cloud, model.h);
+            try {
+                write_points(frame_path(sim_dir, "particles", frame, "vdb"), cloud, model.h);
+            } catch (const RuntimeError& e) {  // a full disk: what is done stays for --resume
+                progress.finish();
+                throw RuntimeError(std::string(e.what()) + kept_frames_note(first, frame - 1, sim_dir));
+            }
             if (cached_attributes.empty()) cached_attributes = attribute_names(cloud);
         }
 
@@ -283,9 +305,9 @@ int run_sim_stage(const Shot& shot, const StageOptions& options, const SimStageO
             checkpoint.state = std::move(state);
             try {
                 write_sim_checkpoint(checkpoint_path(sim_dir, frame), checkpoint);
-            } catch (...) {
-                state = std::move(checkpoint.state);
-                throw;
+            } catch (const RuntimeError& e) {
+                progress.finish();
+                throw RuntimeError(std::string(e.what()) + kept_frames_note(first, frame, sim_dir));
             }
             state = std::move(checkpoint.state);
             prune_checkpoints(sim_dir);

@@ -5,6 +5,7 @@
 #include <cstdio>
 #include <cstdlib>
 #include <exception>
+#include <filesystem>
 #include <regex>
 
 #include "sim/core/error.h"
@@ -27,6 +28,23 @@ void reexec_with_passive_openmp_threads(char** argv) {
     execv("/proc/self/exe", argv);
     // no exec (no /proc?): run on with libgomp's spinning threads, only slower under load
     unsetenv("OMP_WAIT_POLICY");
+}
+
+// a std::filesystem call that threw (a read-only or full output folder) in the house format,
+// "<path>: <operation>: <reason>", instead of libstdc++'s "filesystem error: <operation>: <reason>
+// [<path>]"
+std::string filesystem_error_line(const std::filesystem::filesystem_error& e) {
+    std::string what = e.what();
+    const std::string prefix = "filesystem error: ";
+    if (what.compare(0, prefix.size(), prefix) == 0) what.erase(0, prefix.size());
+    for (const std::filesystem::path& p : {e.path2(), e.path1()}) {
+        const std::string suffix = " [" + p.string() + "]";
+        if (!p.empty() && what.size() >= suffix.size() &&
+            what.compare(what.size() - suffix.size(), suffix.size(), suffix) == 0)
+            what.erase(what.size() - suffix.size());
+    }
+    if (e.path1().empty()) return what;
+    return e.path1().string() + (e.path2().empty() ? "" : " -> " + e.path2().string()) + ": " + what;
 }
 
 }  // namespace
@@ -97,6 +115,9 @@ int run_stage(const std::string& program, const std::string& description, int ar
         code = 1;
     } catch (const RuntimeError& e) {
         report_error_lines(e.what());
+        code = 1;
+    } catch (const std::filesystem::filesystem_error& e) {
+        log::error(filesystem_error_line(e));
         code = 1;
     } catch (const std::exception& e) {
         log::error(std::string("unexpected failure: ") + e.what());

@@ -1,5 +1,7 @@
 #include "pipeline/io/atomic_output.h"
 
+#include <cerrno>
+#include <cstring>
 #include <fstream>
 #include <system_error>
 
@@ -28,12 +30,18 @@ void write_atomically(const fs::path& path, const std::function<void(const fs::p
     }
 }
 
+std::string write_error_reason() {
+    return errno != 0 ? std::string(std::strerror(errno)) : std::string("write failed");
+}
+
 void write_text_atomically(const fs::path& path, const std::string& text) {
     write_atomically(path, [&](const fs::path& tmp) {
+        errno = 0;
         std::ofstream os(tmp, std::ios::binary);
+        if (!os) throw RuntimeError(tmp.string() + ": cannot open for writing: " + write_error_reason());
         os << text;
-        os.close();
-        if (!os) throw RuntimeError(tmp.string() + ": write failed");
+        os.close();  // the last buffer reaches the disk here: a full disk shows up at close
+        if (!os) throw RuntimeError(tmp.string() + ": cannot write: " + write_error_reason());
     });
 }
 

@@ -13,6 +13,13 @@ namespace mudcrack {
 void write_atomically(const std::filesystem::path& path,
                       const std::function<void(const std::filesystem::path& tmp)>& write);
 
+/// Why the write that just failed failed: strerror(errno) ("No space left on device", "File too
+/// large", "Read-only file system"), or "write failed" when errno holds nothing. Callers zero errno
+/// before writing, so an old errno is not blamed.
+/// @note C++ streams do not promise to keep errno, but libstdc++'s filebuf leaves the failed
+/// write()'s errno in place, which is all a one-line error report needs.
+std::string write_error_reason();
+
 /// Writes a whole text file atomically.
 void write_text_atomically(const std::filesystem::path& path, const std::string& text);
 

@@ -1,5 +1,6 @@
 #include "pipeline/io/break_history_io.h"
 
+#include <cerrno>
 #include <cstring>
 #include <fstream>
 
@@ -14,7 +15,9 @@ constexpr char kBreaksMagic[8] = {'M', 'C', 'B', 'R', 'K', 'v', '1', '\0'};
 
 void write_break_history(const std::filesystem::path& path, const BreakHistory& h) {
     write_atomically(path, [&](const std::filesystem::path& tmp) {
+        errno = 0;
         std::ofstream out(tmp, std::ios::binary);
+        if (!out) throw RuntimeError(tmp.string() + ": cannot open for writing: " + write_error_reason());
         const int64_t n = static_cast<int64_t>(h.first_break.size());
         const uint64_t checksum = fnv1a64(h.first_break.data(), h.first_break.size() * sizeof(int32_t));
         out.write(kBreaksMagic, sizeof kBreaksMagic);
@@ -24,7 +27,8 @@ void write_break_history(const std::filesystem::path& path, const BreakHistory& 
         out.write(reinterpret_cast<const char*>(&n), sizeof n);
         out.write(reinterpret_cast<const char*>(h.first_break.data()), n * sizeof(int32_t));
         out.write(reinterpret_cast<const char*>(&checksum), sizeof checksum);
-        if (!out) throw RuntimeError(tmp.string() + ": cannot write the edge break history");
+        out.close();  // a small file fails only here, when its one buffer is flushed
+        if (!out) throw RuntimeError(tmp.string() + ": cannot write the edge break history: " + write_error_reason());
     });
 }
 

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <array>
+#include <cerrno>
 #include <cstring>
 #include <fstream>
 #include <system_error>
@@ -32,7 +33,7 @@ void swap_elements(char* data, size_t count, size_t width) {
 class ChecksummedWriter {
 public:
     explicit ChecksummedWriter(const fs::path& path) : m_os(path, std::ios::binary), m_path(path) {
-        if (!m_os) throw RuntimeError(path.string() + ": cannot open for writing");
+        if (!m_os) throw RuntimeError(path.string() + ": cannot open for writing: " + write_error_reason());
     }
     void raw(const void* data, size_t size) {
         m_hash = fnv1a64(data, size, m_hash);
@@ -67,7 +68,7 @@ public:
         const uint64_t hash = m_hash;
         value(hash);
         m_os.close();
-        if (!m_os) throw RuntimeError(m_path.string() + ": write failed (disk full?)");
+        if (!m_os) throw RuntimeError(m_path.string() + ": cannot write: " + write_error_reason());
     }
 
 private:
@@ -196,6 +197,7 @@ void write_checkpoint(const fs::path& path, const Checkpoint& c) {
     const size_t entries = c.f64.size() + c.i32.size() + c.i64.size() + c.meta_string.size() +
                            c.meta_double.size() + c.meta_int.size();
     write_atomically(path, [&](const fs::path& tmp) {
+        errno = 0;  // so a failure reports its own reason
         ChecksummedWriter w(tmp);
         w.raw(kMagic, sizeof kMagic);
         w.value(kCheckpointFormatVersion);

@@ -2,6 +2,7 @@
 
 #include <png.h>
 
+#include <cerrno>
 #include <cstdio>
 #include <memory>
 #include <string>
@@ -36,8 +37,9 @@ int png_color_type(int channels) {
 }
 
 void write_png_file(const fs::path& tmp, const Image& image) {
+    errno = 0;
     FilePtr file(std::fopen(tmp.c_str(), "wb"), &std::fclose);
-    if (!file) throw RuntimeError(tmp.string() + ": cannot open for writing");
+    if (!file) throw RuntimeError(tmp.string() + ": cannot open for writing: " + write_error_reason());
     png_structp png = png_create_write_struct(PNG_LIBPNG_VER_STRING, nullptr, throw_png_error, ignore_png_warning);
     png_infop info = png ? png_create_info_struct(png) : nullptr;
     if (!info) throw RuntimeError(tmp.string() + ": libpng could not allocate a writer");
@@ -52,10 +54,14 @@ void write_png_file(const fs::path& tmp, const Image& image) {
         png_write_end(png, nullptr);
     } catch (const std::exception& e) {
         png_destroy_write_struct(&png, &info);
-        throw RuntimeError(tmp.string() + ": PNG write failed: " + e.what());
+        // libpng's stdio writer reports a short fwrite as "Write Error"; errno says why
+        throw RuntimeError(tmp.string() + ": PNG write failed: " + e.what() + ": " + write_error_reason());
     }
     png_destroy_write_struct(&png, &info);
-    if (std::fflush(file.get()) != 0) throw RuntimeError(tmp.string() + ": write failed (disk full?)");
+    // fclose flushes the last buffer, so its result is the write's
+    const bool flushed = std::fflush(file.get()) == 0 && !std::ferror(file.get());
+    const bool closed = std::fclose(file.release()) == 0;
+    if (!flushed || !closed) throw RuntimeError(tmp.string() + ": cannot write: " + write_error_reason());
 }
 
 }  // namespace

@@ -9,6 +9,7 @@
 
 #include <algorithm>
 #include <cctype>
+#include <cerrno>
 #include <cmath>
 #include <cstdio>
 #include <fstream>
@@ -198,6 +199,16 @@ void make_uuid_content_derived(const fs::path& file) {
     if (!io) throw RuntimeError(file.string() + ": cannot rewrite the VDB header UUID");
 }
 
+// openvdb::io::File::write (OpenVDB 10) opens its own std::ofstream and never checks it after
+// writing, so a full disk leaves a truncated file without an error. This writer hands OpenVDB's
+// archive a stream we own and check; the bytes are the same as File::write's (seekable layout).
+class CheckedVdbWriter : public openvdb::io::Archive {
+public:
+    void write_to(std::ostream& os, const openvdb::GridCPtrVec& grids) const {
+        Archive::write(os, grids, /*seekable=*/true);
+    }
+};
+
 // OpenVDB reads the last leaf without noticing when the file's final few bytes are missing, so
 // check the layout ourselves: after the header and the file metadata come the grid descriptors,
 // each ending with the grid's end offset (int64), which must lie inside the file.
@@ -333,13 +344,16 @@ void write_points(const fs::path& path, const PointCloud& cloud, double voxel_si
     initialize_openvdb();
     const auto grid = make_grid(path, cloud, voxel_size);
     write_atomically(path, [&](const fs::path& tmp) {
+        errno = 0;
+        std::ofstream os(tmp, std::ios::out | std::ios::binary | std::ios::trunc);
+        if (!os) throw RuntimeError(tmp.string() + ": cannot open for writing: " + write_error_reason());
         try {
-            openvdb::io::File file(tmp.string());
-            file.write(openvdb::GridCPtrVec{grid});
-            file.close();
+            CheckedVdbWriter().write_to(os, openvdb::GridCPtrVec{grid});
         } catch (const openvdb::Exception& e) {
             throw RuntimeError(tmp.string() + ": cannot write the points file: " + e.what());
         }
+        os.close();
+        if (!os) throw RuntimeError(tmp.string() + ": cannot write the points file: " + write_error_reason());
         make_uuid_content_derived(tmp);
     });
 }

@@ -1,5 +1,6 @@
 #include "pipeline/io/tet_mesh_io.h"
 
+#include <cerrno>
 #include <algorithm>
 #include <cstring>
 #include <fstream>
@@ -109,7 +110,9 @@ void write_vtu(const fs::path& tmp, const TetMesh& mesh) {
         << "  </UnstructuredGrid>\n"
         << "  <AppendedData encoding=\"raw\">\n   _";
 
+    errno = 0;
     std::ofstream os(tmp, std::ios::binary);
+    if (!os) throw RuntimeError(tmp.string() + ": cannot open for writing: " + write_error_reason());
     os << xml.str();
     for (const Array& a : arrays) {
         const uint64_t size = a.bytes.size();
@@ -118,7 +121,7 @@ void write_vtu(const fs::path& tmp, const TetMesh& mesh) {
     }
     os << "\n  </AppendedData>\n</VTKFile>\n";
     os.close();
-    if (!os) throw RuntimeError(tmp.string() + ": write failed (disk full?)");
+    if (!os) throw RuntimeError(tmp.string() + ": cannot write: " + write_error_reason());
 }
 
 /// The value of attribute `key` inside one XML tag's text, or "" when absent.
