@@ -219,9 +219,50 @@ RenderJob resolve_job(const StageOptions& opt, bool force_turntable) {
     return job;
 }
 
+/// The union of the surface manifest's per-frame "bounds" over frames first-last (mc-surface
+/// writes the bounds of the geometry each frame's files hold), or nothing when a frame's entry is
+/// missing or has none (a manifest of an older mc-surface): then the caller reads the meshes.
+std::optional<Bounds> manifest_bounds(const RenderJob& job) {
+    const json& input = job.input_manifest;
+    if (!job.src.has_meshes || !input.contains("per_frame") || !input["per_frame"].is_array()) return std::nullopt;
+    std::map<int, const json*> by_frame;
+    for (const json& entry : input["per_frame"])
+        if (entry.is_object() && entry.contains("frame") && entry["frame"].is_number_integer())
+            by_frame[entry["frame"].get<int>()] = &entry;
+    const auto corner = [](const json& b, const char* key, Vec3f& out) {
+        if (!b.contains(key) || !b[key].is_array() || b[key].size() != 3) return false;
+        for (int k = 0; k < 3; ++k) {
+            if (!b[key][k].is_number()) return false;
+            out[k] = b[key][k].get<float>();
+        }
+        return true;
+    };
+    Bounds stage;
+    for (int f = job.first; f <= job.last; ++f) {
+        const auto it = by_frame.find(f);
+        if (it == by_frame.end() || !it->second->contains("bounds")) return std::nullopt;
+        const json& b = (*it->second)["bounds"];
+        if (b.is_null()) continue;  // a frame with no geometry
+        Vec3f lo, hi;
+        if (!b.is_object() || !corner(b, "min", lo) || !corner(b, "max", hi)) return std::nullopt;
+        stage.extend(lo);
+        stage.extend(hi);
+    }
+    return stage;
+}
+
 /// Bounds over every frame of the shot: the camera, the ground and the shadow stay put, and a
-/// chunk of frames rendered alone frames them exactly as a full run does.
+/// chunk of frames rendered alone frames them exactly as a full run does. From the surface
+/// manifest when it has them; else (particle renders, older manifests) by reading every frame.
 Bounds stage_bounds(const RenderJob& job) {
+    if (const std::optional<Bounds> from_manifest = manifest_bounds(job)) {
+        if (from_manifest->is_empty())
+            throw InputError((job.src.dir / "manifest.json").string() + ": frames " + std::to_string(job.first) + "-" +
+                             std::to_string(job.last) + ": no geometry to render (every frame's bounds are null)");
+        log::info("bounds of frames " + std::to_string(job.first) + "-" + std::to_string(job.last) + " from " +
+                  (job.src.dir / "manifest.json").string());
+        return *from_manifest;
+    }
     WallTimer scan;
     Bounds stage;
     for (int f = job.first; f <= job.last; ++f) stage.extend(scene_bounds(load_scene(job.src, f)));

@@ -6,6 +6,7 @@
 // edge broke, computed once by a pass over all cached frames and kept in edge_breaks.bin, so any
 // frame range can be surfaced, in any order and in parallel, with identical files.
 #include <algorithm>
+#include <array>
 #include <cstdio>
 #include <exception>
 #include <filesystem>
@@ -122,6 +123,28 @@ BreakHistory scan_breaks(const fs::path& sim_dir, int first, int last, const Cor
     return h;
 }
 
+/// The bounds of the vertices the frame's faces use, over every mesh, as the manifest's
+/// {"min": [x, y, z], "max": [x, y, z]} (null when no mesh has a face). A reader of the files
+/// gets the same floats (every format we write keeps float32 positions exactly, and readers that
+/// rebuild vertices from face corners drop unused ones), so mc-render frames a shot from the
+/// manifest alone, exactly as from the files, instead of reading every frame's meshes.
+json used_vertex_bounds(const std::vector<const TriMesh*>& meshes) {
+    std::array<float, 3> lo{}, hi{};
+    bool any = false;
+    for (const TriMesh* m : meshes)
+        for (const Tri& t : m->faces)
+            for (int c = 0; c < 3; ++c) {
+                const Vec3f& p = m->positions[size_t(t[c])];
+                for (int k = 0; k < 3; ++k) {
+                    lo[k] = any ? std::min(lo[k], p[k]) : p[k];
+                    hi[k] = any ? std::max(hi[k], p[k]) : p[k];
+                }
+                any = true;
+            }
+    if (!any) return nullptr;
+    return {{"min", {lo[0], lo[1], lo[2]}}, {"max", {hi[0], hi[1], hi[2]}}};
+}
+
 struct FrameResult {
     json entry;
     double surfacing_seconds = 0;  // surface_frame only (no file I/O)
@@ -222,6 +245,7 @@ int run_surface_stage(const StageOptions& options, const std::string& mode_flag,
                       {"fragments", s.fragments},
                       {"culled_fragments", s.culled_fragments},
                       {"surfacing_seconds", results[i].surfacing_seconds}};
+        entry["bounds"] = params.cracks ? used_vertex_bounds({&s.boundary, &s.crack}) : used_vertex_bounds({&s.boundary});
         if (params.cracks) {
             // a frame without cracks gets no crack file: assimp writes an empty mesh that no
             // reader (assimp included) accepts; the manifest records "file": null

@@ -216,6 +216,51 @@ TEST_F(McRenderCli, ChunksPlusAssembleAreByteIdenticalToAFullRun) {
     EXPECT_GT(m.at("seconds_per_frame").get<double>(), 0.0);
 }
 
+// The camera frames the bounds of every frame. mc-surface writes each frame's bounds into its
+// manifest, so mc-render does not read every frame's meshes for them: the bounds the files give
+// frame the shot exactly as reading them does, and the manifest's bounds are the ones used.
+TEST_F(McRenderCli, FramesTheShotFromTheSurfaceManifestsBounds) {
+    const Shot shot = write_shot(kSurfacedShot);
+    write_surface(shot, 3);
+    const fs::path r = out() / "render";
+    const auto frame_png = [&] { return files_of(r).at("frame.0002.png"); };
+    ASSERT_EQ(run(), 0) << m_stderr;  // a manifest without bounds (an older mc-surface): read the meshes
+    EXPECT_NE(m_stderr.find("scanned 3 frames for bounds"), std::string::npos) << m_stderr;
+    const std::string scanned = frame_png();
+
+    // the files' own bounds in the manifest: the same image, without reading the meshes for them
+    const fs::path manifest_dir = out() / "surface";
+    nlohmann::json m = read_manifest(manifest_dir);
+    m["per_frame"] = nlohmann::json::array();
+    for (int f = 1; f <= 3; ++f) {
+        Vec3f lo = Vec3f::Constant(INFINITY), hi = Vec3f::Constant(-INFINITY);
+        for (const char* stem : {"boundary", "crack"})
+            for (const TriMesh& mesh : import_meshes(frame_path(manifest_dir, stem, f, "glb")))
+                for (const Vec3f& p : mesh.positions) {
+                    lo = lo.cwiseMin(p);
+                    hi = hi.cwiseMax(p);
+                }
+        m["per_frame"].push_back({{"frame", f}, {"bounds", {{"min", {lo.x(), lo.y(), lo.z()}}, {"max", {hi.x(), hi.y(), hi.z()}}}}});
+    }
+    write_manifest(manifest_dir, m);
+    fs::remove_all(r);
+    ASSERT_EQ(run(), 0) << m_stderr;
+    EXPECT_EQ(m_stderr.find("scanned"), std::string::npos) << m_stderr;
+    EXPECT_NE(m_stderr.find("bounds of frames 1-3 from"), std::string::npos) << m_stderr;
+    EXPECT_TRUE(frame_png() == scanned) << "the manifest's bounds framed the shot differently from the files'";
+
+    // bounds twice as wide in the manifest: the camera pulls back, so they are what it reads
+    for (nlohmann::json& e : m["per_frame"])
+        for (int k = 0; k < 3; ++k) {
+            e["bounds"]["min"][k] = 2 * e["bounds"]["min"][k].get<double>() - 0.5;
+            e["bounds"]["max"][k] = 2 * e["bounds"]["max"][k].get<double>() + 0.5;
+        }
+    write_manifest(manifest_dir, m);
+    fs::remove_all(r);
+    ASSERT_EQ(run(), 0) << m_stderr;
+    EXPECT_FALSE(frame_png() == scanned);
+}
+
 TEST_F(McRenderCli, AssembleNamesAMissingOrStaleFrame) {
     const Shot shot = write_shot(kSurfacedShot);
     write_surface(shot, 3);

@@ -175,6 +175,39 @@ TEST_F(McSurfaceCli, ObjAndWang2019Work) {
     EXPECT_LT(m["per_frame"][kFrames - 1]["broken_edges"].get<int64_t>(), ours_broken);
 }
 
+// mc-render frames a shot from the manifest's per-frame bounds instead of reading every frame's
+// meshes: they must be the bounds of what a reader of the files gets, to the float, in every
+// format (glb keeps the vertex arrays; obj readers rebuild vertices from face corners)
+TEST_F(McSurfaceCli, ManifestBoundsAreTheBoundsOfTheFilesVertices) {
+    for (const char* format : {"glb", "obj"}) {
+        SCOPED_TRACE(format);
+        const fs::path out = m_dir / format;
+        write_inputs(out);
+        const CliRun run = mc_surface(out, std::string("--format ") + format);
+        ASSERT_EQ(run.code, 0) << run.err;
+        const nlohmann::json manifest = read_manifest(out / "surface");
+        ASSERT_EQ(manifest["per_frame"].size(), size_t(kFrames));
+        for (const nlohmann::json& entry : manifest["per_frame"]) {
+            const int n = entry["frame"].get<int>();
+            Vec3f lo = Vec3f::Constant(INFINITY), hi = Vec3f::Constant(-INFINITY);
+            for (const char* stem : {"boundary", "crack"}) {
+                if (entry[stem]["file"].is_null()) continue;
+                for (const TriMesh& m : import_meshes(frame_path(out / "surface", stem, n, format)))
+                    for (const Vec3f& p : m.positions) {
+                        lo = lo.cwiseMin(p);
+                        hi = hi.cwiseMax(p);
+                    }
+            }
+            ASSERT_TRUE(entry.contains("bounds")) << "frame " << n;
+            ASSERT_TRUE(entry["bounds"].is_object()) << "frame " << n;
+            for (int k = 0; k < 3; ++k) {
+                EXPECT_EQ(entry["bounds"]["min"][k].get<float>(), lo[k]) << "frame " << n << " axis " << k;
+                EXPECT_EQ(entry["bounds"]["max"][k].get<float>(), hi[k]) << "frame " << n << " axis " << k;
+            }
+        }
+    }
+}
+
 TEST_F(McSurfaceCli, BadInputFailsNamingTheFileAndWritesNothing) {
     const fs::path out = m_dir / "out";
     write_inputs(out);
