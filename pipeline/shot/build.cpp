@@ -366,19 +366,15 @@ std::optional<RenderParams> build_render(const json& tree) {
     return r;
 }
 
-CacheAttributes derive_cache(const SimModel& sim, const std::optional<SurfaceParams>& surface,
-                             const std::optional<RenderParams>& render) {
+CacheAttributes derive_cache(const SimModel& sim, const std::optional<SurfaceParams>& surface) {
     const bool has_moisture = sim.moisture.has_value();
-    const bool has_plasticity = sim.nacc.has_value();
-    const bool is_moisture_colored = render && render->color_mode == ColorMode::Moisture;
-    const bool is_hardening_colored = render && render->color_mode == ColorMode::Hardening;
     CacheAttributes cache;
     cache.velocity = true;
-    cache.Fe = surface.has_value();                       // core rotation R of Eq. 13
-    cache.Jw = surface.has_value() && has_moisture;       // Eq. 13-14
-    cache.saturation = has_moisture && (surface.has_value() || is_moisture_colored);
-    cache.alpha = has_plasticity && (surface.has_value() || is_hardening_colored);
     cache.theta = has_moisture;
+    cache.saturation = has_moisture;
+    cache.Jw = has_moisture;
+    cache.alpha = sim.nacc.has_value();
+    cache.Fe = surface.has_value();  // core rotation R of Eq. 13: only the surfacing reads it
     return cache;
 }
 

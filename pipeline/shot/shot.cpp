@@ -108,7 +108,7 @@ Shot parse_shot(const std::string& text, const std::string& path) {
     shot.sim = spec::build_sim(tree, issues);
     shot.surface = spec::build_surface(tree);
     shot.render = spec::build_render(tree);
-    shot.sim.cache = spec::derive_cache(shot.sim, shot.surface, shot.render);
+    shot.sim.cache = spec::derive_cache(shot.sim, shot.surface);
     spec::check_across(tree, shot.init, shot.sim, shot.render, issues);
     issues.throw_if_any();
     spec::warn_doubtful(shot.sim, shot.surface, path);

@@ -146,9 +146,28 @@ TEST_F(ShotTest, RenderWithoutTurntableOrCameraSections) {
     EXPECT_TRUE(shot.render->camera.is_auto);
     EXPECT_FALSE(shot.render->turntable);
     EXPECT_EQ(shot.render->color_mode, ColorMode::Hardening);
-    // a hardening-colored render needs alpha; no moisture, so no theta/saturation
+    // the cache holds the physics' state: alpha (plasticity); no moisture, so no theta/saturation;
+    // no surfacing, so no Fe
     EXPECT_TRUE(shot.sim.cache.alpha);
-    EXPECT_FALSE(shot.sim.cache.saturation || shot.sim.cache.theta || shot.sim.cache.Fe);
+    EXPECT_FALSE(shot.sim.cache.saturation || shot.sim.cache.theta || shot.sim.cache.Jw || shot.sim.cache.Fe);
+}
+
+// A render key never re-simulates: in a shot with moisture and no surfacing, the color mode (which
+// decides whether the render draws saturation) leaves the sim slice as it is, so `make` re-runs
+// only the render
+TEST_F(ShotTest, RenderColorModeLeavesTheSimSliceOfAShotWithoutSurfacing) {
+    const std::string base = R"({"mudcrack": 1, "source": {"type": "box"}, "material": {},
+        "plasticity": {}, "moisture": {}, "render": {"color_mode": "MODE"}})";
+    std::string sim_slice;
+    for (const char* mode : {"plain", "moisture", "hardening"}) {
+        std::string text = base;
+        text.replace(text.find("MODE"), 4, mode);
+        const Shot shot = parse_shot(text, "t.json");
+        EXPECT_TRUE(shot.sim.cache.saturation && shot.sim.cache.alpha && shot.sim.cache.theta) << mode;
+        EXPECT_FALSE(shot.sim.cache.Fe) << mode;
+        if (sim_slice.empty()) sim_slice = shot.slice(Stage::Sim);
+        EXPECT_EQ(shot.slice(Stage::Sim), sim_slice) << mode;
+    }
 }
 
 TEST_F(ShotTest, MalformedJsonNamesFileLineAndColumn) {
