@@ -15,6 +15,7 @@
 #include "sim/moisture/pore.h"
 #include "sim/mpm/bspline.h"
 #include "sim/mpm/simulation.h"
+#include "sim/mpm/workspace.h"
 #include "tolerance.h"
 
 namespace mudcrack {
@@ -415,6 +416,72 @@ TEST(Pore, StepMatchesTheClosedFormAndCapsTheJump) {
     np.beta1 = 1;
     EXPECT_NEAR(cohesion_of(np, 0.25), 2.5, tol::kRoundoff);
     EXPECT_EQ(saturation_of(0.2, 0.0), 1.0);
+}
+
+// Eq. 6 and the saturation it reads, from their definitions: s = theta / eta and
+// Jw = det Fw = (1 - eta)(1 - s) + s (the solid keeps its volume, the pores keep s of theirs)
+TEST(Pore, JwAndSaturationFollowEquation6) {
+    for (Real eta : {0.1, 0.4, 0.7})
+        for (Real s : {0.0, 0.25, 0.6, 1.0}) {
+            EXPECT_NEAR(pore_jw(s, eta), (1 - eta) * (1 - s) + s, tol::kRoundoff) << "eta " << eta << " s " << s;
+            EXPECT_NEAR(saturation_of(s * eta, eta), s, tol::kRoundoff) << "eta " << eta << " s " << s;
+        }
+    // a dry particle shrinks to its solid volume, a saturated one keeps its rest volume
+    EXPECT_NEAR(pore_jw(0, 0.3), 0.7, tol::kRoundoff);
+    EXPECT_EQ(pore_jw(1, 0.3), 1.0);
+    EXPECT_EQ(saturation_of(0.5, 0.4), 1.0);  // theta past eta is saturated
+}
+
+// Eq. 11 from its definition: the solid's mass plus the pore water's, m = V0 (rho_s (1 - eta) +
+// rho_w eta s) with rho_w = rho_s / k_r
+TEST(Pore, MassFollowsEquation11) {
+    MoistureParams mp;
+    mp.eta = 0.3;
+    mp.k_r = 2.5;
+    const Real V0 = 1e-6, rho_s = 1800;
+    for (Real s : {0.0, 0.4, 1.0}) {
+        const Real want = V0 * rho_s * (1 - mp.eta) + V0 * mp.eta * s * (rho_s / mp.k_r);
+        EXPECT_NEAR(moist_mass(V0, rho_s, s, mp), want, tol::kRoundoff * want) << "s " << s;
+    }
+}
+
+// The evaporation term r of the moisture system (M + L) theta^{n+1} = M theta^n + r: summed over
+// the nodes, L x vanishes (the weight gradients sum to zero) and sum_i W_i (theta_i^{n+1} -
+// theta_i^n) = dt sum_i r_i, so the particles' water changes by exactly
+// -dt sum_{p boundary} lambda S_p (theta_p - theta_0): drying, never wetting, and by the r of
+// physics.md 4.2 alone.
+TEST(Moisture, WaterLostInAStepIsTheEvaporationTermR) {
+    SimModel model = still_model(0.1);
+    MoistureParams& mp = *model.moisture;
+    mp.D = 0.3;
+    mp.lambda = 0.05;
+    mp.theta0 = 0.1;
+    const Real dt = 1e-2;
+    const test::Lattice l = make_lattice(Vec3::Zero(), Vec3i(8, 8, 8), 0.05);
+    SimState s = make_initial_state(model, l.X, l.V0);
+    set_moisture_field(model, s, [&](const Vec3& x) { return 0.3 + 0.1 * x.x() + 0.05 * x.y(); });
+    std::vector<Real> theta_old(s.size()), V_old(s.size());
+    for (size_t p = 0; p < s.size(); ++p) {
+        theta_old[s.id[p]] = s.theta[p];
+        V_old[s.id[p]] = s.V0[p] * s.J[p];
+    }
+    step(model, s, dt);
+    const std::vector<uint8_t>& is_boundary = s.workspace->moisture.particle_is_boundary;
+    ASSERT_EQ(is_boundary.size(), s.size());
+    Real water_change = 0, r_sum = 0;
+    int n_boundary = 0;
+    for (size_t p = 0; p < s.size(); ++p) {
+        const int id = s.id[p];
+        water_change += V_old[id] * (s.theta[p] - theta_old[id]);
+        if (!is_boundary[p]) continue;
+        ++n_boundary;
+        const Real R = std::cbrt(3 * V_old[id] / (4 * M_PI));  // S = pi R^2 of the equivalent sphere
+        r_sum -= mp.lambda * M_PI * R * R * (theta_old[id] - mp.theta0);
+    }
+    ASSERT_GT(n_boundary, 0);
+    ASSERT_LT(n_boundary, static_cast<int>(s.size())) << "the block needs an inside that does not evaporate";
+    EXPECT_LT(water_change, 0) << "evaporation towards theta0 < theta dries";
+    EXPECT_NEAR(water_change, dt * r_sum, 1e-8 * std::abs(dt * r_sum));
 }
 
 TEST(Moisture, ParticleAreaIsTheEquivalentSphereCrossSection) {

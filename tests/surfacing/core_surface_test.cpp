@@ -356,6 +356,41 @@ TEST(SurfaceFrame, RigidlySeparatedHalvesKeepTheirVolumes) {
     EXPECT_GT(max_x - min_x, 0.2f);
 }
 
+// Eq. 13, y = x_p + Jw^(1/3) R_p (y0 - X_p): on a uniformly shrunk and rotated block (x = s R X,
+// Fe = R, Jw = s^3) every core is the block's own affine image, so a fragment cut off by broken
+// edges keeps Jw times its rest volume. Intact meshes cannot tell: there each welded vertex
+// averages the cores on both sides and the core scale cancels; the crack faces use one side only.
+TEST(SurfaceFrame, CoresOfSeparatedHalvesShrinkByTheCubeRootOfJw) {
+    const TetMesh mesh = box_lattice(6, 2, 3, 0.1);
+    const CoreTopology topo = build_core_topology(mesh);
+    const Mat3 R = rotation(0.4, Vec3(0.3, 1, -0.2));
+    const float jw = 0.7f;
+    const double s = std::cbrt(double(jw));
+    ParticleFrame frame = affine_frame(mesh, s * R, Vec3::Zero(), R, jw);
+    for (size_t p = 0; p < mesh.X.size(); ++p)
+        if (mesh.X[p].x() > 0.3 + 1e-9) frame.P[p].y() += 0.2f;
+    std::vector<int32_t> fb = no_edge_breaks(topo);
+    SurfaceParams params;
+    params.zeta = 1.5;  // Eq. 14: threshold 0.5 (Jw + Jw) zeta = 1.05 > s, only the cut breaks
+    record_edge_breaks(topo, frame, params, fb);
+    const SurfacedFrame out = surface_frame(topo, frame, fb, params);
+    ASSERT_EQ(out.fragments, 2);
+    const std::vector<Real> v0 = particle_rest_volumes(mesh);
+    for (int32_t frag = 0; frag < 2; ++frag) {
+        double expected = 0;
+        for (size_t p = 0; p < mesh.X.size(); ++p)
+            if ((mesh.X[p].x() > 0.3 + 1e-9) == (frag == 1)) expected += jw * v0[p];
+        double volume = 0;
+        for (const TriMesh* m : {&out.boundary, &out.crack}) {
+            std::vector<Tri> faces;
+            for (size_t f = 0; f < m->faces.size(); ++f)
+                if (m->face_fragment[f] == frag) faces.push_back(m->faces[f]);
+            volume += enclosed_volume(faces, [&](int v) { return m->positions[v].cast<double>(); });
+        }
+        EXPECT_NEAR(volume, expected, 1e-5 * expected) << "fragment " << frag;
+    }
+}
+
 TEST(SurfaceFrame, CracksOffBuildsNoCrackFacesButStillSplitsTheBoundary) {
     const TetMesh mesh = box_lattice(4, 3, 3, 0.1);
     const CoreTopology topo = build_core_topology(mesh);

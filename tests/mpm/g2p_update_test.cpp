@@ -1,0 +1,161 @@
+// The G2P's per-particle update (physics.md 7 steps 4-8) against the paper's equations, one step
+// on a handful of particles: the pore update (Eq. 6 Jw, Eq. 10 Fe compensation, Eq. 11 mass,
+// Eq. 12 saturation hardening) and the SVD-free "clearly inside" test in front of the NACC return
+// map (Eq. 8). Each check is written from the equation, not from the kernels the G2P calls, so a
+// changed sign, factor or exponent in the G2P or in sim/moisture/pore.h fails here in
+// milliseconds instead of in the figure-claim integration tests.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <random>
+
+#include "material/material_samples.h"
+#include "mpm_test_util.h"
+#include "sim/core/parallel.h"
+#include "sim/material/nacc.h"
+#include "sim/mpm/simulation.h"
+#include "tolerance.h"
+
+namespace mudcrack {
+namespace {
+
+using test::make_lattice;
+using test::plain_model;
+
+const bool kOneThread = (set_thread_count(1), true);
+
+// a soil with pores and NACC whose particles start at rest, unstressed (Fe = I) and hardened far
+// inside the yield surface (alpha0 = -2: p0 = 3.6 kappa), so the return map leaves them alone and
+// only the pore update moves Fe and alpha. No diffusion and no evaporation: theta stays put.
+SimModel pore_model() {
+    SimModel m = plain_model(0.1);
+    m.nacc = NaccParams{};
+    m.nacc->alpha0 = -2;
+    m.nacc->beta0 = 0.3;
+    m.nacc->beta1 = 0.1;
+    m.moisture = MoistureParams{};
+    m.moisture->eta = 0.4;
+    m.moisture->k_r = 1.5;
+    m.moisture->eps = 0.7;
+    m.moisture->D = 0;
+    m.moisture->lambda = 0;
+    m.moisture->max_log_jw_step = 0;  // uncapped: Jw reaches its target in one step
+    return m;
+}
+
+// Jw of Eq. 6 from its two-phase form: solid (1 - eta) keeps its volume, pores keep s of theirs
+Real eq6_jw(Real s, Real eta) { return (1 - eta) * (1 - s) + s; }
+
+TEST(G2pPoreUpdate, OneStepFollowsEquations6To12) {
+    const SimModel model = pore_model();
+    const MoistureParams& mp = *model.moisture;
+    const Real dt = 1e-3;
+    const test::Lattice l = make_lattice(Vec3::Zero(), Vec3i(2, 2, 2), 0.05);
+    SimState s = make_initial_state(model, l.X, l.V0);
+    // per particle (by id): a saturation, and Jw off its target by a factor exp(offset): drying
+    // (Jw above the target) and wetting (below), by large steps (log1p path) and small ones (the
+    // series path of pore_step, |ratio - 1| < 1e-3)
+    const Real sat[8] = {0.2, 0.2, 0.9, 0.9, 0.5, 0.5, 0.05, 1.0};
+    const Real offset[8] = {0.06, -0.06, 0.1, -0.1, 4e-4, -4e-4, 0.03, -0.08};
+    std::vector<Real> Jw_old(8), alpha_old(8);
+    for (size_t p = 0; p < s.size(); ++p) {
+        const int id = s.id[p];
+        s.theta[p] = sat[id] * mp.eta;
+        s.Jw[p] = eq6_jw(sat[id], mp.eta) * std::exp(offset[id]);
+        Jw_old[id] = s.Jw[p];
+        alpha_old[id] = s.alpha[p];
+    }
+    std::vector<Mat3> Fe_old(8);
+    for (size_t p = 0; p < s.size(); ++p) Fe_old[s.id[p]] = s.Fe[p];
+    step(model, s, dt);
+
+    for (size_t p = 0; p < s.size(); ++p) {
+        const int id = s.id[p];
+        SCOPED_TRACE(testing::Message() << "particle " << id << ": s = " << sat[id] << ", log(Jw / target) = " << offset[id]);
+        ASSERT_NEAR(s.theta[p], sat[id] * mp.eta, tol::kRoundoff) << "theta must not move (D = lambda = 0)";
+        // Eq. 6: Jw = (1 - eta)(1 - s) + s
+        const Real Jw_new = eq6_jw(sat[id], mp.eta);
+        EXPECT_NEAR(s.Jw[p], Jw_new, tol::kRoundoff);
+        // Eq. 12: alpha += eps log(Jw^{n+1} / Jw^n): drying (Jw falls) softens, wetting hardens
+        const Real log_ratio = std::log(Jw_new / Jw_old[id]);
+        EXPECT_NEAR(s.alpha[p] - alpha_old[id], mp.eps * log_ratio, tol::kRoundoff)
+            << "alpha " << alpha_old[id] << " -> " << s.alpha[p];
+        EXPECT_EQ(s.alpha[p] > alpha_old[id], Jw_new > Jw_old[id]) << "the sign of the hardening";
+        // Eq. 10: Fe^{n+1} = (Jw^n / Jw^{n+1})^(1/3) (I + dt C) Fe^n, so Fe Fw keeps det F
+        Mat3 dF = dt * s.C[p];
+        dF.diagonal().array() += 1;
+        const Mat3 Fe_expected = std::pow(Jw_old[id] / Jw_new, 1.0 / 3) * dF * Fe_old[id];
+        EXPECT_LT((s.Fe[p] - Fe_expected).norm(), tol::kRoundoff) << "Fe =\n" << s.Fe[p] << "\nexpected\n" << Fe_expected;
+        EXPECT_NEAR(s.Fe[p].determinant() * s.Jw[p], dF.determinant() * Fe_old[id].determinant() * Jw_old[id],
+                    tol::kRoundoff);
+        // Eq. 11: m = V0 (rho_s (1 - eta) + rho_w eta s), rho_w = rho_s / k_r
+        const Real rho_s = model.elastic.density, rho_w = rho_s / mp.k_r;
+        const Real mass = s.V0[p] * (rho_s * (1 - mp.eta) + rho_w * mp.eta * sat[id]);
+        EXPECT_NEAR(s.mass[p], mass, tol::kRoundoff * mass);
+    }
+}
+
+// the per-step cap on |log Jw ratio| (physics.md 3.2): Jw moves by exactly the cap towards its
+// target, and alpha by eps times it, with the sign of the change
+TEST(G2pPoreUpdate, CappedStepHardensByEpsTimesTheCap) {
+    SimModel model = pore_model();
+    model.moisture->max_log_jw_step = 2e-3;
+    const MoistureParams& mp = *model.moisture;
+    const test::Lattice l = make_lattice(Vec3::Zero(), Vec3i(2, 1, 1), 0.05);
+    SimState s = make_initial_state(model, l.X, l.V0);
+    for (size_t p = 0; p < s.size(); ++p) {
+        s.theta[p] = (s.id[p] == 0 ? 0.1 : 0.9) * mp.eta;
+        s.Jw[p] = eq6_jw(0.5, mp.eta);  // id 0 dries, id 1 wets
+    }
+    const Real Jw0 = eq6_jw(0.5, mp.eta), alpha0 = s.alpha[0];
+    step(model, s, 1e-3);
+    for (size_t p = 0; p < s.size(); ++p) {
+        const Real sign = s.id[p] == 0 ? -1 : 1;
+        EXPECT_NEAR(std::log(s.Jw[p] / Jw0), sign * 2e-3, tol::kRoundoff) << "particle " << s.id[p];
+        EXPECT_NEAR(s.alpha[p] - alpha0, sign * mp.eps * 2e-3, tol::kRoundoff) << "particle " << s.id[p];
+    }
+}
+
+// the G2P skips the return map for states its SVD-free test finds clearly inside Eq. 8's yield
+// surface; over states inside, projected and past both tips, its result is the return map's
+TEST(G2pYield, FastInsideTestAgreesWithTheReturnMap) {
+    SimModel model = plain_model(0.1);
+    model.nacc = NaccParams{};
+    model.nacc->beta0 = model.nacc->beta1 = 0.4;
+    model.nacc->alpha0 = -0.2;
+    const LameParams lame = lame_params(model.elastic);
+    const Real dt = 1e-4;
+    const test::Lattice l = make_lattice(Vec3::Zero(), Vec3i(4, 4, 4), 0.05);
+    std::mt19937_64 rng(18);
+    std::uniform_real_distribution<Real> u(0, 1);
+    std::normal_distribution<Real> g(0, 1);
+    SimState s = make_initial_state(model, l.X, l.V0);
+    std::vector<Mat3> Fe_old(s.size());
+    std::vector<Real> alpha_old(s.size());
+    for (size_t p = 0; p < s.size(); ++p) {
+        // volume and shear spread so that about half the states leave the surface
+        const Real log_J = 0.12 * (u(rng) - 0.5), dev = 0.08 * u(rng);
+        const Vec3 sigma = std::exp(log_J / 3) * Vec3(std::exp(dev * g(rng)), std::exp(dev * g(rng)), std::exp(dev * g(rng)));
+        s.Fe[p] = test::with_singular_values(rng, sigma);
+        s.alpha[p] = -0.3 * u(rng);
+        Fe_old[s.id[p]] = s.Fe[p];
+        alpha_old[s.id[p]] = s.alpha[p];
+    }
+    step(model, s, dt);
+    int inside = 0, outside = 0;
+    for (size_t p = 0; p < s.size(); ++p) {
+        const int id = s.id[p];
+        Mat3 dF = dt * s.C[p];
+        dF.diagonal().array() += 1;
+        const Mat3 Fe_trial = dF * Fe_old[id];
+        const NaccReturn want = nacc_return_map(Fe_trial, alpha_old[id], model.nacc->beta1, *model.nacc, lame);
+        (want.yield_case == kNaccInside ? inside : outside) += 1;
+        EXPECT_LT((s.Fe[p] - want.Fe).norm(), 1e-10) << "particle " << id << " case " << want.yield_case;
+        EXPECT_NEAR(s.alpha[p], want.alpha, 1e-10) << "particle " << id << " case " << want.yield_case;
+    }
+    EXPECT_GT(inside, 8);
+    EXPECT_GT(outside, 8);
+}
+
+}  // namespace
+}  // namespace mudcrack
