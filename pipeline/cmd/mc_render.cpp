@@ -237,14 +237,23 @@ std::optional<Bounds> manifest_bounds(const RenderJob& job) {
         }
         return true;
     };
+    const std::string manifest = (job.src.dir / "manifest.json").string();
     Bounds stage;
     for (int f = job.first; f <= job.last; ++f) {
         const auto it = by_frame.find(f);
-        if (it == by_frame.end() || !it->second->contains("bounds")) return std::nullopt;
+        if (it == by_frame.end() || !it->second->contains("bounds")) {
+            log::info(manifest + ": no bounds for frame " + std::to_string(f) +
+                      " (an older mc-surface): reading every frame's meshes for them");
+            return std::nullopt;
+        }
         const json& b = (*it->second)["bounds"];
         if (b.is_null()) continue;  // a frame with no geometry
         Vec3f lo, hi;
-        if (!b.is_object() || !corner(b, "min", lo) || !corner(b, "max", hi)) return std::nullopt;
+        if (!b.is_object() || !corner(b, "min", lo) || !corner(b, "max", hi)) {
+            log::warn("bad bounds", manifest + ": /per_frame bounds of frame " + std::to_string(f) + " = " + b.dump() +
+                                        ": not {\"min\": [x, y, z], \"max\": [x, y, z]}; reading every frame's meshes instead");
+            return std::nullopt;
+        }
         stage.extend(lo);
         stage.extend(hi);
     }
