@@ -2,12 +2,6 @@
 
 namespace mudcrack {
 
-Bounds mesh_bounds(const TriMesh& mesh) {
-    Bounds b;
-    for (const Vec3f& p : mesh.positions) b.extend(p);
-    return b;
-}
-
 Bounds scene_bounds(const Scene& scene) {
     Bounds b;
     for (const SceneMesh& m : scene.meshes) b.extend(mesh_bounds(m.mesh));
