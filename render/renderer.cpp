@@ -15,6 +15,7 @@
 
 #include "render/colormap.h"
 #include "render/shaders.h"
+#include "sim/core/check.h"
 #include "sim/core/error.h"
 
 namespace mudcrack {
@@ -287,11 +288,11 @@ void Renderer::Impl::release_scene() {
 Renderer::Renderer(const RenderParams& params, const ShadingOptions& options)
     : m_impl(std::make_unique<Impl>()) {
     Impl& r = *m_impl;
-    if (params.width < 1 || params.height < 1 || params.width > kMaxResolution ||
-        params.height > kMaxResolution)
-        throw InputError("render: resolution = [" + std::to_string(params.width) + ", " +
-                         std::to_string(params.height) + "]: expected 1.." +
-                         std::to_string(kMaxResolution) + " pixels per side");
+    // the shot layer bounds /render/resolution (naming the file); here a bad size is a bug
+    MC_CHECK_GE(params.width, 1);
+    MC_CHECK_GE(params.height, 1);
+    MC_CHECK_LE(params.width, kMaxResolution);
+    MC_CHECK_LE(params.height, kMaxResolution);
     if (params.samples < 1)
         throw InputError("render: samples = " + std::to_string(params.samples) + ": expected >= 1");
     if (!(params.alpha_range > 0))

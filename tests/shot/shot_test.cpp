@@ -253,6 +253,10 @@ TEST_F(ShotTest, OutOfRangeNamesPointerValueAndUnits) {
                     {"/material/poisson_ratio = 0.5: must be in (-1, 0.5)"});
     expect_contains(error_of(R"({"mudcrack": 1, "source": {"type": "box"}, "material": {},
         "render": {"resolution": [8, 360]}})"), {"/render/resolution/0 = 8: must be in [16, 16384] [px]"});
+    // the renderer's own limit is checked here, at the shot, where the file can be named
+    expect_contains(error_of(R"({"mudcrack": 1, "source": {"type": "box"}, "material": {},
+        "render": {"resolution": [960, 16385]}})", "shots/huge.json"),
+                    {"shots/huge.json: /render/resolution/1 = 16385: must be in [16, 16384] [px]"});
 }
 
 TEST_F(ShotTest, EnumTypoSuggestsTheChoice) {
