@@ -19,6 +19,13 @@ namespace {
 
 constexpr const char* kManifestName = "manifest.json";
 
+/// The stage binary that writes a folder, named after it: out/demo/init -> mc-init.
+std::string producer_of(const fs::path& dir) {
+    std::string stage = dir.filename().string();
+    if (stage.empty()) stage = dir.parent_path().filename().string();
+    return "mc-" + stage;
+}
+
 std::string utc_now_iso8601() {
     const std::time_t now = std::time(nullptr);
     std::tm utc{};
@@ -63,10 +70,7 @@ nlohmann::json read_manifest(const fs::path& dir) {
     const fs::path path = dir / kManifestName;
     std::error_code ec;
     if (!fs::is_regular_file(path, ec)) {
-        // the folder is named after the stage that makes it: out/demo/init -> mc-init
-        std::string stage = dir.filename().string();
-        if (stage.empty()) stage = dir.parent_path().filename().string();
-        throw InputError(path.string() + ": missing: run mc-" + stage + " first");
+        throw InputError(path.string() + ": missing: run " + producer_of(dir) + " first");
     }
     std::ifstream is(path);
     nlohmann::json manifest = nlohmann::json::parse(is, nullptr, /*allow_exceptions=*/false,
@@ -75,6 +79,23 @@ nlohmann::json read_manifest(const fs::path& dir) {
         throw InputError(path.string() + ": malformed manifest: expected a JSON object (re-run the "
                                          "stage that wrote it)");
     }
+    return manifest;
+}
+
+nlohmann::json read_current_manifest(const fs::path& dir, const std::string& expected_slice_hash) {
+    nlohmann::json manifest = read_manifest(dir);
+    const std::string file = (dir / kManifestName).string();
+    const auto hash = manifest.find("shot_slice_hash");
+    if (hash == manifest.end())
+        throw InputError(file + ": /shot_slice_hash: missing, so it cannot be checked against this shot: re-run " +
+                         producer_of(dir));
+    if (!hash->is_string() || hash->get<std::string>().empty())
+        throw InputError(file + ": /shot_slice_hash = " + hash->dump() + ": not a slice hash: re-run " +
+                         producer_of(dir));
+    const std::string found = hash->get<std::string>();
+    if (found != expected_slice_hash)
+        throw InputError(file + ": /shot_slice_hash = \"" + found + "\": stale for this shot (expected \"" +
+                         expected_slice_hash + "\"): re-run " + producer_of(dir));
     return manifest;
 }
 

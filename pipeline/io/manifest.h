@@ -25,4 +25,13 @@ void write_manifest(const std::filesystem::path& dir, const nlohmann::json& mani
 /// (e.g. "out/demo/init/manifest.json: missing: run mc-init first").
 nlohmann::json read_manifest(const std::filesystem::path& dir);
 
+/// Reads dir/manifest.json, the manifest of the stage a later stage reads from, and checks that it
+/// is current: it exists, parses, records a "shot_slice_hash", and that hash is the one the shot's
+/// slice of that stage hashes to now. Every stage reads its inputs through this one check, so a
+/// missing, malformed, unhashed or stale input is refused with the same message wherever it is
+/// read, naming the file, the key and the value (e.g. "out/demo/sim/manifest.json:
+/// /shot_slice_hash = "9f..": stale for this shot (expected "3c.."): re-run mc-sim").
+/// @param expected_slice_hash Shot::slice_hash of the stage that wrote dir
+nlohmann::json read_current_manifest(const std::filesystem::path& dir, const std::string& expected_slice_hash);
+
 }  // namespace mudcrack

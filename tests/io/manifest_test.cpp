@@ -48,5 +48,37 @@ TEST(Manifest, MissingOrMalformed) {
     test::expect_input_error_naming([&] { read_manifest(dir / "init"); }, "expected a JSON object");
 }
 
+// the one check every stage makes of the manifest it reads: each refusal names the file, the key
+// and the value, and the stage to re-run
+TEST(Manifest, CurrentManifestIsChecked) {
+    ScratchDir dir;
+    const std::filesystem::path sim = dir / "sim";
+    std::filesystem::create_directories(sim);
+    test::expect_input_error_naming([&] { read_current_manifest(sim, "abc"); },
+                                    "sim/manifest.json: missing: run mc-sim first");
+    test::write_file(sim / "manifest.json", "{ \"stage\": ");
+    test::expect_input_error_naming([&] { read_current_manifest(sim, "abc"); }, "sim/manifest.json: malformed");
+
+    nlohmann::json m = make_manifest("sim", "s.json", "abc");
+    m.erase("shot_slice_hash");
+    write_manifest(sim, m);
+    test::expect_input_error_naming([&] { read_current_manifest(sim, "abc"); },
+                                    "sim/manifest.json: /shot_slice_hash: missing");
+    test::expect_input_error_naming([&] { read_current_manifest(sim, "abc"); }, "re-run mc-sim");
+    m["shot_slice_hash"] = 42;
+    write_manifest(sim, m);
+    test::expect_input_error_naming([&] { read_current_manifest(sim, "abc"); },
+                                    "sim/manifest.json: /shot_slice_hash = 42: not a slice hash");
+    m["shot_slice_hash"] = "old";
+    write_manifest(sim, m);
+    test::expect_input_error_naming([&] { read_current_manifest(sim, "abc"); },
+                                    "sim/manifest.json: /shot_slice_hash = \"old\": stale for this shot "
+                                    "(expected \"abc\"): re-run mc-sim");
+
+    m["shot_slice_hash"] = "abc";
+    write_manifest(sim, m);
+    EXPECT_EQ(read_current_manifest(sim, "abc"), m);
+}
+
 }  // namespace
 }  // namespace mudcrack
