@@ -1,138 +1,11 @@
-// mc-init: the tetrahedral initialization stage (issue 2). Reads the shot's /source and /init,
-// builds the particle tet mesh (box or heightfield lattice, or a checked surface filled by CGAL
-// Mesh_3), and writes DIR/init/particles.vdb (P, id, volume0), DIR/init/tets.vtu (tets,
-// boundary faces with UVs) and DIR/init/manifest.json (last). A failed run leaves nothing.
-#include <cstdio>
-#include <filesystem>
-#include <string>
-
-#include <nlohmann/json.hpp>
-
+// mc-init: the tetrahedral initialization stage (pipeline/stages/init/init_stage.h).
 #include "pipeline/cmd/stage_cli.h"
-#include "pipeline/init/init_builder.h"
-#include "pipeline/io/atomic_output.h"
-#include "pipeline/io/manifest.h"
-#include "pipeline/io/points_io.h"
-#include "pipeline/io/tet_mesh_io.h"
-#include "pipeline/shot/shot.h"
-#include "sim/core/error.h"
-#include "sim/core/log.h"
-#include "sim/core/stats.h"
-
-namespace fs = std::filesystem;
-using nlohmann::json;
-
-namespace mudcrack {
-namespace {
-
-/// The particles as a points cache: P, id (= index), the rest volume "volume0" and, for a
-/// heterogeneous soil, the p0 multiplier "strength" (an artist may repaint it in Houdini).
-PointCloud init_points(const InitResult& r) {
-    PointCloud cloud;
-    const size_t n = r.mesh.X.size();
-    cloud.P.resize(n);
-    cloud.id.resize(n);
-    std::vector<float> volume0(n);
-    for (size_t i = 0; i < n; ++i) {
-        cloud.P[i] = r.mesh.X[i].cast<float>();
-        cloud.id[i] = static_cast<int32_t>(i);
-        volume0[i] = static_cast<float>(r.volume0[i]);
-    }
-    cloud.floats.emplace_back("volume0", std::move(volume0));
-    if (!r.strength.empty()) {
-        std::vector<float> strength(n);
-        for (size_t i = 0; i < n; ++i) strength[i] = static_cast<float>(r.strength[i]);
-        cloud.floats.emplace_back("strength", std::move(strength));
-    }
-    cloud.meta_string["mudcrack:stage"] = "init";
-    return cloud;
-}
-
-json vec_json(const Vec3& v) { return json::array({v.x(), v.y(), v.z()}); }
-
-/// The init-specific manifest fields: source, counts, quality, timing.
-void add_init_fields(json& m, const InitParams& params, bool parallel_mesh, const InitResult& r,
-                     double build_seconds) {
-    const MeshQuality& q = r.quality;
-    m["source"] = source_type_name(params.type);
-    m["parallel_mesh"] = parallel_mesh;
-    m["seed"] = params.seed;
-    m["counts"] = {{"particles", q.particles}, {"tets", q.tets}, {"boundary_faces", q.boundary_faces}};
-    json quality = {{"min_dihedral_deg", q.min_dihedral_deg},
-                    {"max_dihedral_deg", q.max_dihedral_deg},
-                    {"mean_edge_length", q.mean_edge_length},
-                    {"tet_volume", q.tet_volume},
-                    {"bbox_min", vec_json(q.bbox_min)},
-                    {"bbox_max", vec_json(q.bbox_max)}};
-    if (params.type == SourceType::Mesh) {
-        quality["surface_volume"] = r.surface_volume;
-        quality["volume_error_pct"] = 100 * (q.tet_volume / r.surface_volume - 1);
-        m["edge_length"] = r.edge_length;
-    }
-    m["quality"] = quality;
-    m["uv_method"] = r.uv_method;
-    m["build_seconds"] = build_seconds;
-    m["rates"] = {{"tets_per_s", q.tets / build_seconds}, {"particles_per_s", q.particles / build_seconds}};
-    m["outputs"] = json::array({"particles.vdb", "tets.vtu"});
-}
-
-void print_summary(const InitParams& params, const InitResult& r, double build_seconds, double wall_seconds,
-                   const fs::path& dir) {
-    const MeshQuality& q = r.quality;
-    std::printf("mc-init %s -> %s\n", source_type_name(params.type), dir.string().c_str());
-    std::printf("  %-22s %14lld\n", "particles", static_cast<long long>(q.particles));
-    std::printf("  %-22s %14lld\n", "tets", static_cast<long long>(q.tets));
-    std::printf("  %-22s %14lld\n", "boundary faces", static_cast<long long>(q.boundary_faces));
-    std::printf("  %-22s %14.2f\n", "min dihedral [deg]", q.min_dihedral_deg);
-    std::printf("  %-22s %14.6g\n", "volume [m^3]", q.tet_volume);
-    if (params.type == SourceType::Mesh)
-        std::printf("  %-22s %+14.3f\n", "vs surface [%]", 100 * (q.tet_volume / r.surface_volume - 1));
-    std::printf("  %-22s %14.2f\n", "build [s]", build_seconds);
-    std::printf("  %-22s %14.0f\n", "tets/s", q.tets / build_seconds);
-    std::printf("  %-22s %14.2f\n", "total [s]", wall_seconds);
-    std::printf("  %-22s %14.1f\n", "peak memory [MiB]", peak_rss_bytes() / 1048576.0);
-    std::fflush(stdout);  // before run_stage's closing log line on stderr
-}
-
-int run_init(const StageOptions& opt, bool parallel_mesh) {
-    WallTimer wall;
-    const Shot shot = load_shot(opt.shot);
-    InitParams params = shot.init;
-    if (opt.seed != 0) params.seed = opt.seed;
-    if (!(shot.sim.h > 0)) throw InputError(opt.shot + ": /sim/h must be > 0");
-    MesherOptions mesher = mesher_options(params, shot.sim.h);
-    mesher.parallel = parallel_mesh;
-
-    // build everything in memory first: a bad source fails before any folder exists
-    WallTimer build_timer;
-    const InitResult r = [&] {
-        try {
-            return build_init(params, mesher);
-        } catch (const ShotValueError& e) {
-            throw InputError(opt.shot + ": " + e.what());  // the builders name the key, not the file
-        }
-    }();
-    const double build_seconds = build_timer.seconds();
-
-    StagingDir staging(fs::path(opt.out) / "init", opt.keep_partial);
-    write_points(staging.path() / "particles.vdb", init_points(r), shot.sim.h);
-    write_tet_mesh_vtu(staging.path() / "tets.vtu", r.mesh);
-    json manifest = make_manifest("init", opt.shot, shot.slice_hash(Stage::Init));
-    add_init_fields(manifest, params, mesher.parallel, r, build_seconds);
-    manifest["wall_seconds"] = wall.seconds();
-    manifest["peak_memory_bytes"] = peak_rss_bytes();
-    write_manifest(staging.path(), manifest);  // last: its presence means the stage completed
-    staging.commit();
-    if (!opt.quiet) print_summary(params, r, build_seconds, wall.seconds(), staging.final_path());
-    return 0;
-}
-
-}  // namespace
-}  // namespace mudcrack
+#include "pipeline/stages/init/init_stage.h"
 
 int main(int argc, char** argv) {
+    using namespace mudcrack;
     bool parallel_mesh = false;
-    return mudcrack::run_stage(
+    return run_stage(
         "mc-init",
         "Tetrahedral initialization: fills the shot's source (mesh, box or heightfield) with "
         "particles, one per tet vertex",
@@ -142,5 +15,5 @@ int main(int argc, char** argv) {
                          "mesh sources: run CGAL Mesh_3 on all threads (TBB); faster, but the mesh "
                          "then depends on thread timing, so reruns are not bit-identical");
         },
-        [&](const mudcrack::StageOptions& opt) { return mudcrack::run_init(opt, parallel_mesh); });
+        [&](const StageOptions& options) { return run_init_stage(options, parallel_mesh); });
 }

@@ -1,5 +1,5 @@
-// mc-sim: the MPM simulation stage (issue 3). Reads DIR/init/, writes DIR/sim/.
-#include "pipeline/cmd/sim_stage.h"
+// mc-sim: the MPM simulation stage (pipeline/stages/sim/sim_stage.h). Reads DIR/init/, writes DIR/sim/.
+#include "pipeline/stages/sim/sim_stage.h"
 #include "pipeline/cmd/stage_cli.h"
 #include "pipeline/shot/shot.h"
 

@@ -1,5 +1,5 @@
 #pragma once
-/// What every stage binary shares (style.md 9): the flag set (--shot, --out, --frames,
+/// What every stage binary shares: the flag set (--shot, --out, --frames,
 /// --threads, --seed, --log-level, --quiet, --keep-partial, --help, --version), exit codes
 /// (0 ok, 1 bad input or failure, 2 bad usage), the one-line error report, and the closing
 /// summary of wall time and peak memory.

@@ -7,8 +7,8 @@
 #include <fstream>
 #include <random>
 
-#include "pipeline/cmd/sim_checkpoint.h"
-#include "pipeline/cmd/sim_frame_stepper.h"
+#include "pipeline/stages/sim/sim_checkpoint.h"
+#include "pipeline/stages/sim/sim_frame_stepper.h"
 #include "sim/core/error.h"
 #include "sim/core/parallel.h"
 #include "sim/mpm/simulation.h"

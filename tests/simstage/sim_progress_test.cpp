@@ -6,7 +6,7 @@
 #include <cstdio>
 #include <string>
 
-#include "pipeline/cmd/sim_progress.h"
+#include "pipeline/stages/sim/sim_progress.h"
 
 using namespace mudcrack;
 

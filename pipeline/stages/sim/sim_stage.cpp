@@ -1,4 +1,4 @@
-#include "pipeline/cmd/sim_stage.h"
+#include "pipeline/stages/sim/sim_stage.h"
 
 #include <algorithm>
 #include <cstdio>
@@ -11,9 +11,9 @@
 
 #include <nlohmann/json.hpp>
 
-#include "pipeline/cmd/sim_checkpoint.h"
-#include "pipeline/cmd/sim_frame_stepper.h"
-#include "pipeline/cmd/sim_progress.h"
+#include "pipeline/stages/sim/sim_checkpoint.h"
+#include "pipeline/stages/sim/sim_frame_stepper.h"
+#include "pipeline/stages/sim/sim_progress.h"
 #include "pipeline/io/manifest.h"
 #include "pipeline/io/points_io.h"
 #include "sim/core/error.h"
@@ -39,17 +39,8 @@ struct InitParticles {
 
 // read DIR/init/ and check that it was made from this shot's init slice
 InitParticles read_init(const fs::path& init_dir, const Shot& shot) {
-    const fs::path manifest_file = init_dir / "manifest.json";
-    if (!fs::exists(manifest_file))
-        throw InputError(manifest_file.string() + ": missing: run mc-init first");
     InitParticles init;
-    init.manifest = read_manifest(init_dir);
-    const std::string expected = shot.slice_hash(Stage::Init);
-    const std::string found = manifest_slice_hash(init.manifest);
-    if (found != expected)
-        throw InputError(manifest_file.string() + ": shot_slice_hash = \"" + found +
-                         "\": the init outputs are stale for this shot (its init slice hashes to \"" +
-                         expected + "\"): re-run mc-init");
+    init.manifest = read_current_manifest(init_dir, shot.slice_hash(Stage::Init));
 
     const fs::path particles_file = init_dir / "particles.vdb";
     const PointCloud cloud = read_points(particles_file);

@@ -1,4 +1,4 @@
-#include "pipeline/cmd/sim_frame_stepper.h"
+#include "pipeline/stages/sim/sim_frame_stepper.h"
 
 #include <algorithm>
 #include <cmath>

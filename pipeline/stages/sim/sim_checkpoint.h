@@ -7,7 +7,7 @@
 #include <string>
 #include <vector>
 
-#include "pipeline/cmd/sim_frame_stepper.h"
+#include "pipeline/stages/sim/sim_frame_stepper.h"
 #include "sim/mpm/simulation.h"
 
 namespace mudcrack {

@@ -1,4 +1,4 @@
-#include "pipeline/cmd/sim_progress.h"
+#include "pipeline/stages/sim/sim_progress.h"
 
 #include <unistd.h>
 

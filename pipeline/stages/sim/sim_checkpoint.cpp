@@ -1,4 +1,4 @@
-#include "pipeline/cmd/sim_checkpoint.h"
+#include "pipeline/stages/sim/sim_checkpoint.h"
 
 #include <algorithm>
 #include <cstdio>

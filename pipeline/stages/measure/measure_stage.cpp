@@ -1,0 +1,193 @@
+#include "pipeline/stages/measure/measure_stage.h"
+
+#include <algorithm>
+#include <cstdio>
+#include <filesystem>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+
+#include "pipeline/io/atomic_output.h"
+#include "pipeline/io/break_history_io.h"
+#include "pipeline/io/manifest.h"
+#include "pipeline/io/points_io.h"
+#include "pipeline/io/tet_mesh_io.h"
+#include "pipeline/measure/shape_measures.h"
+#include "pipeline/shot/shot.h"
+#include "sim/core/error.h"
+#include "surfacing/core_topology.h"
+#include "surfacing/edge_breaks.h"
+#include "surfacing/fragments.h"
+
+namespace fs = std::filesystem;
+using nlohmann::json;
+
+namespace mudcrack {
+namespace {
+
+constexpr const char* kProgram = "mc-measure";
+/// Gaps whose lower particle lies within this many cells of the ground count as lift-off: the
+/// ground's nodes hold the particles whose quadratic stencil reaches them, 1.5 cells deep.
+constexpr Real kGroundBandCells = 1.5;
+
+/// The edges broken at frame n by the break history (broken at or before n).
+std::vector<uint8_t> broken_at(const BreakHistory& history, int n) {
+    std::vector<uint8_t> is_broken(history.first_break.size());
+    for (size_t e = 0; e < is_broken.size(); ++e) is_broken[e] = history.first_break[e] <= n ? 1 : 0;
+    return is_broken;
+}
+
+/// A frame's fragment, surface polygon and crack network figures, as the table's JSON fields.
+json fragment_fields(const FragmentSizes& sizes, const SurfacePolygons& polygons, const CrackNetwork& network) {
+    return {{"fragments", sizes.count},
+            {"largest_fragment_fraction", sizes.largest_fraction},
+            {"weighted_mean_fragment_volume", sizes.weighted_mean_volume},
+            {"surface_polygons", polygons.count},
+            {"weighted_mean_polygon_area", polygons.weighted_mean_area},
+            {"largest_polygon_fraction", polygons.largest_fraction},
+            {"crack_points", network.crack_points},
+            {"oriented_crack_points", network.oriented_points},
+            {"axis_aligned_fraction", network.axis_aligned_fraction},
+            {"junctions", network.junctions},
+            {"t_junction_fraction", network.t_fraction},
+            {"y_junction_fraction", network.y_fraction}};
+}
+
+}  // namespace
+
+int run_measure_stage(const StageOptions& options, const std::string& json_file) {
+    const Shot shot = load_shot(options.shot);
+    const fs::path out(options.out);
+    const fs::path init_dir = out / "init", sim_dir = out / "sim", surface_dir = out / "surface";
+    read_current_manifest(init_dir, shot.slice_hash(Stage::Init));
+    const json sim_manifest = read_current_manifest(sim_dir, shot.slice_hash(Stage::Sim));
+    int first = 0, last = 0;
+    try {
+        first = sim_manifest.at("frames").at("first").get<int>();
+        last = sim_manifest.at("frames").at("last").get<int>();
+    } catch (const json::exception&) {
+        throw InputError((sim_dir / "manifest.json").string() + ": /frames/first and /frames/last: missing or not integers");
+    }
+    if (options.frame_range.is_set()) {
+        if (options.frame_range.first < first || options.frame_range.last > last)
+            throw InputError("--frames " + options.frames + ": outside the cached frames " + std::to_string(first) +
+                             "-" + std::to_string(last) + " of " + (sim_dir / "manifest.json").string());
+        first = options.frame_range.first;
+        last = options.frame_range.last;
+    }
+
+    const TetMesh mesh = read_tet_mesh_vtu(init_dir / "tets.vtu");
+    const std::vector<Real> rest_volume = particle_rest_volumes(mesh);
+    const Real spacing = particle_spacing(rest_volume);
+    const RestColumns columns = build_rest_columns(mesh.X, spacing);
+    // gaps within 1.5 cells of the ground are lift-off: the grid holds that band (GroundBand)
+    GroundBand ground;
+    ground.cell = shot.sim.h;
+    if (shot.sim.ground) {
+        ground.ground_y = shot.sim.ground->height;
+        ground.band = kGroundBandCells * shot.sim.h;
+    }
+    // the boundary particles (the ones a render shows), for the hardening colormap's halves
+    std::vector<int32_t> surface_particles;
+    for (const auto& tri : mesh.boundary)
+        for (int k = 0; k < 3; ++k) surface_particles.push_back(static_cast<int32_t>(tri[k]));
+    std::sort(surface_particles.begin(), surface_particles.end());
+    surface_particles.erase(std::unique(surface_particles.begin(), surface_particles.end()), surface_particles.end());
+    const Real alpha0 = shot.sim.nacc ? shot.sim.nacc->alpha0 : Real(0);
+
+    // fragments only when the surfacing ran: its break history is the one source of "broken"
+    std::optional<CoreTopology> topo;
+    std::optional<BreakHistory> history;
+    int min_particles = 1;
+    if (fs::exists(surface_dir / "manifest.json")) {
+        const json surface_manifest = read_current_manifest(surface_dir, shot.slice_hash(Stage::Surface));
+        min_particles = surface_manifest.value("min_fragment_particles", 1);
+        topo = build_core_topology(mesh);
+        history = read_break_history(surface_dir / kBreakHistoryFile, std::nullopt, topo->n_edges());
+        if (!history)
+            throw InputError((surface_dir / kBreakHistoryFile).string() +
+                             ": missing or damaged (or from another mesh): re-run mc-surface");
+        if (history->last_frame < last)
+            throw InputError((surface_dir / kBreakHistoryFile).string() + ": covers frames up to " +
+                             std::to_string(history->last_frame) + ", not " + std::to_string(last) +
+                             ": re-run mc-surface");
+    }
+
+    if (!options.quiet) {
+        std::printf("%s: %s, %zu particles in %d columns of %.4g m\n", kProgram, shot.name.c_str(), mesh.X.size(),
+                    columns.n_columns(), spacing);
+        std::printf("%6s %8s %11s %9s %9s %8s %10s %8s %10s %9s %13s %8s %6s %6s %8s %8s\n", "frame", "time[s]",
+                    "rise50[mm]", "curl[mm]", "split[%]", "splitH", "lifted[%]", "broken", "fragments", "polygons",
+                    "polygon[m^2]", "axis[%]", "T[%]", "Y[%]", "str[%]", "comp[%]");
+    }
+    json table = json::array();
+    for (int n = first; n <= last; ++n) {
+        const fs::path path = frame_path(sim_dir, "particles", n, "vdb");
+        const PointCloud cloud = read_points(path);
+        const ParticleFrame frame = points_to_frame(cloud, path.string());
+        if (frame.size() != mesh.X.size())
+            throw InputError(path.string() + ": " + std::to_string(frame.size()) + " particles, but " +
+                             (init_dir / "tets.vtu").string() + " has " + std::to_string(mesh.X.size()));
+        std::vector<Vec3> x(frame.size());
+        for (size_t p = 0; p < x.size(); ++p) x[p] = frame.P[p].cast<Real>();
+        const LayerShape shape = measure_layer_shape(columns, mesh.X, x, spacing, ground);
+        const double time = cloud.meta_double.count("mudcrack:time") ? cloud.meta_double.at("mudcrack:time") : 0.0;
+        json row = {{"frame", n},
+                    {"time", time},
+                    {"top_rise_median", shape.top_rise_median},
+                    {"top_rise_p95", shape.top_rise_p95},
+                    {"curl", shape.curl},
+                    {"split_fraction", shape.split_fraction},
+                    {"split_height_median_cells", shape.split_height_median},
+                    {"split_height_p10_cells", shape.split_height_p10},
+                    {"lifted_fraction", shape.lifted_fraction}};
+        std::optional<HardeningHalves> halves;
+        if (!frame.alpha.empty()) {
+            halves = measure_hardening_halves(surface_particles, frame.alpha, alpha0);
+            row["surface_stretched_fraction"] = halves->stretched_fraction;
+            row["surface_compressed_fraction"] = halves->compressed_fraction;
+        }
+        int64_t broken = -1;
+        FragmentSizes sizes;
+        SurfacePolygons polygons;
+        CrackNetwork network;
+        if (topo) {
+            broken = count_broken_edges(history->first_break, n);
+            const std::vector<uint8_t> is_broken = broken_at(*history, n);
+            sizes = measure_fragment_sizes(find_fragments(*topo, is_broken, min_particles), rest_volume);
+            polygons = measure_surface_polygons(*topo, is_broken, columns, min_particles);
+            network = measure_crack_network(*topo, is_broken, columns, min_particles);
+            row["broken_edges"] = broken;
+            row.update(fragment_fields(sizes, polygons, network));
+        }
+        if (!options.quiet) {
+            std::printf("%6d %8.4f %11.2f %9.2f %9.2f %8.2f %10.2f", n, time, 1e3 * shape.top_rise_median,
+                        1e3 * shape.curl, 100 * shape.split_fraction, shape.split_height_median,
+                        100 * shape.lifted_fraction);
+            if (topo)
+                std::printf(" %8lld %10d %9d %13.4g %8.1f %6.1f %6.1f", static_cast<long long>(broken), sizes.count,
+                            polygons.count, polygons.weighted_mean_area, 100 * network.axis_aligned_fraction,
+                            100 * network.t_fraction, 100 * network.y_fraction);
+            else
+                std::printf(" %8s %10s %9s %13s %8s %6s %6s", "-", "-", "-", "-", "-", "-", "-");
+            if (halves)
+                std::printf(" %8.1f %8.1f\n", 100 * halves->stretched_fraction, 100 * halves->compressed_fraction);
+            else
+                std::printf(" %8s %8s\n", "-", "-");
+        }
+        table.push_back(std::move(row));
+    }
+    if (!json_file.empty()) {
+        const json doc = {{"shot", shot.name},
+                          {"particles", mesh.X.size()},
+                          {"column_width", spacing},
+                          {"columns", columns.n_columns()},
+                          {"frames", std::move(table)}};
+        write_text_atomically(json_file, doc.dump(2) + "\n");
+    }
+    return 0;
+}
+
+}  // namespace mudcrack

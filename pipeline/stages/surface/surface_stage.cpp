@@ -1,0 +1,294 @@
+#include "pipeline/stages/surface/surface_stage.h"
+
+#include <algorithm>
+#include <cstdio>
+#include <exception>
+#include <filesystem>
+#include <map>
+#include <mutex>
+#include <optional>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+
+#include "pipeline/io/atomic_output.h"
+#include "pipeline/io/break_history_io.h"
+#include "pipeline/io/checksum.h"
+#include "pipeline/io/manifest.h"
+#include "pipeline/io/mesh_io.h"
+#include "pipeline/io/points_io.h"
+#include "pipeline/io/tet_mesh_io.h"
+#include "pipeline/shot/shot.h"
+#include "sim/core/bounds.h"
+#include "sim/core/error.h"
+#include "sim/core/log.h"
+#include "sim/core/parallel.h"
+#include "sim/core/stats.h"
+#include "surfacing/core_surface.h"
+#include "surfacing/edge_breaks.h"
+
+namespace fs = std::filesystem;
+using nlohmann::json;
+
+namespace mudcrack {
+namespace {
+
+/// Hash of everything the break history depends on: the sim run (its manifest), Eq. 14's
+/// parameters, and the mesh.
+uint64_t break_source_hash(const json& sim_manifest, const SurfaceParams& params, const CoreTopology& topo) {
+    std::ostringstream os;
+    os << sim_manifest.dump() << "|" << surface_mode_name(params.mode) << "|";
+    os.precision(17);
+    os << params.zeta << "|" << params.length_consistent << "|" << topo.n_edges() << "|" << topo.n_tets();
+    const std::string s = os.str();
+    return fnv1a64(s.data(), s.size());
+}
+
+/// Loads one sim cache and checks that it is the expected frame of this mesh.
+ParticleFrame load_frame(const fs::path& sim_dir, int frame_number, const CoreTopology& topo) {
+    const fs::path path = frame_path(sim_dir, "particles", frame_number, "vdb");
+    const PointCloud cloud = read_points(path);  // missing, truncated, foreign or other-version files throw
+    ParticleFrame frame = points_to_frame(cloud, path.string());
+    const auto it = cloud.meta_int.find("mudcrack:frame");
+    if (it != cloud.meta_int.end() && it->second != frame_number)
+        throw InputError(path.string() + ": mudcrack:frame = " + std::to_string(it->second) + ": expected " +
+                         std::to_string(frame_number));
+    frame.frame = frame_number;
+    try {
+        check_frame_fits(topo, frame);
+    } catch (const InputError& e) {
+        throw InputError(path.string() + ": " + e.what() + " in DIR/init/tets.vtu");
+    }
+    return frame;
+}
+
+/// Runs fn(i) for i in [0, n), over items in parallel when there are enough of them (each item
+/// then runs single-threaded inside), else one by one with the threads inside each item.
+/// Rethrows the exception of the lowest failing index, so errors are deterministic.
+template <class Fn>
+void for_each_item(int n, Fn&& fn) {
+    std::vector<std::exception_ptr> error(n);
+    auto guarded = [&](int64_t i) {
+        try {
+            fn(static_cast<int>(i));
+        } catch (...) {
+            error[i] = std::current_exception();
+        }
+    };
+    if (n >= thread_count() && thread_count() > 1)
+        parallel_for(n, guarded);
+    else
+        for (int i = 0; i < n; ++i) guarded(i);
+    for (const auto& e : error)
+        if (e) std::rethrow_exception(e);
+}
+
+/// The break history of frames first..last: Eq. 14 on every cached frame (order-free: a minimum).
+BreakHistory scan_breaks(const fs::path& sim_dir, int first, int last, const CoreTopology& topo,
+                         const SurfaceParams& params, uint64_t source_hash) {
+    BreakHistory h;
+    h.source_hash = source_hash;
+    h.first_frame = first;
+    h.last_frame = last;
+    h.first_break = no_edge_breaks(topo);
+    std::mutex merge;
+    for_each_item(last - first + 1, [&](int i) {
+        const ParticleFrame frame = load_frame(sim_dir, first + i, topo);
+        std::vector<int32_t> mine = no_edge_breaks(topo);
+        record_edge_breaks(topo, frame, params, mine);
+        const std::lock_guard<std::mutex> lock(merge);
+        merge_edge_breaks(h.first_break, mine);
+    });
+    return h;
+}
+
+/// The bounds of the vertices the frame's faces use, over every mesh, as the manifest's
+/// {"min": [x, y, z], "max": [x, y, z]} (null when no mesh has a face). A reader of the files
+/// gets the same floats (every format we write keeps float32 positions exactly, and readers that
+/// rebuild vertices from face corners drop unused ones), so mc-render frames a shot from the
+/// manifest alone, exactly as from the files, instead of reading every frame's meshes.
+json bounds_json(const std::vector<const TriMesh*>& meshes) {
+    Bounds b;
+    for (const TriMesh* m : meshes) b.extend(used_vertex_bounds(*m));
+    if (b.is_empty()) return nullptr;
+    return {{"min", {b.min.x(), b.min.y(), b.min.z()}}, {"max", {b.max.x(), b.max.y(), b.max.z()}}};
+}
+
+struct FrameResult {
+    json entry;
+    double surfacing_seconds = 0;  // surface_frame only (no file I/O)
+    int64_t triangles = 0;
+};
+
+}  // namespace
+
+int run_surface_stage(const StageOptions& options, const SurfaceStageOptions& surface_options) {
+    const std::string& mode_flag = surface_options.mode;
+    const std::string& format_flag = surface_options.format;
+    WallTimer wall;
+    const Shot shot = load_shot(options.shot);
+    if (!shot.surface)
+        throw InputError(shot.path + ": /surfacing: missing: this shot has no surfacing stage (add a \"surfacing\" section)");
+    SurfaceParams params = *shot.surface;
+    if (!mode_flag.empty()) params.mode = mode_flag == "wang2019" ? SurfaceMode::Wang2019 : SurfaceMode::Ours;
+    if (!format_flag.empty()) params.format = format_flag;
+    if (!is_supported_mesh_format(params.format))
+        throw InputError("--format " + params.format + ": " + mesh_format_refusal(params.format));
+
+    const fs::path out = options.out, init_dir = out / "init", sim_dir = out / "sim", surface_dir = out / "surface";
+    const json init_manifest = read_current_manifest(init_dir, shot.slice_hash(Stage::Init));
+    const json sim_manifest = read_current_manifest(sim_dir, shot.slice_hash(Stage::Sim));
+    int sim_first = 0, sim_last = -1;
+    try {
+        sim_first = sim_manifest.at("frames").at("first").get<int>();
+        sim_last = sim_manifest.at("frames").at("last").get<int>();
+    } catch (const json::exception&) {
+        throw InputError((sim_dir / "manifest.json").string() + ": /frames/first and /frames/last: missing or not integers");
+    }
+    int first = sim_first, last = sim_last;
+    if (options.frame_range.is_set()) {
+        first = options.frame_range.first;
+        last = options.frame_range.last;
+        if (first < sim_first || last > sim_last)
+            throw InputError("--frames " + options.frames + ": outside the cached frames " + std::to_string(sim_first) +
+                             "-" + std::to_string(sim_last) + " of " + (sim_dir / "manifest.json").string());
+    }
+
+    // preprocessing, once per tet mesh
+    WallTimer timer;
+    const fs::path tets_file = init_dir / "tets.vtu";
+    const TetMesh mesh = read_tet_mesh_vtu(tets_file);
+    CoreTopology topo;
+    try {
+        topo = build_core_topology(mesh);
+    } catch (const InputError& e) {
+        throw InputError(tets_file.string() + ": " + e.what());
+    }
+    const double preprocessing_seconds = timer.seconds();
+    log::info("particle cores: " + std::to_string(topo.n_particles) + " particles, " + std::to_string(topo.n_tets()) +
+              " tets, " + std::to_string(topo.n_edges()) + " edges, " + std::to_string(topo.skin_faces.size()) +
+              " boundary faces (" + std::to_string(preprocessing_seconds) + " s)");
+
+    // an existing surface folder of the same shot, mode and format is updated in place by --frames
+    json previous;
+    const bool update_in_place = options.frame_range.is_set() && fs::exists(surface_dir / "manifest.json") && [&] {
+        try {
+            previous = read_manifest(surface_dir);
+        } catch (const InputError&) {
+            return false;
+        }
+        return manifest_slice_hash(previous) == shot.slice_hash(Stage::Surface) &&
+               previous.value("mode", "") == surface_mode_name(params.mode) &&
+               previous.value("format", "") == params.format;
+    }();
+    std::optional<StagingDir> staging;
+    if (!update_in_place) staging.emplace(surface_dir, options.keep_partial);
+    const fs::path dir = update_in_place ? surface_dir : staging->path();
+
+    // the break history: reused when it matches the inputs and covers the frames, else scanned
+    timer.reset();
+    const uint64_t source_hash = break_source_hash(sim_manifest, params, topo);
+    std::optional<BreakHistory> history;
+    if (update_in_place) history = read_break_history(surface_dir / kBreakHistoryFile, source_hash, topo.n_edges());
+    const bool reused = history && history->first_frame <= sim_first && history->last_frame >= last;
+    if (!reused) {
+        log::info("break history: scanning frames " + std::to_string(sim_first) + "-" + std::to_string(sim_last));
+        history = scan_breaks(sim_dir, sim_first, sim_last, topo, params, source_hash);
+        write_break_history(dir / kBreakHistoryFile, *history);
+    }
+    const double break_seconds = timer.seconds();
+
+    // frames, in parallel; each writes its own files atomically
+    const int n_frames = last - first + 1;
+    std::vector<FrameResult> results(n_frames);
+    for_each_item(n_frames, [&](int i) {
+        const int n = first + i;
+        const ParticleFrame frame = load_frame(sim_dir, n, topo);
+        WallTimer t;
+        const SurfacedFrame s = surface_frame(topo, frame, history->first_break, params);
+        results[i].surfacing_seconds = t.seconds();
+        results[i].triangles = int64_t(s.boundary.faces.size() + s.crack.faces.size());
+        const fs::path boundary_file = frame_path(dir, "boundary", n, params.format);
+        export_meshes(boundary_file, {s.boundary}, params.format);
+        json entry = {{"frame", n},
+                      {"boundary", {{"file", boundary_file.filename().string()},
+                                    {"vertices", s.boundary.positions.size()},
+                                    {"faces", s.boundary.faces.size()}}},
+                      {"broken_edges", s.broken_edges},
+                      {"fragments", s.fragments},
+                      {"culled_fragments", s.culled_fragments},
+                      {"surfacing_seconds", results[i].surfacing_seconds}};
+        entry["bounds"] = params.cracks ? bounds_json({&s.boundary, &s.crack}) : bounds_json({&s.boundary});
+        if (params.cracks) {
+            // a frame without cracks gets no crack file: assimp writes an empty mesh that no
+            // reader (assimp included) accepts; the manifest records "file": null
+            const fs::path crack_file = frame_path(dir, "crack", n, params.format);
+            std::error_code ec;
+            fs::remove(crack_file, ec);  // a stale file of an earlier run
+            if (!s.crack.faces.empty()) export_meshes(crack_file, {s.crack}, params.format);
+            entry["crack"] = {{"file", s.crack.faces.empty() ? json(nullptr) : json(crack_file.filename().string())},
+                              {"vertices", s.crack.positions.size()},
+                              {"faces", s.crack.faces.size()}};
+        }
+        results[i].entry = std::move(entry);
+    });
+
+    // the manifest, last (merged with the frames already there when updating in place)
+    std::map<int, json> frames;
+    if (update_in_place && previous.contains("per_frame"))
+        for (const json& e : previous["per_frame"]) frames[e.value("frame", 0)] = e;
+    double surfacing_seconds = 0;
+    int64_t triangles = 0;
+    for (const FrameResult& r : results) {
+        frames[r.entry["frame"].get<int>()] = r.entry;
+        surfacing_seconds += r.surfacing_seconds;
+        triangles += r.triangles;
+    }
+    json per_frame = json::array();
+    for (auto& [n, e] : frames) per_frame.push_back(e);
+    json m = make_manifest("surface", shot.path, shot.slice_hash(Stage::Surface));
+    m["inputs"] = {{"init", {{"dir", init_dir.string()}, {"slice_hash", manifest_slice_hash(init_manifest)}}},
+                   {"sim", {{"dir", sim_dir.string()}, {"slice_hash", manifest_slice_hash(sim_manifest)}}}};
+    m["mode"] = surface_mode_name(params.mode);
+    m["format"] = params.format;
+    m["zeta"] = params.zeta;
+    m["length_consistent"] = params.length_consistent;
+    m["cracks"] = params.cracks;
+    m["min_fragment_particles"] = params.min_fragment_particles;
+    // fps: the shot's (/frames/fps), so a DCC importer sets its scene's rate from this manifest alone
+    m["frames"] = {{"first", frames.begin()->first}, {"last", frames.rbegin()->first}, {"count", frames.size()},
+                   {"fps", shot.sim.time.fps}, {"this_run", {{"first", first}, {"last", last}}}};
+    m["particles"] = topo.n_particles;
+    m["tets"] = topo.n_tets();
+    m["edges"] = topo.n_edges();
+    m["boundary_faces"] = topo.skin_faces.size();
+    m["preprocessing_seconds"] = preprocessing_seconds;
+    m["topology_bytes"] = topo.memory_bytes();
+    m["topology_bytes_per_tet"] = double(topo.memory_bytes()) / topo.n_tets();
+    m["break_history"] = {{"file", kBreakHistoryFile}, {"reused", reused}, {"frames_scanned", reused ? 0 : sim_last - sim_first + 1},
+                          {"seconds", break_seconds}};
+    m["surfacing_seconds"] = surfacing_seconds;
+    m["tets_per_second"] = surfacing_seconds > 0 ? double(topo.n_tets()) * n_frames / surfacing_seconds : 0.0;
+    m["triangles_per_second"] = surfacing_seconds > 0 ? double(triangles) / surfacing_seconds : 0.0;
+    m["threads"] = thread_count();
+    m["wall_seconds"] = wall.seconds();
+    m["peak_memory_bytes"] = peak_rss_bytes();
+    m["per_frame"] = per_frame;
+    write_manifest(dir, m);
+    if (staging) staging->commit();
+
+    // results table on stdout
+    std::printf("frame  boundary_faces  crack_faces  broken_edges  fragments\n");
+    for (const FrameResult& r : results)
+        std::printf("%5d  %14lld  %11lld  %12lld  %9d\n", r.entry["frame"].get<int>(),
+                    (long long)r.entry["boundary"]["faces"].get<int64_t>(),
+                    (long long)(r.entry.contains("crack") ? r.entry["crack"]["faces"].get<int64_t>() : 0),
+                    (long long)r.entry["broken_edges"].get<int64_t>(), r.entry["fragments"].get<int>());
+    std::printf("surfaced %d frames: %.3g tets/s, %.3g triangles/s per frame compute; wall %.2f s\n", n_frames,
+                m["tets_per_second"].get<double>(), m["triangles_per_second"].get<double>(), wall.seconds());
+    return 0;
+}
+
+}  // namespace mudcrack
