@@ -55,6 +55,15 @@ void check_gl(const char* what) {
         }() + " during " + what);
 }
 
+/// What GL says about a shader or program that failed (get_log: glGetShaderInfoLog or
+/// glGetProgramInfoLog).
+template <class GetLog>
+std::string info_log(GLuint id, GetLog get_log) {
+    char log[4096] = {0};
+    get_log(id, sizeof log, nullptr, log);
+    return log;
+}
+
 GLuint compile(GLenum type, const std::string& source, const char* name) {
     const GLuint s = glCreateShader(type);
     const char* text = source.c_str();
@@ -63,8 +72,7 @@ GLuint compile(GLenum type, const std::string& source, const char* name) {
     GLint ok = 0;
     glGetShaderiv(s, GL_COMPILE_STATUS, &ok);
     if (!ok) {
-        char log[4096];
-        glGetShaderInfoLog(s, sizeof log, nullptr, log);
+        const std::string log = info_log(s, glGetShaderInfoLog);
         glDeleteShader(s);
         throw RuntimeError(std::string("render: shader ") + name + " does not compile: " + log);
     }
@@ -89,11 +97,9 @@ struct Program {
         glDeleteShader(fs);
         GLint ok = 0;
         glGetProgramiv(id, GL_LINK_STATUS, &ok);
-        if (!ok) {
-            char log[4096];
-            glGetProgramInfoLog(id, sizeof log, nullptr, log);
-            throw RuntimeError(std::string("render: program ") + name + " does not link: " + log);
-        }
+        if (!ok)
+            throw RuntimeError(std::string("render: program ") + name + " does not link: " +
+                               info_log(id, glGetProgramInfoLog));
     }
     GLint loc(const char* name) {
         auto it = locations.find(name);
