@@ -313,6 +313,25 @@ TEST_F(McRenderCli, MissingSurfaceStageIsNamed) {
     EXPECT_FALSE(fs::exists(out() / "render"));
 }
 
+// the surface manifest is read through the one input check every stage makes: a manifest without
+// a slice hash, or with another shot's, is refused naming the file and key
+TEST_F(McRenderCli, UnhashedOrStaleSurfaceIsRefused) {
+    const Shot shot = write_shot(kSurfacedShot);
+    write_surface(shot, 3);
+    nlohmann::json m = read_manifest(out() / "surface");
+    m.erase("shot_slice_hash");
+    write_manifest(out() / "surface", m);
+    EXPECT_EQ(run(), 1);
+    EXPECT_NE(m_stderr.find("surface/manifest.json: /shot_slice_hash: missing"), std::string::npos) << m_stderr;
+    m["shot_slice_hash"] = "0000000000000000";
+    write_manifest(out() / "surface", m);
+    EXPECT_EQ(run(), 1);
+    EXPECT_NE(m_stderr.find("surface/manifest.json: /shot_slice_hash = \"0000000000000000\": stale"),
+              std::string::npos)
+        << m_stderr;
+    EXPECT_FALSE(fs::exists(out() / "render"));
+}
+
 TEST_F(McRenderCli, BadShotValuesAreRefused) {
     // an unknown color mode and a zero resolution never get past the shot layer
     std::string text = kSurfacedShot;
