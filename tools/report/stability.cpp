@@ -110,6 +110,22 @@ void append_tet(ParticleBlock& b, const std::array<Vec3, 4>& corners) {
     }
 }
 
+// the degenerate-tet cases: one tet from init, on top of the base block or alone
+struct DegenerateTet {
+    const char* name;
+    const char* description;
+    bool keeps_block;
+    std::array<Vec3, 4> corners;
+};
+const DegenerateTet kDegenerateTets[] = {
+    {"tet_flat", "block plus a flat (coplanar) tet from init: zero rest volumes", true,
+     {Vec3(0.05, 0.3, 0.05), Vec3(0.1, 0.3, 0.05), Vec3(0.05, 0.3, 0.1), Vec3(0.1, 0.3, 0.1)}},
+    {"tet_needle", "block plus a needle tet (0.1 m long, 1e-6 m wide) on its top", true,
+     {Vec3(0.1, 0.26, 0.1), Vec3(0.1, 0.36, 0.1), Vec3(0.100001, 0.3, 0.1), Vec3(0.1, 0.3, 0.100001)}},
+    {"tet_sliver_alone", "a lone sliver tet (rest volume ~1e-20 m^3) falling onto the ground", false,
+     {Vec3(0.1, 0.1, 0.1), Vec3(0.13, 0.1, 0.1), Vec3(0.1, 0.13, 0.1), Vec3(0.115, 0.115, 0.1 + 1e-16)}},
+};
+
 // the shot of the "dt past the elastic bound" case: dt twice the bound, through the shot loader
 std::string dt_past_bound_shot() {
     SimModel m;
@@ -218,26 +234,11 @@ const std::vector<CaseEntry>& case_table() {
             c.model.initial_velocity = Vec3(0, -50, 0);
             return c;
         });
-        add("tet_flat", "degenerate tets", "block plus a flat (coplanar) tet from init: zero rest volumes",
-            [](Scale s) {
+        for (const DegenerateTet& d : kDegenerateTets)
+            add(d.name, "degenerate tets", d.description, [d](Scale s) {
                 CaseSetup c = base_scene(s);
-                append_tet(c.particles, {Vec3(0.05, 0.3, 0.05), Vec3(0.1, 0.3, 0.05), Vec3(0.05, 0.3, 0.1),
-                                         Vec3(0.1, 0.3, 0.1)});
-                return c;
-            });
-        add("tet_needle", "degenerate tets", "block plus a needle tet (0.1 m long, 1e-6 m wide) on its top",
-            [](Scale s) {
-                CaseSetup c = base_scene(s);
-                append_tet(c.particles, {Vec3(0.1, 0.26, 0.1), Vec3(0.1, 0.36, 0.1), Vec3(0.100001, 0.3, 0.1),
-                                         Vec3(0.1, 0.3, 0.100001)});
-                return c;
-            });
-        add("tet_sliver_alone", "degenerate tets", "a lone sliver tet (rest volume ~1e-20 m^3) falling onto the ground",
-            [](Scale s) {
-                CaseSetup c = base_scene(s);
-                c.particles = {};
-                append_tet(c.particles, {Vec3(0.1, 0.1, 0.1), Vec3(0.13, 0.1, 0.1), Vec3(0.1, 0.13, 0.1),
-                                         Vec3(0.115, 0.115, 0.1 + 1e-16)});
+                if (!d.keeps_block) c.particles = {};
+                append_tet(c.particles, d.corners);
                 return c;
             });
         return t;
