@@ -184,14 +184,11 @@ void build_box(const json& tree, BoxSource& box, Issues& issues) {
 void build_heightfield(json& tree, const std::string& shot_path, HeightfieldSource& hf, Issues& issues) {
     const json& size = tree.at(json::json_pointer("/source/heightfield/size"));
     hf.size = Vec3(size[0].get<double>(), 0, size[1].get<double>());
-    read_fields<HeightfieldSource>(tree, "/source/heightfield", hf,
-                                   {{"base", &HeightfieldSource::base},
-                                    {"amplitude", &HeightfieldSource::amplitude},
-                                    {"channel_depth", &HeightfieldSource::channel_depth},
-                                    {"channel_width", &HeightfieldSource::channel_width},
-                                    {"channel_meander", &HeightfieldSource::channel_meander},
-                                    {"image_height", &HeightfieldSource::image_height},
-                                    {"spacing", &HeightfieldSource::spacing}});
+    using H = HeightfieldSource;
+    read_fields<H>(tree, "/source/heightfield", hf,
+                   {{"base", &H::base}, {"amplitude", &H::amplitude}, {"channel_depth", &H::channel_depth},
+                    {"channel_width", &H::channel_width}, {"channel_meander", &H::channel_meander},
+                    {"image_height", &H::image_height}, {"spacing", &H::spacing}});
     if (has(tree, "/source/heightfield/image"))
         hf.image = resolve_existing(tree, "/source/heightfield/image", shot_path, issues);
     // the channel must not cut through the slab's bottom
@@ -225,19 +222,13 @@ void build_plasticity(json& tree, SimModel& model) {
 void build_moisture(json& tree, SimModel& model, Issues& issues) {
     if (!has(tree, "/moisture")) return;
     MoistureParams m;
-    read_fields<MoistureParams>(tree, "/moisture", m,
-                                {{"eta", &MoistureParams::eta},
-                                 {"k_r", &MoistureParams::k_r},
-                                 {"eps", &MoistureParams::eps},
-                                 {"D", &MoistureParams::D},
-                                 {"lambda", &MoistureParams::lambda},
-                                 {"theta0", &MoistureParams::theta0},
-                                 {"cg_tolerance", &MoistureParams::cg_tolerance},
-                                 {"cg_max_iterations", &MoistureParams::cg_max_iterations},
-                                 {"seal_colliders", &MoistureParams::seal_colliders},
-                                 {"implicit_robin", &MoistureParams::implicit_robin},
-                                 {"interval", &MoistureParams::interval},
-                                 {"max_log_jw_step", &MoistureParams::max_log_jw_step}});
+    using M = MoistureParams;
+    read_fields<M>(tree, "/moisture", m,
+                   {{"eta", &M::eta}, {"k_r", &M::k_r}, {"eps", &M::eps}, {"D", &M::D}, {"lambda", &M::lambda},
+                    {"theta0", &M::theta0}, {"cg_tolerance", &M::cg_tolerance},
+                    {"cg_max_iterations", &M::cg_max_iterations}, {"seal_colliders", &M::seal_colliders},
+                    {"implicit_robin", &M::implicit_robin}, {"interval", &M::interval},
+                    {"max_log_jw_step", &M::max_log_jw_step}});
     m.evaporation = text(tree, "/moisture/evaporation") == "surface" ? MoistureParams::Evaporation::Surface
                                                                     : MoistureParams::Evaporation::Grid;
     if (m.implicit_robin && m.evaporation == MoistureParams::Evaporation::Surface)
@@ -259,14 +250,10 @@ void build_moisture(json& tree, SimModel& model, Issues& issues) {
 
 void build_time(const json& tree, SimModel& model, Issues& issues) {
     TimeParams& t = model.time;
-    read_fields<TimeParams>(tree, "/sim", t,
-                            {{"dt_max", &TimeParams::dt_max},
-                             {"cfl_velocity", &TimeParams::cfl_velocity},
-                             {"cfl_elastic", &TimeParams::cfl_elastic}});
-    read_fields<TimeParams>(tree, "/frames", t,
-                            {{"fps", &TimeParams::fps},
-                             {"start", &TimeParams::frame_start},
-                             {"end", &TimeParams::frame_end}});
+    using T = TimeParams;
+    read_fields<T>(tree, "/sim", t,
+                   {{"dt_max", &T::dt_max}, {"cfl_velocity", &T::cfl_velocity}, {"cfl_elastic", &T::cfl_elastic}});
+    read_fields<T>(tree, "/frames", t, {{"fps", &T::fps}, {"start", &T::frame_start}, {"end", &T::frame_end}});
     if (t.frame_end < t.frame_start && !issues.has("/frames"))
         issues.add("/frames/end", issues.value_of(tree, "/frames/end"),
                    "must be >= /frames/start = " + std::to_string(t.frame_start));
@@ -368,12 +355,10 @@ std::optional<SurfaceParams> build_surface(const json& tree) {
     if (!has(tree, "/surfacing")) return std::nullopt;
     SurfaceParams s;
     s.mode = text(tree, "/surfacing/mode") == "wang2019" ? SurfaceMode::Wang2019 : SurfaceMode::Ours;
-    read_fields<SurfaceParams>(tree, "/surfacing", s,
-                               {{"zeta", &SurfaceParams::zeta},
-                                {"length_consistent", &SurfaceParams::length_consistent},
-                                {"cracks", &SurfaceParams::cracks},
-                                {"format", &SurfaceParams::format},
-                                {"min_fragment_particles", &SurfaceParams::min_fragment_particles}});
+    using S = SurfaceParams;
+    read_fields<S>(tree, "/surfacing", s,
+                   {{"zeta", &S::zeta}, {"length_consistent", &S::length_consistent}, {"cracks", &S::cracks},
+                    {"format", &S::format}, {"min_fragment_particles", &S::min_fragment_particles}});
     return s;
 }
 
@@ -386,21 +371,17 @@ std::optional<RenderParams> build_render(const json& tree) {
     r.color_mode = color_mode(text(tree, "/render/color_mode"));
     r.camera.is_auto = !has(tree, "/render/camera");
     if (!r.camera.is_auto) {
-        read_fields<CameraParams>(tree, "/render/camera", r.camera,
-                                  {{"position", &CameraParams::position},
-                                   {"target", &CameraParams::target},
-                                   {"fov", &CameraParams::fov_deg}});
+        using C = CameraParams;
+        read_fields<C>(tree, "/render/camera", r.camera,
+                       {{"position", &C::position}, {"target", &C::target}, {"fov", &C::fov_deg}});
     }
-    read_fields<RenderParams>(tree, "/render", r,
-                              {{"samples", &RenderParams::samples},
-                               {"albedo", &RenderParams::albedo},
-                               {"alpha_range", &RenderParams::alpha_range},
-                               {"fps", &RenderParams::fps}});
+    using R = RenderParams;
+    read_fields<R>(tree, "/render", r,
+                   {{"samples", &R::samples}, {"albedo", &R::albedo}, {"alpha_range", &R::alpha_range},
+                    {"fps", &R::fps}});
     r.turntable = has(tree, "/render/turntable");
     if (r.turntable)
-        read_fields<RenderParams>(tree, "/render/turntable", r,
-                                  {{"views", &RenderParams::turntable_views},
-                                   {"frame", &RenderParams::turntable_frame}});
+        read_fields<R>(tree, "/render/turntable", r, {{"views", &R::turntable_views}, {"frame", &R::turntable_frame}});
     return r;
 }
 
