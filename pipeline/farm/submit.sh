@@ -186,6 +186,21 @@ after() {  # after ID... -> "afterok:ID:ID" (empty without ids)
     [ ${#ids[@]} -gt 0 ] && (IFS=:; echo "afterok:${ids[*]}") || true
 }
 
+# one job array over a stage's frame chunks ("FIRST LAST" each), after the jobs in deps; each
+# array task is recorded as its own row. Sets array_id (a $(...) call could not record).
+submit_chunk_array() {  # submit_chunk_array STAGE CLASS CHUNK...
+    local stage=$1 class=$2
+    shift 2
+    local chunks=("$@") i a b
+    printf '%s\n' "${chunks[@]}" >"$farm/$stage.chunks"
+    array_id=$(submit_task "$class" "$stage" "$(after "${deps[@]+"${deps[@]}"}")" "$stage-chunk" "$farm/$stage.chunks" \
+        -- --array="1-${#chunks[@]}")
+    for i in "${!chunks[@]}"; do
+        read -r a b <<<"${chunks[$i]}"
+        record "$stage" "${array_id}_$((i + 1))" "$a-$b" "$(farm_task_name "$stage" "$a" "$b")"
+    done
+}
+
 deps=()
 if [ $run_init -eq 1 ]; then
     id=$(submit_task INIT init "" init)
@@ -205,14 +220,8 @@ if [ -n "$surface_prep" ]; then
     deps=("$id")
 fi
 if [ ${#surface_chunks[@]} -gt 0 ]; then
-    printf '%s\n' "${surface_chunks[@]}" >"$farm/surface.chunks"
-    id=$(submit_task SURFACE surface "$(after "${deps[@]+"${deps[@]}"}")" surface-chunk "$farm/surface.chunks" \
-        -- --array="1-${#surface_chunks[@]}")
-    for i in "${!surface_chunks[@]}"; do
-        read -r a b <<<"${surface_chunks[$i]}"
-        record surface "${id}_$((i + 1))" "$a-$b" "$(farm_task_name surface "$a" "$b")"
-    done
-    deps+=("$id")
+    submit_chunk_array surface SURFACE "${surface_chunks[@]}"
+    deps+=("$array_id")
 fi
 if [ $run_merge -eq 1 ]; then
     id=$(submit_task MERGE surface-merge "$(after "${deps[@]+"${deps[@]}"}")" surface-merge)
@@ -220,14 +229,8 @@ if [ $run_merge -eq 1 ]; then
     deps=("$id")
 fi
 if [ ${#render_chunks[@]} -gt 0 ]; then
-    printf '%s\n' "${render_chunks[@]}" >"$farm/render.chunks"
-    id=$(submit_task RENDER render "$(after "${deps[@]+"${deps[@]}"}")" render-chunk "$farm/render.chunks" \
-        -- --array="1-${#render_chunks[@]}")
-    for i in "${!render_chunks[@]}"; do
-        read -r a b <<<"${render_chunks[$i]}"
-        record render "${id}_$((i + 1))" "$a-$b" "$(farm_task_name render "$a" "$b")"
-    done
-    deps=("$id")
+    submit_chunk_array render RENDER "${render_chunks[@]}"
+    deps=("$array_id")
 fi
 if [ $run_assemble -eq 1 ]; then
     id=$(submit_task ASSEMBLE render-assemble "$(after "${deps[@]+"${deps[@]}"}")" render-assemble)

@@ -22,6 +22,7 @@
 #include <unordered_map>
 #include <utility>
 
+#include "sim/core/check.h"
 #include "sim/core/error.h"
 #include "sim/core/log.h"
 #include "sim/core/parallel.h"
@@ -102,9 +103,7 @@ TetMesh run_mesh_3(Domain& domain, const MesherOptions& o) {
 }  // namespace
 
 TetMesh tetrahedralize_surface(const InputSurface& surface, const MesherOptions& options) {
-    if (!(options.edge_length > 0))
-        throw RuntimeError("CGAL Mesh_3: edge_length = " + std::to_string(options.edge_length) +
-                           ": must be > 0");
+    MC_CHECK_GT(options.edge_length, 0);  // mesher_options derives 0 from /sim/h > 0
     // Mesh_3 draws its initial points from the default random generator: reseed for
     // reproducible meshes
     CGAL::get_default_random() = CGAL::Random(options.seed);

@@ -46,6 +46,7 @@ struct MesherOptions {
 /// (check it first with check_input_surface). Returns the tets of the complex, positively
 /// oriented, over the vertices they use only (ids 0..n-1); boundary and UVs are left empty.
 /// Throws RuntimeError if CGAL produced no tets (e.g. edge_length far larger than the object).
+/// @note options.edge_length must be > 0 (checked): mesher_options never gives less.
 TetMesh tetrahedralize_surface(const InputSurface& surface, const MesherOptions& options);
 
 }  // namespace mudcrack

@@ -8,6 +8,7 @@
 #include "pipeline/init/heightfield.h"
 #include "pipeline/init/lattice.h"
 #include "pipeline/init/surface_check.h"
+#include "sim/core/check.h"
 #include "sim/core/error.h"
 #include "sim/core/log.h"
 #include "sim/core/stats.h"
@@ -26,6 +27,7 @@ std::string num(Real v) {
 Real default_edge_length(Real h) { return Real(0.6) * h; }
 
 MesherOptions mesher_options(const InitParams& params, Real h) {
+    MC_CHECK_GT(h, 0);  // the shot spec refuses /sim/h <= 0
     MesherOptions o;
     o.edge_length = params.edge_length > 0 ? params.edge_length : default_edge_length(h);
     o.seed = params.seed;
@@ -122,7 +124,6 @@ InitResult build_init(const InitParams& params, const MesherOptions& mesher) {
 }
 
 InitResult build_init(const InitParams& params, Real h) {
-    if (!(h > 0)) throw ShotValueError("/sim/h = " + num(h) + ": must be > 0 [m]");
     return build_init(params, mesher_options(params, h));
 }
 

@@ -23,6 +23,7 @@ namespace mudcrack {
 Real default_edge_length(Real h);
 
 /// Mesh_3 options for a shot: edge_length (or default_edge_length(h)) and the seed.
+/// @param h the simulation grid spacing [m]; > 0 (the shot spec refuses others)
 MesherOptions mesher_options(const InitParams& params, Real h);
 
 /// The mesh source's surface: loaded (load_input_surface), scaled, translated, and with
@@ -46,7 +47,7 @@ struct InitResult {
 /// (bad mesh: what is wrong and where), RuntimeError if the mesh comes out inverted.
 InitResult build_init(const InitParams& params, const MesherOptions& mesher);
 
-/// build_init with mesher_options(params, h). @param h the simulation grid spacing [m]
+/// build_init with mesher_options(params, h). @param h the simulation grid spacing [m]; > 0
 InitResult build_init(const InitParams& params, Real h);
 
 /// Finishes a tet mesh from any source (exposed for tests): drop unused vertices, boundary,

@@ -12,6 +12,32 @@
 #include "sim/core/error.h"
 
 namespace mudcrack {
+namespace {
+
+// a set of pieces by size (volume or area): what a fragmentation or a crack pattern is measured by
+struct SizeSummary {
+    Real total = 0;
+    Real weighted_mean = 0;     // sum s^2 / sum s: the size of the piece a random point lies in
+    Real largest_fraction = 0;  // the largest piece's share of the total
+};
+
+SizeSummary summarize_sizes(const std::vector<Real>& sizes) {
+    Real sum = 0, sum_sq = 0, largest = 0;
+    for (Real s : sizes) {
+        sum += s;
+        sum_sq += s * s;
+        largest = std::max(largest, s);
+    }
+    SizeSummary summary;
+    summary.total = sum;
+    if (sum > 0) {
+        summary.weighted_mean = sum_sq / sum;
+        summary.largest_fraction = largest / sum;
+    }
+    return summary;
+}
+
+}  // namespace
 
 RestColumns build_rest_columns(const std::vector<Vec3>& rest, Real width) {
     if (!(width > 0)) throw InputError("rest columns: width = " + std::to_string(width) + ": expected > 0");
@@ -113,17 +139,10 @@ FragmentSizes measure_fragment_sizes(const Fragments& fragments, const std::vect
     std::vector<Real> volume(fragments.count, 0);
     for (size_t p = 0; p < rest_volume.size(); ++p)
         if (fragments.id[p] >= 0) volume[fragments.id[p]] += rest_volume[p];
-    Real sum = 0, sum_sq = 0, largest = 0;
-    for (Real v : volume) {
-        sum += v;
-        sum_sq += v * v;
-        largest = std::max(largest, v);
-    }
-    sizes.total_volume = sum;
-    if (sum > 0) {
-        sizes.largest_fraction = largest / sum;
-        sizes.weighted_mean_volume = sum_sq / sum;
-    }
+    const SizeSummary summary = summarize_sizes(volume);
+    sizes.total_volume = summary.total;
+    sizes.largest_fraction = summary.largest_fraction;
+    sizes.weighted_mean_volume = summary.weighted_mean;
     return sizes;
 }
 
@@ -209,19 +228,13 @@ SurfacePolygons measure_surface_polygons(const CoreTopology& topo, const std::ve
     const Real particle_area = polygons.top_particles > 0 ? columns.n_columns() * columns.width * columns.width /
                                                                 polygons.top_particles
                                                           : 0;
-    Real sum = 0, sum_sq = 0, largest = 0;
-    for (int32_t p = 0; p < topo.n_particles; ++p) {
-        if (size[p] < std::max(min_particles, kMinPolygonParticles)) continue;
-        const Real area = size[p] * particle_area;
-        ++polygons.count;
-        sum += area;
-        sum_sq += area * area;
-        largest = std::max(largest, area);
-    }
-    if (sum > 0) {
-        polygons.weighted_mean_area = sum_sq / sum;
-        polygons.largest_fraction = largest / sum;
-    }
+    std::vector<Real> areas;
+    for (int32_t p = 0; p < topo.n_particles; ++p)
+        if (size[p] >= std::max(min_particles, kMinPolygonParticles)) areas.push_back(size[p] * particle_area);
+    polygons.count = static_cast<int32_t>(areas.size());
+    const SizeSummary summary = summarize_sizes(areas);
+    polygons.weighted_mean_area = summary.weighted_mean;
+    polygons.largest_fraction = summary.largest_fraction;
     return polygons;
 }
 

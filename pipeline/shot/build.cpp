@@ -4,7 +4,9 @@
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
+#include <initializer_list>
 #include <sstream>
+#include <variant>
 
 #include "sim/core/log.h"
 
@@ -35,6 +37,29 @@ std::string text(const json& tree, const std::string& pointer) {
 Vec3 vec3(const json& tree, const std::string& pointer) {
     const json& v = tree.at(json::json_pointer(pointer));
     return Vec3(v[0].get<double>(), v[1].get<double>(), v[2].get<double>());
+}
+
+void read_into(const json& tree, const std::string& pointer, Real& out) { out = number(tree, pointer); }
+void read_into(const json& tree, const std::string& pointer, int& out) { out = integer(tree, pointer); }
+void read_into(const json& tree, const std::string& pointer, bool& out) { out = boolean(tree, pointer); }
+void read_into(const json& tree, const std::string& pointer, std::string& out) { out = text(tree, pointer); }
+void read_into(const json& tree, const std::string& pointer, Vec3& out) { out = vec3(tree, pointer); }
+
+// one member of a typed params struct and its key inside the struct's shot section
+template <class S>
+struct Field {
+    const char* key;
+    std::variant<Real S::*, int S::*, bool S::*, std::string S::*, Vec3 S::*> member;
+};
+
+// copies each key of `section` into its member of `out`; the keys must be in the filled tree
+// (keys with a default always are), so optional keys stay with their own has() test
+template <class S>
+void read_fields(const json& tree, const std::string& section, S& out, std::initializer_list<Field<S>> fields) {
+    for (const Field<S>& f : fields) {
+        const std::string pointer = section + "/" + f.key;
+        std::visit([&](auto member) { read_into(tree, pointer, out.*member); }, f.member);
+    }
 }
 
 std::string g(double v) {
@@ -129,17 +154,19 @@ void build_mesh(json& tree, const std::string& shot_path, MeshSource& mesh, Issu
         mesh.path = resolve_existing(tree, "/source/mesh/path", shot_path, issues);
     else if (!issues.has("/source/mesh/path"))
         issues.add("/source/mesh/path", "(missing)", "required when /source/type = \"mesh\"");
-    mesh.scale = number(tree, "/source/mesh/scale");
-    mesh.translate = vec3(tree, "/source/mesh/translate");
-    mesh.fit_to_ground = boolean(tree, "/source/mesh/fit_to_ground");
+    read_fields<MeshSource>(tree, "/source/mesh", mesh,
+                            {{"scale", &MeshSource::scale},
+                             {"translate", &MeshSource::translate},
+                             {"fit_to_ground", &MeshSource::fit_to_ground}});
 }
 
 void build_box(const json& tree, BoxSource& box, Issues& issues) {
-    box.min = vec3(tree, "/source/box/min");
-    box.max = vec3(tree, "/source/box/max");
-    box.spacing = number(tree, "/source/box/spacing");
+    read_fields<BoxSource>(tree, "/source/box", box,
+                           {{"min", &BoxSource::min},
+                            {"max", &BoxSource::max},
+                            {"spacing", &BoxSource::spacing},
+                            {"jitter", &BoxSource::jitter}});
     box.lattice = text(tree, "/source/box/lattice") == "jittered" ? Lattice::Jittered : Lattice::Regular;
-    box.jitter = number(tree, "/source/box/jitter");
     if (issues.has("/source/box")) return;  // bounds already reported
     if (!all_less(box.min, box.max)) {
         issues.add("/source/box/max", issues.value_of(tree, "/source/box/max"),
@@ -157,13 +184,11 @@ void build_box(const json& tree, BoxSource& box, Issues& issues) {
 void build_heightfield(json& tree, const std::string& shot_path, HeightfieldSource& hf, Issues& issues) {
     const json& size = tree.at(json::json_pointer("/source/heightfield/size"));
     hf.size = Vec3(size[0].get<double>(), 0, size[1].get<double>());
-    hf.base = number(tree, "/source/heightfield/base");
-    hf.amplitude = number(tree, "/source/heightfield/amplitude");
-    hf.channel_depth = number(tree, "/source/heightfield/channel_depth");
-    hf.channel_width = number(tree, "/source/heightfield/channel_width");
-    hf.channel_meander = number(tree, "/source/heightfield/channel_meander");
-    hf.image_height = number(tree, "/source/heightfield/image_height");
-    hf.spacing = number(tree, "/source/heightfield/spacing");
+    using H = HeightfieldSource;
+    read_fields<H>(tree, "/source/heightfield", hf,
+                   {{"base", &H::base}, {"amplitude", &H::amplitude}, {"channel_depth", &H::channel_depth},
+                    {"channel_width", &H::channel_width}, {"channel_meander", &H::channel_meander},
+                    {"image_height", &H::image_height}, {"spacing", &H::spacing}});
     if (has(tree, "/source/heightfield/image"))
         hf.image = resolve_existing(tree, "/source/heightfield/image", shot_path, issues);
     // the channel must not cut through the slab's bottom
@@ -176,14 +201,15 @@ void build_heightfield(json& tree, const std::string& shot_path, HeightfieldSour
 void build_plasticity(json& tree, SimModel& model) {
     if (!has(tree, "/plasticity")) return;
     NaccParams nacc;
-    nacc.alpha0 = number(tree, "/plasticity/alpha0");
+    read_fields<NaccParams>(tree, "/plasticity", nacc,
+                            {{"alpha0", &NaccParams::alpha0},
+                             {"xi", &NaccParams::xi},
+                             {"M", &NaccParams::M},
+                             {"hardening", &NaccParams::hardening}});
     // Table 1 gives one beta; beta0 and beta1 default to it (physics.md 4.8 T21)
     const Real beta = has(tree, "/plasticity/beta") ? number(tree, "/plasticity/beta") : Real(1);
     nacc.beta0 = has(tree, "/plasticity/beta0") ? number(tree, "/plasticity/beta0") : beta;
     nacc.beta1 = has(tree, "/plasticity/beta1") ? number(tree, "/plasticity/beta1") : beta;
-    nacc.xi = number(tree, "/plasticity/xi");
-    nacc.M = number(tree, "/plasticity/M");
-    nacc.hardening = boolean(tree, "/plasticity/hardening");
     if (has(tree, "/plasticity/damage_strain")) nacc.damage_strain = number(tree, "/plasticity/damage_strain");
     // the shorthand is replaced by what it means, so equal settings give equal slices
     json& section = tree["plasticity"];
@@ -196,24 +222,19 @@ void build_plasticity(json& tree, SimModel& model) {
 void build_moisture(json& tree, SimModel& model, Issues& issues) {
     if (!has(tree, "/moisture")) return;
     MoistureParams m;
-    m.eta = number(tree, "/moisture/eta");
-    m.k_r = number(tree, "/moisture/k_r");
-    m.eps = number(tree, "/moisture/eps");
-    m.D = number(tree, "/moisture/D");
-    m.lambda = number(tree, "/moisture/lambda");
-    m.theta0 = number(tree, "/moisture/theta0");
-    m.cg_tolerance = number(tree, "/moisture/cg_tolerance");
-    m.cg_max_iterations = integer(tree, "/moisture/cg_max_iterations");
-    m.seal_colliders = boolean(tree, "/moisture/seal_colliders");
-    m.implicit_robin = boolean(tree, "/moisture/implicit_robin");
+    using M = MoistureParams;
+    read_fields<M>(tree, "/moisture", m,
+                   {{"eta", &M::eta}, {"k_r", &M::k_r}, {"eps", &M::eps}, {"D", &M::D}, {"lambda", &M::lambda},
+                    {"theta0", &M::theta0}, {"cg_tolerance", &M::cg_tolerance},
+                    {"cg_max_iterations", &M::cg_max_iterations}, {"seal_colliders", &M::seal_colliders},
+                    {"implicit_robin", &M::implicit_robin}, {"interval", &M::interval},
+                    {"max_log_jw_step", &M::max_log_jw_step}});
     m.evaporation = text(tree, "/moisture/evaporation") == "surface" ? MoistureParams::Evaporation::Surface
                                                                     : MoistureParams::Evaporation::Grid;
     if (m.implicit_robin && m.evaporation == MoistureParams::Evaporation::Surface)
         issues.add("/moisture/implicit_robin", issues.value_of(tree, "/moisture/implicit_robin"),
                    "must be false with /moisture/evaporation = \"surface\" (the surface layer's decay is "
                    "exact; the implicit Robin term belongs to the grid evaporation)");
-    m.interval = integer(tree, "/moisture/interval");
-    m.max_log_jw_step = number(tree, "/moisture/max_log_jw_step");
     // particles start fully saturated unless told otherwise (paper Section 7.1)
     m.theta_init = has(tree, "/moisture/theta_init") ? number(tree, "/moisture/theta_init") : m.eta;
     tree["moisture"]["theta_init"] = m.theta_init;
@@ -229,12 +250,10 @@ void build_moisture(json& tree, SimModel& model, Issues& issues) {
 
 void build_time(const json& tree, SimModel& model, Issues& issues) {
     TimeParams& t = model.time;
-    t.dt_max = number(tree, "/sim/dt_max");
-    t.cfl_velocity = number(tree, "/sim/cfl_velocity");
-    t.cfl_elastic = number(tree, "/sim/cfl_elastic");
-    t.fps = number(tree, "/frames/fps");
-    t.frame_start = integer(tree, "/frames/start");
-    t.frame_end = integer(tree, "/frames/end");
+    using T = TimeParams;
+    read_fields<T>(tree, "/sim", t,
+                   {{"dt_max", &T::dt_max}, {"cfl_velocity", &T::cfl_velocity}, {"cfl_elastic", &T::cfl_elastic}});
+    read_fields<T>(tree, "/frames", t, {{"fps", &T::fps}, {"start", &T::frame_start}, {"end", &T::frame_end}});
     if (t.frame_end < t.frame_start && !issues.has("/frames"))
         issues.add("/frames/end", issues.value_of(tree, "/frames/end"),
                    "must be >= /frames/start = " + std::to_string(t.frame_start));
@@ -257,17 +276,18 @@ void build_time(const json& tree, SimModel& model, Issues& issues) {
 void build_colliders(const json& tree, SimModel& model, Issues& issues) {
     if (has(tree, "/colliders/ground")) {
         GroundParams ground;
-        ground.height = number(tree, "/colliders/ground/height");
+        read_fields<GroundParams>(tree, "/colliders/ground", ground,
+                                  {{"height", &GroundParams::height}, {"friction", &GroundParams::friction}});
         ground.mode = collider_mode(text(tree, "/colliders/ground/mode"));
-        ground.friction = number(tree, "/colliders/ground/friction");
         model.ground = ground;
     }
     if (has(tree, "/colliders/domain")) {
         DomainParams& d = model.domain;
         d.is_auto = false;
-        d.min = vec3(tree, "/colliders/domain/min");
-        d.max = vec3(tree, "/colliders/domain/max");
-        d.padding = integer(tree, "/colliders/domain/padding");
+        read_fields<DomainParams>(tree, "/colliders/domain", d,
+                                  {{"min", &DomainParams::min},
+                                   {"max", &DomainParams::max},
+                                   {"padding", &DomainParams::padding}});
         if (!issues.has("/colliders/domain") && !all_less(d.min, d.max))
             issues.add("/colliders/domain/max", issues.value_of(tree, "/colliders/domain/max"),
                        "must be > /colliders/domain/min = " + issues.value_of(tree, "/colliders/domain/min") +
@@ -315,13 +335,15 @@ InitParams build_init(json& tree, const std::string& shot_path, Issues& issues) 
 
 SimModel build_sim(json& tree, Issues& issues) {
     SimModel model;
-    model.h = number(tree, "/sim/h");
-    model.gravity = vec3(tree, "/sim/gravity");
+    read_fields<SimModel>(tree, "/sim", model,
+                          {{"h", &SimModel::h},
+                           {"gravity", &SimModel::gravity},
+                           {"checkpoint_every", &SimModel::checkpoint_every}});
     model.initial_velocity = vec3(tree, "/source/initial_velocity");
-    model.checkpoint_every = integer(tree, "/sim/checkpoint_every");
-    model.elastic.density = number(tree, "/material/density");
-    model.elastic.youngs_modulus = number(tree, "/material/youngs_modulus");
-    model.elastic.poisson_ratio = number(tree, "/material/poisson_ratio");
+    read_fields<ElasticParams>(tree, "/material", model.elastic,
+                               {{"density", &ElasticParams::density},
+                                {"youngs_modulus", &ElasticParams::youngs_modulus},
+                                {"poisson_ratio", &ElasticParams::poisson_ratio}});
     build_plasticity(tree, model);
     build_moisture(tree, model, issues);
     build_time(tree, model, issues);
@@ -333,11 +355,10 @@ std::optional<SurfaceParams> build_surface(const json& tree) {
     if (!has(tree, "/surfacing")) return std::nullopt;
     SurfaceParams s;
     s.mode = text(tree, "/surfacing/mode") == "wang2019" ? SurfaceMode::Wang2019 : SurfaceMode::Ours;
-    s.zeta = number(tree, "/surfacing/zeta");
-    s.length_consistent = boolean(tree, "/surfacing/length_consistent");
-    s.cracks = boolean(tree, "/surfacing/cracks");
-    s.format = text(tree, "/surfacing/format");
-    s.min_fragment_particles = integer(tree, "/surfacing/min_fragment_particles");
+    using S = SurfaceParams;
+    read_fields<S>(tree, "/surfacing", s,
+                   {{"zeta", &S::zeta}, {"length_consistent", &S::length_consistent}, {"cracks", &S::cracks},
+                    {"format", &S::format}, {"min_fragment_particles", &S::min_fragment_particles}});
     return s;
 }
 
@@ -350,19 +371,17 @@ std::optional<RenderParams> build_render(const json& tree) {
     r.color_mode = color_mode(text(tree, "/render/color_mode"));
     r.camera.is_auto = !has(tree, "/render/camera");
     if (!r.camera.is_auto) {
-        r.camera.position = vec3(tree, "/render/camera/position");
-        r.camera.target = vec3(tree, "/render/camera/target");
-        r.camera.fov_deg = number(tree, "/render/camera/fov");
+        using C = CameraParams;
+        read_fields<C>(tree, "/render/camera", r.camera,
+                       {{"position", &C::position}, {"target", &C::target}, {"fov", &C::fov_deg}});
     }
-    r.samples = integer(tree, "/render/samples");
+    using R = RenderParams;
+    read_fields<R>(tree, "/render", r,
+                   {{"samples", &R::samples}, {"albedo", &R::albedo}, {"alpha_range", &R::alpha_range},
+                    {"fps", &R::fps}});
     r.turntable = has(tree, "/render/turntable");
-    if (r.turntable) {
-        r.turntable_views = integer(tree, "/render/turntable/views");
-        r.turntable_frame = integer(tree, "/render/turntable/frame");
-    }
-    r.albedo = vec3(tree, "/render/albedo");
-    r.alpha_range = number(tree, "/render/alpha_range");
-    r.fps = number(tree, "/render/fps");
+    if (r.turntable)
+        read_fields<R>(tree, "/render/turntable", r, {{"views", &R::turntable_views}, {"frame", &R::turntable_frame}});
     return r;
 }
 

@@ -182,6 +182,19 @@ TEST_F(InitCli, TooManyParticlesNamesFileKeyAndAWholeCount) {
     expect_no_output(out);
 }
 
+// the shot spec is the one place /sim/h is checked: mc-init reports it like any other key
+TEST_F(InitCli, NonPositiveGridSpacingNamesFileKeyAndValue) {
+    for (const char* h : {"0", "-0.05"}) {
+        const fs::path shot = write("flat.json", std::string(R"({
+          "mudcrack": 1, "source": { "type": "box" }, "material": {}, "sim": { "h": )") + h + " } }");
+        const fs::path out = m_dir / "out";
+        EXPECT_EQ(run("--shot " + shot.string() + " --out " + out.string()), 1) << h;
+        const std::string expected = "mc-init: error: " + shot.string() + ": /sim/h = " + h + ": must be > 0 [m]";
+        EXPECT_NE(m_stderr.find(expected), std::string::npos) << m_stderr;
+        expect_no_output(out);
+    }
+}
+
 TEST_F(InitCli, OpenMeshExitsOneNamingTheBorderEdgesAndLeavesNoOutput) {
     // a unit cube without its z = 0 side (two triangles): a square hole of 4 border edges
     write("open_cube.off", R"(OFF

@@ -5,8 +5,11 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <functional>
 #include <string>
+#include <vector>
 
+#include "sim/core/check.h"
 #include "sim/moisture/pore.h"
 #include "sim/mpm/simulation.h"
 #include "tools/report/fit.h"
@@ -343,28 +346,103 @@ Sweep cg_cap_sweep(Scale scale, Real diffusion_number) {
     return sw;
 }
 
-}  // namespace
-
-Sweep sweep_diffusion_1d_h(Scale scale) {
-    Sweep sw;
-    sw.id = "diffusion_1d_h";
-    sw.title = "1D moisture diffusion (erfc) over h, dt = 0.4 h^2/D";
-    sw.knob = "h [m]";
-    sw.error_measure = "RMS theta error at t1 (jump eta/2 = 0.25)";
-    std::vector<Real> hs = {0.04, 0.02, 0.01};
-    if (scale == Scale::Full) hs.push_back(0.005);
+// one table row of a sweep from one knob value
+SweepPoint diffusion_1d_h_point(Real h) {
     const Real D = 0.01, span = 0.25;
-    for (Real h : hs) {
-        const int steps = static_cast<int>(std::lround(span / (0.4 * h * h / D)));
-        const DiffusionRun r = run_diffusion_1d(h, steps);
-        sw.points.push_back({h, r.error, r.wall_s,
-                             format("%d steps, %zu particles, mean CG %.1f", r.steps, r.particles, r.mean_cg)});
-    }
+    const int steps = static_cast<int>(std::lround(span / (0.4 * h * h / D)));
+    const DiffusionRun r = run_diffusion_1d(h, steps);
+    return {h, r.error, r.wall_s, format("%d steps, %zu particles, mean CG %.1f", r.steps, r.particles, r.mean_cg)};
+}
+
+SweepPoint diffusion_3d_h_point(Real cells_per_side) {
+    const int n = static_cast<int>(cells_per_side);
+    const DiffusionRun r = run_diffusion_3d(n);
+    return {0.5 / n, r.error, r.wall_s,
+            format("%d steps, %zu particles, mean CG %.1f", r.steps, r.particles, r.mean_cg)};
+}
+
+SweepPoint shrinkage_h_point(Real h) {
+    const ShrinkageRun r = run_shrinkage(h, 2, 20000);
+    return {h, r.error_extent, r.wall_s,
+            format("tracked-volume error %.2e; %lld steps, %zu particles", r.error_tracked,
+                   static_cast<long long>(r.steps), r.particles)};
+}
+
+SweepPoint shrinkage_ppc_point(Real per_axis) {
+    const int k = static_cast<int>(per_axis);
+    const ShrinkageRun r = run_shrinkage(0.1, k, 20000);
+    return {Real(k * k * k), r.error_extent, r.wall_s,
+            format("%d per axis; tracked-volume error %.2e; %lld steps, %zu particles", k, r.error_tracked,
+                   static_cast<long long>(r.steps), r.particles)};
+}
+
+SweepPoint column_h_point(Real h) {
+    const ColumnRun r = run_column(h, 1e6);
+    return {h, r.error, r.wall_s,
+            format("u/u_exact - 1 = %+.2e; u_exact %.3e m, strain %.1e; %lld steps, %zu particles", r.signed_error,
+                   r.u_exact, r.strain, static_cast<long long>(r.steps), r.particles)};
+}
+
+// what one sweep measures: its table header, its knob values (the reduced set, plus more at full
+// scale) and the run that turns one knob value into one table row
+struct SweepPlan {
+    std::string id, title, knob, error_measure, order_note;
+    std::vector<Real> knobs;
+    std::vector<Real> full_only_knobs;
+    std::function<SweepPoint(Real)> run;
+};
+
+const char* const kShrinkageError = "|V/V0 - (1-eta)|/(1-eta), V from the particle extents (time-averaged once dry)";
+
+// the sweeps whose order is fitted on the table's own error, by id
+const SweepPlan& plan(const std::string& id) {
+    static const std::vector<SweepPlan> plans = {
+        {"diffusion_1d_h", "1D moisture diffusion (erfc) over h, dt = 0.4 h^2/D", "h [m]",
+         "RMS theta error at t1 (jump eta/2 = 0.25)", "quadratic B-splines with lumped mass, dt ~ h^2: 2 expected",
+         {0.04, 0.02, 0.01}, {0.005}, diffusion_1d_h_point},
+        {"diffusion_3d_h", "3D moisture diffusion (cosine mode in a cube, zero flux) over h, dt ~ 0.4 h^2/D", "h [m]",
+         "RMS theta error at t = 1/(3 D k^2), / mode amplitude",
+         "2 expected in the interior; the material boundary sits within a B-spline support of the faces",
+         {4, 6, 8}, {12, 16}, diffusion_3d_h_point},
+        {"shrinkage_h", "Free drying shrinkage to (1-eta) V0 over h, 2x2x2 particles per cell", "h [m]",
+         kShrinkageError,
+         "no spatial order expected: a uniform dry state is exact on any grid; the residual is the settling "
+         "oscillation",
+         {0.2, 0.1}, {0.05}, shrinkage_h_point},
+        {"shrinkage_ppc", "Free drying shrinkage to (1-eta) V0 over particles per cell, h = 0.1 m",
+         "particles per cell", kShrinkageError, "slope against particles per cell (not a spatial order)", {1, 2},
+         {3, 4}, shrinkage_ppc_point},
+        {"column_h", "Elastic column settling under gravity (E = 1e6 Pa, nu = 0, H = 0.5 m) over h", "h [m]",
+         "|u_top - u_exact|/|u_exact|, u_exact = rho g (H y - y^2/2)/E at the top layer",
+         "the free top surface is resolved to O(h) by the B-spline mass: about 1 expected", {0.1, 0.05, 0.025},
+         {0.0125, 0.00625}, column_h_point},
+    };
+    const auto it = std::find_if(plans.begin(), plans.end(), [&](const SweepPlan& p) { return p.id == id; });
+    MC_CHECK(it != plans.end());
+    return *it;
+}
+
+// runs the plan's knobs in order and fits the log-log slope of error against the recorded knob
+Sweep run_sweep(const SweepPlan& plan, Scale scale) {
+    Sweep sw;
+    sw.id = plan.id;
+    sw.title = plan.title;
+    sw.knob = plan.knob;
+    sw.error_measure = plan.error_measure;
+    std::vector<Real> knobs = plan.knobs;
+    if (scale == Scale::Full) knobs.insert(knobs.end(), plan.full_only_knobs.begin(), plan.full_only_knobs.end());
+    for (Real k : knobs) sw.points.push_back(plan.run(k));
     fit_order(sw);
-    sw.order_note = "quadratic B-splines with lumped mass, dt ~ h^2: 2 expected";
+    sw.order_note = plan.order_note;
     return sw;
 }
 
+}  // namespace
+
+Sweep sweep_diffusion_1d_h(Scale scale) { return run_sweep(plan("diffusion_1d_h"), scale); }
+
+// not a run_sweep: its order is fitted on the time error against a fine-step reference, not on
+// the table's error against the exact solution
 Sweep sweep_diffusion_1d_dt(Scale scale) {
     Sweep sw;
     sw.id = "diffusion_1d_dt";
@@ -395,112 +473,31 @@ Sweep sweep_diffusion_1d_dt(Scale scale) {
     return sw;
 }
 
-Sweep sweep_diffusion_3d_h(Scale scale) {
-    Sweep sw;
-    sw.id = "diffusion_3d_h";
-    sw.title = "3D moisture diffusion (cosine mode in a cube, zero flux) over h, dt ~ 0.4 h^2/D";
-    sw.knob = "h [m]";
-    sw.error_measure = "RMS theta error at t = 1/(3 D k^2), / mode amplitude";
-    std::vector<int> cells = {4, 6, 8};
-    if (scale == Scale::Full) {
-        cells.push_back(12);
-        cells.push_back(16);
-    }
-    for (int n : cells) {
-        const DiffusionRun r = run_diffusion_3d(n);
-        sw.points.push_back({0.5 / n, r.error, r.wall_s,
-                             format("%d steps, %zu particles, mean CG %.1f", r.steps, r.particles, r.mean_cg)});
-    }
-    fit_order(sw);
-    sw.order_note = "2 expected in the interior; the material boundary sits within a B-spline support of the faces";
-    return sw;
-}
+Sweep sweep_diffusion_3d_h(Scale scale) { return run_sweep(plan("diffusion_3d_h"), scale); }
 
-Sweep sweep_shrinkage_h(Scale scale) {
-    Sweep sw;
-    sw.id = "shrinkage_h";
-    sw.title = "Free drying shrinkage to (1-eta) V0 over h, 2x2x2 particles per cell";
-    sw.knob = "h [m]";
-    sw.error_measure = "|V/V0 - (1-eta)|/(1-eta), V from the particle extents (time-averaged once dry)";
-    std::vector<Real> hs = {0.2, 0.1};
-    if (scale == Scale::Full) hs.push_back(0.05);
-    for (Real h : hs) {
-        const ShrinkageRun r = run_shrinkage(h, 2, 20000);
-        sw.points.push_back({h, r.error_extent, r.wall_s,
-                             format("tracked-volume error %.2e; %lld steps, %zu particles", r.error_tracked,
-                                    static_cast<long long>(r.steps), r.particles)});
-    }
-    fit_order(sw);
-    sw.order_note = "no spatial order expected: a uniform dry state is exact on any grid; the residual is the "
-                    "settling oscillation";
-    return sw;
-}
+Sweep sweep_shrinkage_h(Scale scale) { return run_sweep(plan("shrinkage_h"), scale); }
 
-Sweep sweep_shrinkage_ppc(Scale scale) {
-    Sweep sw;
-    sw.id = "shrinkage_ppc";
-    sw.title = "Free drying shrinkage to (1-eta) V0 over particles per cell, h = 0.1 m";
-    sw.knob = "particles per cell";
-    sw.error_measure = "|V/V0 - (1-eta)|/(1-eta), V from the particle extents (time-averaged once dry)";
-    std::vector<int> ppa = {1, 2};
-    if (scale == Scale::Full) {
-        ppa.push_back(3);
-        ppa.push_back(4);
-    }
-    for (int k : ppa) {
-        const ShrinkageRun r = run_shrinkage(0.1, k, 20000);
-        sw.points.push_back({Real(k * k * k), r.error_extent, r.wall_s,
-                             format("%d per axis; tracked-volume error %.2e; %lld steps, %zu particles", k,
-                                    r.error_tracked, static_cast<long long>(r.steps), r.particles)});
-    }
-    fit_order(sw);
-    sw.order_note = "slope against particles per cell (not a spatial order)";
-    return sw;
-}
+Sweep sweep_shrinkage_ppc(Scale scale) { return run_sweep(plan("shrinkage_ppc"), scale); }
 
-Sweep sweep_column_h(Scale scale) {
-    Sweep sw;
-    sw.id = "column_h";
-    sw.title = "Elastic column settling under gravity (E = 1e6 Pa, nu = 0, H = 0.5 m) over h";
-    sw.knob = "h [m]";
-    sw.error_measure = "|u_top - u_exact|/|u_exact|, u_exact = rho g (H y - y^2/2)/E at the top layer";
-    std::vector<Real> hs = {0.1, 0.05, 0.025};
-    if (scale == Scale::Full) {
-        hs.push_back(0.0125);
-        hs.push_back(0.00625);
-    }
-    for (Real h : hs) {
-        const ColumnRun r = run_column(h, 1e6);
-        sw.points.push_back({h, r.error, r.wall_s,
-                             format("u/u_exact - 1 = %+.2e; u_exact %.3e m, strain %.1e; %lld steps, %zu particles", r.signed_error,
-                                    r.u_exact, r.strain,
-                                    static_cast<long long>(r.steps), r.particles)});
-    }
-    fit_order(sw);
-    sw.order_note = "the free top surface is resolved to O(h) by the B-spline mass: about 1 expected";
-    return sw;
-}
+Sweep sweep_column_h(Scale scale) { return run_sweep(plan("column_h"), scale); }
 
+// over E the title names the scale's h and the full scale adds E between the reduced ones
 Sweep sweep_column_E(Scale scale) {
-    const Real h = scale == Scale::Full ? 0.025 : 0.05;
-    Sweep sw;
-    sw.id = "column_E";
-    sw.title = format("Elastic column settling under gravity over E (h = %g m)", h);
-    sw.knob = "E [Pa]";
-    sw.error_measure = "|u_top - u_exact|/|u_exact| (small-strain theory)";
-    std::vector<Real> Es = {1e5, 1e6, 1e7};
-    if (scale == Scale::Full) Es = {1e5, 3e5, 1e6, 3e6, 1e7};
-    for (Real E : Es) {
-        const ColumnRun r = run_column(h, E);
-        sw.points.push_back({E, r.error, r.wall_s,
-                             format("u/u_exact - 1 = %+.2e; strain rho g H/E = %.1e; %lld steps", r.signed_error, r.strain,
-                                    static_cast<long long>(r.steps))});
-    }
-    fit_order(sw);
-    sw.order_note = "not a convergence order: at small strain the O(h) error (about constant, see the signs) "
-                    "dominates; at large strain (low E) the Neo-Hookean response departs from small-strain "
-                    "theory with the opposite sign";
-    return sw;
+    const bool full = scale == Scale::Full;
+    const Real h = full ? 0.025 : 0.05;
+    SweepPlan p{"column_E", format("Elastic column settling under gravity over E (h = %g m)", h), "E [Pa]",
+                "|u_top - u_exact|/|u_exact| (small-strain theory)",
+                "not a convergence order: at small strain the O(h) error (about constant, see the signs) "
+                "dominates; at large strain (low E) the Neo-Hookean response departs from small-strain "
+                "theory with the opposite sign",
+                full ? std::vector<Real>{1e5, 3e5, 1e6, 3e6, 1e7} : std::vector<Real>{1e5, 1e6, 1e7}, {},
+                [h](Real E) {
+                    const ColumnRun r = run_column(h, E);
+                    return SweepPoint{E, r.error, r.wall_s,
+                                      format("u/u_exact - 1 = %+.2e; strain rho g H/E = %.1e; %lld steps",
+                                             r.signed_error, r.strain, static_cast<long long>(r.steps))};
+                }};
+    return run_sweep(p, scale);
 }
 
 std::vector<Sweep> sweep_cg_caps(Scale scale) {

@@ -110,6 +110,22 @@ void append_tet(ParticleBlock& b, const std::array<Vec3, 4>& corners) {
     }
 }
 
+// the degenerate-tet cases: one tet from init, on top of the base block or alone
+struct DegenerateTet {
+    const char* name;
+    const char* description;
+    bool keeps_block;
+    std::array<Vec3, 4> corners;
+};
+const DegenerateTet kDegenerateTets[] = {
+    {"tet_flat", "block plus a flat (coplanar) tet from init: zero rest volumes", true,
+     {Vec3(0.05, 0.3, 0.05), Vec3(0.1, 0.3, 0.05), Vec3(0.05, 0.3, 0.1), Vec3(0.1, 0.3, 0.1)}},
+    {"tet_needle", "block plus a needle tet (0.1 m long, 1e-6 m wide) on its top", true,
+     {Vec3(0.1, 0.26, 0.1), Vec3(0.1, 0.36, 0.1), Vec3(0.100001, 0.3, 0.1), Vec3(0.1, 0.3, 0.100001)}},
+    {"tet_sliver_alone", "a lone sliver tet (rest volume ~1e-20 m^3) falling onto the ground", false,
+     {Vec3(0.1, 0.1, 0.1), Vec3(0.13, 0.1, 0.1), Vec3(0.1, 0.13, 0.1), Vec3(0.115, 0.115, 0.1 + 1e-16)}},
+};
+
 // the shot of the "dt past the elastic bound" case: dt twice the bound, through the shot loader
 std::string dt_past_bound_shot() {
     SimModel m;
@@ -122,6 +138,23 @@ std::string dt_past_bound_shot() {
         "material": {"youngs_modulus": 1e4, "poisson_ratio": 0.3, "density": 1000},
         "sim": {"h": 0.02, "dt": %.6g}})",
                   dt);
+}
+
+// a case's setup: the base scene, or a drying one at porosity eta, with one change
+using SetupChange = std::function<void(CaseSetup&)>;
+std::function<CaseSetup(Scale)> on_base(SetupChange change) {
+    return [change](Scale s) {
+        CaseSetup c = base_scene(s);
+        change(c);
+        return c;
+    };
+}
+std::function<CaseSetup(Scale)> on_drying(Real eta, SetupChange change) {
+    return [eta, change](Scale s) {
+        CaseSetup c = drying_scene(s, eta);
+        change(c);
+        return c;
+    };
 }
 
 struct CaseEntry {
@@ -138,108 +171,65 @@ const std::vector<CaseEntry>& case_table() {
         for (Real E : {1e2, 1e4, 1e6, 1e8})
             add(format("E_%.0e", E), "stiffness",
                 format("elastic block dropped on a sticky ground, E = %.0e Pa, nu = 0.3, adaptive dt", E),
-                [E](Scale s) {
-                    CaseSetup c = base_scene(s);
-                    c.model.elastic.youngs_modulus = E;
-                    return c;
-                });
+                on_base([E](CaseSetup& c) { c.model.elastic.youngs_modulus = E; }));
         for (Real nu : {0.45, 0.49, 0.499})
             add(format("nu_%g", nu), "incompressibility", format("elastic block dropped, E = 1e4 Pa, nu = %g", nu),
-                [nu](Scale s) {
-                    CaseSetup c = base_scene(s);
-                    c.model.elastic.poisson_ratio = nu;
-                    return c;
-                });
-        add("nacc_nu_0.499", "incompressibility", "NACC soil block dropped, nu = 0.499", [](Scale s) {
-            CaseSetup c = base_scene(s);
+                on_base([nu](CaseSetup& c) { c.model.elastic.poisson_ratio = nu; }));
+        add("nacc_nu_0.499", "incompressibility", "NACC soil block dropped, nu = 0.499", on_base([](CaseSetup& c) {
             c.model.elastic.poisson_ratio = 0.499;
             c.model.nacc = soil_nacc();
-            return c;
-        });
+        }));
         for (Real eta : {0.0, 0.5, 0.9, 0.95})
             add(format("eta_%g", eta), "porosity",
                 format("NACC soil drying on the ground, eta = %g, lambda = 0.5 m/s", eta),
                 [eta](Scale s) { return drying_scene(s, eta); });
         add("sinh_overflow_alpha0", "hardening", "NACC with xi = 1000, alpha0 = -1: xi*alpha = 1000, sinh overflows",
-            [](Scale s) {
-                CaseSetup c = base_scene(s);
+            on_base([](CaseSetup& c) {
                 c.model.nacc = soil_nacc();
                 c.model.nacc->xi = 1000;
                 c.model.nacc->alpha0 = -1;
-                return c;
-            });
+            }));
         add("sinh_overflow_drying", "hardening",
             "drying drives alpha down: eps = 50, eta = 0.95, xi = 10, lambda = 50 m/s (xi*|alpha| -> 1500)",
-            [](Scale s) {
-                CaseSetup c = drying_scene(s, 0.95);
+            on_drying(0.95, [](CaseSetup& c) {
                 c.model.nacc->xi = 10;
                 c.model.moisture->eps = 50;
                 c.model.moisture->lambda = 50;
                 c.model.moisture->max_log_jw_step = 0;  // no cap: the whole jump at once
-                return c;
-            });
+            }));
         add("evaporation_one_step", "evaporation",
-            "lambda = 1e4 m/s: the surface layer dries completely in one step", [](Scale s) {
-                CaseSetup c = drying_scene(s, 0.5);
-                c.model.moisture->lambda = 1e4;
-                return c;
-            });
+            "lambda = 1e4 m/s: the surface layer dries completely in one step",
+            on_drying(0.5, [](CaseSetup& c) { c.model.moisture->lambda = 1e4; }));
         add("evaporation_one_step_uncapped", "evaporation",
-            "lambda = 1e4 m/s with no cap on the per-step pore change (max_log_jw_step = 0)", [](Scale s) {
-                CaseSetup c = drying_scene(s, 0.5);
+            "lambda = 1e4 m/s with no cap on the per-step pore change (max_log_jw_step = 0)",
+            on_drying(0.5, [](CaseSetup& c) {
                 c.model.moisture->lambda = 1e4;
                 c.model.moisture->max_log_jw_step = 0;
-                return c;
-            });
+            }));
         for (Real r : {1e2, 1e4})
             add(format("D_dt_h2_%.0e", r), "diffusion number",
                 format("drying soil with D dt/h^2 = %.0e at a fixed dt = half the elastic bound", r),
                 [r](Scale s) { return diffusion_number_scene(s, r); });
         add("dt_past_bound_shot", "time step", "shot with /sim/dt = 2x the elastic bound, through the shot loader",
-            [](Scale s) {
-                CaseSetup c = base_scene(s);
-                c.shot_json = dt_past_bound_shot();
-                return c;
-            });
+            on_base([](CaseSetup& c) { c.shot_json = dt_past_bound_shot(); }));
         add("dt_past_bound_forced", "time step",
-            "dt = 3x the elastic bound forced in-process (bypasses the shot check)", [](Scale s) {
-                CaseSetup c = base_scene(s);
-                c.model.time.dt_fixed = 3 * elastic_dt_bound(c.model);
-                return c;
-            });
+            "dt = 3x the elastic bound forced in-process (bypasses the shot check)",
+            on_base([](CaseSetup& c) { c.model.time.dt_fixed = 3 * elastic_dt_bound(c.model); }));
         add("wall_impact_20", "impacts", "elastic block thrown at 20 m/s into a domain wall", [](Scale s) {
             return wall_impact_scene(s, Vec3(20, 0, 0), false);
         });
         add("wall_impact_200", "impacts", "NACC block thrown at (200, -100, 50) m/s into the domain corner",
             [](Scale s) { return wall_impact_scene(s, Vec3(200, -100, 50), true); });
-        add("ground_impact_50", "impacts", "NACC block falling at 50 m/s onto the sticky ground", [](Scale s) {
-            CaseSetup c = base_scene(s);
-            c.model.nacc = soil_nacc();
-            c.model.initial_velocity = Vec3(0, -50, 0);
-            return c;
-        });
-        add("tet_flat", "degenerate tets", "block plus a flat (coplanar) tet from init: zero rest volumes",
-            [](Scale s) {
-                CaseSetup c = base_scene(s);
-                append_tet(c.particles, {Vec3(0.05, 0.3, 0.05), Vec3(0.1, 0.3, 0.05), Vec3(0.05, 0.3, 0.1),
-                                         Vec3(0.1, 0.3, 0.1)});
-                return c;
-            });
-        add("tet_needle", "degenerate tets", "block plus a needle tet (0.1 m long, 1e-6 m wide) on its top",
-            [](Scale s) {
-                CaseSetup c = base_scene(s);
-                append_tet(c.particles, {Vec3(0.1, 0.26, 0.1), Vec3(0.1, 0.36, 0.1), Vec3(0.100001, 0.3, 0.1),
-                                         Vec3(0.1, 0.3, 0.100001)});
-                return c;
-            });
-        add("tet_sliver_alone", "degenerate tets", "a lone sliver tet (rest volume ~1e-20 m^3) falling onto the ground",
-            [](Scale s) {
-                CaseSetup c = base_scene(s);
-                c.particles = {};
-                append_tet(c.particles, {Vec3(0.1, 0.1, 0.1), Vec3(0.13, 0.1, 0.1), Vec3(0.1, 0.13, 0.1),
-                                         Vec3(0.115, 0.115, 0.1 + 1e-16)});
-                return c;
-            });
+        add("ground_impact_50", "impacts", "NACC block falling at 50 m/s onto the sticky ground",
+            on_base([](CaseSetup& c) {
+                c.model.nacc = soil_nacc();
+                c.model.initial_velocity = Vec3(0, -50, 0);
+            }));
+        for (const DegenerateTet& d : kDegenerateTets)
+            add(d.name, "degenerate tets", d.description, on_base([d](CaseSetup& c) {
+                if (!d.keeps_block) c.particles = {};
+                append_tet(c.particles, d.corners);
+            }));
         return t;
     }();
     return table;

@@ -98,7 +98,6 @@ int run_init_stage(const StageOptions& opt, bool parallel_mesh) {
     const Shot shot = load_shot(opt.shot);
     InitParams params = shot.init;
     if (opt.seed != 0) params.seed = opt.seed;
-    if (!(shot.sim.h > 0)) throw InputError(opt.shot + ": /sim/h must be > 0");
     MesherOptions mesher = mesher_options(params, shot.sim.h);
     mesher.parallel = parallel_mesh;
 
