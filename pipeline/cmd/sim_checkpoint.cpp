@@ -41,6 +41,26 @@ std::vector<Element> unflatten(const Checkpoint& c, const std::string& name, siz
     return values;
 }
 
+void save_array(Checkpoint& c, const char* name, const std::vector<int32_t>& values) { c.i32[name] = values; }
+
+template <class Element>
+void save_array(Checkpoint& c, const char* name, const std::vector<Element>& values) {
+    c.f64[name] = flatten(values);
+}
+
+void load_array(const Checkpoint& c, const char* name, size_t n, ArrayPresence presence,
+                std::vector<int32_t>& values) {
+    const bool is_empty_optional =
+        presence == ArrayPresence::Optional && c.i32.count(name) && c.i32.at(name).empty();
+    values = is_empty_optional ? std::vector<int32_t>{} : c.require_i32(name, n);
+}
+
+template <class Element>
+void load_array(const Checkpoint& c, const char* name, size_t n, ArrayPresence presence,
+                std::vector<Element>& values) {
+    values = unflatten<Element>(c, name, n, presence == ArrayPresence::Optional);
+}
+
 }  // namespace
 
 fs::path checkpoint_path(const fs::path& dir, int frame) {
@@ -76,19 +96,7 @@ void write_sim_checkpoint(const fs::path& path, const SimCheckpoint& checkpoint)
     c.meta_double["time"] = s.time;
     c.meta_int["step_count"] = s.step_count;
     c.meta_int["particles"] = int64_t(s.size());
-    c.i32["id"] = s.id;
-    c.f64["x"] = flatten(s.x);
-    c.f64["v"] = flatten(s.v);
-    c.f64["C"] = flatten(s.C);
-    c.f64["Fe"] = flatten(s.Fe);
-    c.f64["J"] = s.J;
-    c.f64["alpha"] = s.alpha;
-    c.f64["V0"] = s.V0;
-    c.f64["mass"] = s.mass;
-    c.f64["theta"] = s.theta;
-    c.f64["Jw"] = s.Jw;
-    c.f64["strength"] = s.strength;
-    c.f64["damage"] = s.damage;
+    s.for_each_array([&](const char* name, const auto& array, ArrayPresence) { save_array(c, name, array); });
     c.f64["domain_min"] = flatten(std::vector<Vec3>{s.domain_min});
     c.f64["domain_max"] = flatten(std::vector<Vec3>{s.domain_max});
     // the run's counters, so a resumed run's manifest covers every frame
@@ -123,19 +131,9 @@ SimCheckpoint read_sim_checkpoint(const fs::path& path) {
     SimState& s = sc.state;
     s.time = c.require_double("time");
     s.step_count = c.require_int("step_count");
-    s.id = c.require_i32("id", n);
-    s.x = unflatten<Vec3>(c, "x", n, false);
-    s.v = unflatten<Vec3>(c, "v", n, false);
-    s.C = unflatten<Mat3>(c, "C", n, false);
-    s.Fe = unflatten<Mat3>(c, "Fe", n, false);
-    s.J = unflatten<Real>(c, "J", n, false);
-    s.alpha = unflatten<Real>(c, "alpha", n, true);
-    s.V0 = unflatten<Real>(c, "V0", n, false);
-    s.mass = unflatten<Real>(c, "mass", n, false);
-    s.theta = unflatten<Real>(c, "theta", n, true);
-    s.Jw = unflatten<Real>(c, "Jw", n, true);
-    s.strength = unflatten<Real>(c, "strength", n, true);
-    s.damage = unflatten<Real>(c, "damage", n, true);
+    s.for_each_array([&](const char* name, auto& array, ArrayPresence presence) {
+        load_array(c, name, n, presence, array);
+    });
     s.domain_min = unflatten<Vec3>(c, "domain_min", 1, false)[0];
     s.domain_max = unflatten<Vec3>(c, "domain_max", 1, false)[0];
     SimTotals& t = sc.totals;
