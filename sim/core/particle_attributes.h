@@ -36,7 +36,8 @@ enum class CachePolicy {
     X(float, saturation, saturation, "saturation", Moisture, ByPhysics, "s = theta/eta in [0,1]")         \
     X(float, alpha, alpha, "alpha", Plasticity, ByPhysics, "NACC hardening state (log Jp plus eps log Jw)") \
     X(float, Jw, Jw, "Jw", Moisture, ByPhysics, "pore deformation determinant, 1 - eta (1 - s)")          \
-    X(Mat3f, Fe, Fe, "Fe", Surfacing, ByPhysics, "elastic deformation gradient (the core rotation of Eq. 13)")
+    X(Mat3f, Fe, Fe, "Fe", Surfacing, ByPhysics, "elastic deformation gradient (the core rotation of Eq. 13)") \
+    X(float, damage, damage, "damage", Damage, OnRequest, "tensile damage d in [0, 1]: where the soil tore")
 
 /// How an attribute is stored: one float, a vector or a matrix per particle.
 enum class AttributeKind { Float, Vector, Matrix };

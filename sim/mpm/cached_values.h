@@ -33,4 +33,8 @@ inline float Jw(const SimModel&, const SimState& s, size_t p) {
 
 inline Mat3f Fe(const SimModel&, const SimState& s, size_t p) { return s.Fe[p].cast<float>(); }
 
+inline float damage(const SimModel&, const SimState& s, size_t p) {
+    return s.damage.empty() ? 0.f : static_cast<float>(s.damage[p]);
+}
+
 }  // namespace mudcrack::cached_value
