@@ -15,7 +15,7 @@ namespace mudcrack {
 namespace {
 
 // bump when the set or meaning of the saved arrays changes; a reader refuses other versions
-constexpr int64_t kSimCheckpointVersion = 2;  // 2: strength and damage arrays
+constexpr int64_t kSimCheckpointVersion = 3;  // 2: strength and damage arrays; 3: the moisture flux history
 
 // Eigen fixed-size types are plain arrays of their scalar (column-major, no padding), so the
 // state's arrays are copied as raw doubles: a restored state is bitwise the saved one
@@ -97,6 +97,13 @@ void write_sim_checkpoint(const fs::path& path, const SimCheckpoint& checkpoint)
     c.meta_int["step_count"] = s.step_count;
     c.meta_int["particles"] = int64_t(s.size());
     s.for_each_array([&](const char* name, const auto& array, ArrayPresence) { save_array(c, name, array); });
+    // the moisture CG's flux history (block keys as int64: they are uint32)
+    c.meta_int["moisture_flux.count"] = s.moisture_flux.count;
+    c.meta_double["moisture_flux.dt"] = s.moisture_flux.dt;
+    c.meta_double["moisture_flux.dt_prev"] = s.moisture_flux.dt_prev;
+    c.i64["moisture_flux.keys"].assign(s.moisture_flux.keys.begin(), s.moisture_flux.keys.end());
+    c.f64["moisture_flux.flux"] = s.moisture_flux.flux;
+    c.f64["moisture_flux.flux_prev"] = s.moisture_flux.flux_prev;
     c.f64["domain_min"] = flatten(std::vector<Vec3>{s.domain_min});
     c.f64["domain_max"] = flatten(std::vector<Vec3>{s.domain_max});
     // the run's counters, so a resumed run's manifest covers every frame
@@ -134,6 +141,16 @@ SimCheckpoint read_sim_checkpoint(const fs::path& path) {
     s.for_each_array([&](const char* name, auto& array, ArrayPresence presence) {
         load_array(c, name, n, presence, array);
     });
+    MoistureFluxHistory& h = s.moisture_flux;
+    h.count = int(c.require_int("moisture_flux.count"));
+    h.dt = c.require_double("moisture_flux.dt");
+    h.dt_prev = c.require_double("moisture_flux.dt_prev");
+    const std::vector<int64_t>& keys = c.require_i64("moisture_flux.keys");
+    h.keys.assign(keys.begin(), keys.end());
+    h.flux = c.require_f64("moisture_flux.flux", keys.size() * mpm::kBlockNodes);
+    h.flux_prev = c.require_f64("moisture_flux.flux_prev", keys.size() * mpm::kBlockNodes);
+    if (h.count < 0 || h.count > 2)
+        throw InputError(path.string() + ": moisture_flux.count = " + std::to_string(h.count) + ": expected 0, 1 or 2");
     s.domain_min = unflatten<Vec3>(c, "domain_min", 1, false)[0];
     s.domain_max = unflatten<Vec3>(c, "domain_max", 1, false)[0];
     SimTotals& t = sc.totals;

@@ -60,8 +60,7 @@ bool is_identity(const std::vector<int32_t>& order) {
 }
 
 SimWorkspace& ensure_workspace(const SimModel& model, SimState& state) {
-    if (!state.workspace) state.workspace = std::make_shared<SimWorkspace>();
-    SimWorkspace& ws = *state.workspace;
+    SimWorkspace& ws = state.workspace.get_or_create();
     ws.grid.geo = mpm::make_grid_geometry(state.domain_min, state.domain_max, model.h, model.domain.padding);
     const int nt = std::max(1, thread_count());
     ws.windows.resize(nt);
@@ -291,7 +290,8 @@ StepStats step(const SimModel& model, SimState& state, Real dt) {
         seal.has_ground = model.ground.has_value();
         if (seal.has_ground) seal.ground_height = model.ground->height;
         const MoistureParticles mp{state.x.data(), state.V0.data(), state.J.data(), state.theta.data()};
-        const MoistureSolveStats ms = solve_moisture(*model.moisture, seal, ws.grid, mp, interval * dt, *mg, ws.windows);
+        const MoistureSolveStats ms = solve_moisture(*model.moisture, seal, ws.grid, mp, interval * dt, *mg,
+                                                     state.moisture_flux, ws.windows);
         stats.cg_iterations = ms.iterations;
         stats.cg_residual = ms.residual;
     }
@@ -336,10 +336,6 @@ StepStats step(const SimModel& model, SimState& state, Real dt) {
     return stats;
 }
 
-void forget_step_history(SimState& state) {
-    if (state.workspace) state.workspace->moisture.history.clear();
-}
-
 ParticleFrame state_to_frame(const SimModel& model, const SimState& state, const CacheAttributes& attrs) {
     const size_t n = state.size();
     ParticleFrame f;
@@ -364,6 +360,7 @@ ParticleFrame state_to_frame(const SimModel& model, const SimState& state, const
 int64_t state_memory_bytes(const SimState& s) {
     int64_t total = 0;
     s.for_each_array([&](const char*, const auto& array, ArrayPresence) { total += capacity_bytes(array); });
+    total += s.moisture_flux.memory_bytes();
     if (s.workspace) total += s.workspace->memory_bytes();
     return total;
 }

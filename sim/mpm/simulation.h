@@ -4,16 +4,17 @@
 /// Tu et al. 2023 Sections 4-5; the consolidated step of physics.md Section 7.
 #include <cstdint>
 #include <functional>
-#include <memory>
 #include <vector>
 
 #include "sim/core/particle_frame.h"
+#include "sim/core/scratch.h"
 #include "sim/core/types.h"
 #include "sim/model.h"
+#include "sim/moisture/flux_history.h"
 
 namespace mudcrack {
 
-struct SimWorkspace;  // grid and scratch, rebuilt every step; never serialized
+struct SimWorkspace;  // grid and scratch, rebuilt every step; carries nothing from step to step
 
 /// Mutable simulation state. Particle arrays are SoA, (n_particles), periodically reordered by
 /// grid block for memory coherence; `id` maps a slot to its particle id (ids are 0..n-1). The
@@ -54,7 +55,9 @@ struct SimState {
 #undef MC_STATE_ARRAY_MEMBER
     Vec3 domain_min = Vec3::Zero(); // simulation box, fixed at t = 0 (derived once when the
     Vec3 domain_max = Vec3::Zero(); //   model's domain is auto) [m]; part of the checkpoint
-    std::shared_ptr<SimWorkspace> workspace;  // scratch; recreated on demand
+    MoistureFluxHistory moisture_flux;  // the moisture CG's last two solves (its initial guess);
+                                        //   part of the checkpoint, so a resumed run is exact
+    Scratch<SimWorkspace> workspace;    // a copy gets its own, recreated on demand
 
     size_t size() const { return x.size(); }
 
@@ -100,11 +103,6 @@ Real stable_dt(const SimModel& model, const SimState& state);
 /// Advances one substep of length dt. After the step every particle is checked for finite
 /// state; a failure throws RuntimeError naming the particle id and its state (theta, J, alpha).
 StepStats step(const SimModel& model, SimState& state, Real dt);
-
-/// Forgets what the steps carry from one to the next outside the state (the moisture CG's
-/// flux history, which only shapes its initial guess), so the steps that follow are bit for bit
-/// those of a run resumed here from a checkpoint. The frame stepper calls it at every frame.
-void forget_step_history(SimState& state);
 
 /// The cacheable view of the state in particle-id order, with only the requested attributes.
 ParticleFrame state_to_frame(const SimModel& model, const SimState& state, const CacheAttributes& attrs);

@@ -2,6 +2,7 @@
 // mid-run save/restore that continues bitwise identically to an uninterrupted run.
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <cstring>
 #include <filesystem>
 #include <fstream>
@@ -50,6 +51,12 @@ void expect_same_state(const SimState& a, const SimState& b) {
     EXPECT_TRUE(same_bits(a.Jw, b.Jw));
     EXPECT_TRUE(same_bits(a.strength, b.strength));
     EXPECT_TRUE(same_bits(a.damage, b.damage));
+    EXPECT_EQ(a.moisture_flux.count, b.moisture_flux.count);
+    EXPECT_EQ(std::memcmp(&a.moisture_flux.dt, &b.moisture_flux.dt, sizeof(Real)), 0);
+    EXPECT_EQ(std::memcmp(&a.moisture_flux.dt_prev, &b.moisture_flux.dt_prev, sizeof(Real)), 0);
+    EXPECT_TRUE(same_bits(a.moisture_flux.keys, b.moisture_flux.keys));
+    EXPECT_TRUE(same_bits(a.moisture_flux.flux, b.moisture_flux.flux));
+    EXPECT_TRUE(same_bits(a.moisture_flux.flux_prev, b.moisture_flux.flux_prev));
     EXPECT_TRUE(same_bits(a.domain_min, b.domain_min));
     EXPECT_TRUE(same_bits(a.domain_max, b.domain_max));
 }
@@ -91,6 +98,17 @@ SimCheckpoint sample_checkpoint(bool has_moisture, bool has_plasticity) {
     c.slice_hash = "0123456789abcdef";
     c.threads = 2;
     c.state = random_state(101, has_moisture, has_plasticity, 7);
+    if (has_moisture) {  // a flux history on three blocks, one with a key above INT32_MAX
+        MoistureFluxHistory& h = c.state.moisture_flux;
+        h.count = 2;
+        h.dt = 1e-3 / 3;
+        h.dt_prev = 1e-3 / 7;
+        h.keys = {3u, 77u, 0xfffffff0u};
+        for (size_t i = 0; i < h.keys.size() * 64; ++i) {
+            h.flux.push_back(std::sin(double(i)) * 1e-9);
+            h.flux_prev.push_back(std::cos(double(i)) / 3);
+        }
+    }
     c.totals.substeps = 999;
     c.totals.dt_min = 1.0 / 3e4;
     c.totals.dt_max = 2e-4;
@@ -224,7 +242,8 @@ TEST(SimCheckpoint, SavesEveryStateField) {
     // (sim_checkpoint.cpp), or a resumed run silently diverges. Update this number with it.
     constexpr size_t kVectors = 13, kVec3s = 2;
     constexpr size_t kExpected = sizeof(double) + sizeof(int64_t) + kVectors * sizeof(std::vector<Real>) +
-                                 kVec3s * sizeof(Vec3) + sizeof(std::shared_ptr<SimWorkspace>);
+                                 kVec3s * sizeof(Vec3) + sizeof(MoistureFluxHistory) +
+                                 sizeof(Scratch<SimWorkspace>);
     EXPECT_EQ(sizeof(SimState), kExpected) << "SimState gained or lost a field: update sim_checkpoint.cpp";
 }
 
