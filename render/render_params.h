@@ -26,7 +26,7 @@ struct RenderParams {
     ColorMode color_mode = ColorMode::Moisture;
     CameraParams camera;
     int samples = 4;                // anti-aliasing samples per pixel (MSAA)
-    bool turntable = true;          // render a turntable orbit
+    bool turntable = false;         // render a turntable orbit (on when the shot has /render/turntable)
     int turntable_views = 36;       // views in the orbit
     int turntable_frame = -1;       // frame to orbit; -1 = the last frame
     Vec3 albedo = Vec3(0.55, 0.42, 0.30); // dry soil color (linear RGB)

@@ -5,6 +5,7 @@
 #include <optional>
 #include <string>
 
+#include "sim/core/particle_attributes.h"
 #include "sim/core/types.h"
 
 namespace mudcrack {
@@ -85,16 +86,6 @@ struct TimeParams {
     Real fps = 24;             // frames per second
     int frame_start = 1;       // first frame (1-based)
     int frame_end = 24;        // last frame, inclusive
-};
-
-/// Which per-particle attributes the frame caches carry (what later stages need).
-struct CacheAttributes {
-    bool velocity = true;
-    bool theta = false;
-    bool saturation = false;
-    bool alpha = false;
-    bool Jw = false;
-    bool Fe = false;
 };
 
 struct SimModel {

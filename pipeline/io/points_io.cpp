@@ -16,6 +16,7 @@
 #include <mutex>
 #include <numeric>
 #include <system_error>
+#include <type_traits>
 
 #include "pipeline/io/atomic_output.h"
 #include "pipeline/io/checksum.h"
@@ -322,6 +323,21 @@ std::vector<T> permuted(const std::vector<T>& values, const std::vector<size_t>&
     return out;
 }
 
+// the cloud's attribute list for elements of type T (float, Vec3f or Mat3f)
+template <class T>
+auto& attributes_of(PointCloud& cloud) {
+    if constexpr (std::is_same_v<T, float>) return cloud.floats;
+    else if constexpr (std::is_same_v<T, Vec3f>) return cloud.vec3s;
+    else return cloud.mat3s;
+}
+
+template <class T>
+const std::vector<T>* find_attribute(const PointCloud& cloud, const std::string& name) {
+    if constexpr (std::is_same_v<T, float>) return cloud.find_float(name);
+    else if constexpr (std::is_same_v<T, Vec3f>) return cloud.find_vec3(name);
+    else return cloud.find_mat3(name);
+}
+
 }  // namespace
 
 const std::vector<float>* PointCloud::find_float(const std::string& name) const {
@@ -438,13 +454,10 @@ PointCloud frame_to_points(const ParticleFrame& frame) {
     cloud.P = frame.P;
     cloud.id.resize(frame.size());
     std::iota(cloud.id.begin(), cloud.id.end(), 0);
-    if (!frame.v.empty()) cloud.vec3s.emplace_back("v", frame.v);
-    const std::pair<const char*, const std::vector<float>*> scalars[] = {
-        {"theta", &frame.theta}, {"saturation", &frame.saturation}, {"alpha", &frame.alpha}, {"Jw", &frame.Jw}};
-    for (const auto& [name, values] : scalars) {
-        if (!values->empty()) cloud.floats.emplace_back(name, *values);
-    }
-    if (!frame.Fe.empty()) cloud.mat3s.emplace_back("Fe", frame.Fe);
+#define MC_ADD_CACHED(T, member, key, vdb, physics, policy, doc) \
+    if (!frame.member.empty()) attributes_of<T>(cloud).emplace_back(vdb, frame.member);
+    MC_CACHED_ATTRIBUTES(MC_ADD_CACHED)
+#undef MC_ADD_CACHED
     cloud.meta_string["mudcrack:stage"] = "sim";
     cloud.meta_int["mudcrack:frame"] = frame.frame;
     cloud.meta_int["mudcrack:substeps"] = frame.substeps;
@@ -482,12 +495,10 @@ ParticleFrame points_to_frame(const PointCloud& cloud, const std::string& source
 
     ParticleFrame frame;
     frame.P = by_id(cloud.P, "P");
-    if (const auto* v = cloud.find_vec3("v")) frame.v = by_id(*v, "v");
-    if (const auto* a = cloud.find_float("theta")) frame.theta = by_id(*a, "theta");
-    if (const auto* a = cloud.find_float("saturation")) frame.saturation = by_id(*a, "saturation");
-    if (const auto* a = cloud.find_float("alpha")) frame.alpha = by_id(*a, "alpha");
-    if (const auto* a = cloud.find_float("Jw")) frame.Jw = by_id(*a, "Jw");
-    if (const auto* m = cloud.find_mat3("Fe")) frame.Fe = by_id(*m, "Fe");
+#define MC_READ_CACHED(T, member, key, vdb, physics, policy, doc) \
+    if (const auto* values = find_attribute<T>(cloud, vdb)) frame.member = by_id(*values, vdb);
+    MC_CACHED_ATTRIBUTES(MC_READ_CACHED)
+#undef MC_READ_CACHED
     if (auto it = cloud.meta_int.find("mudcrack:frame"); it != cloud.meta_int.end()) frame.frame = int(it->second);
     if (auto it = cloud.meta_int.find("mudcrack:substeps"); it != cloud.meta_int.end()) frame.substeps = int(it->second);
     if (auto it = cloud.meta_double.find("mudcrack:time"); it != cloud.meta_double.end()) frame.time = it->second;

@@ -49,8 +49,8 @@ PointCloud read_points(const std::filesystem::path& path);
 /// Reads only the metadata (cheap: no attribute data).
 PointCloud read_points_metadata(const std::filesystem::path& path);
 
-/// A simulation frame <-> its cache: P, id, and the attributes present in `frame` (v, theta,
-/// saturation, alpha, Jw, Fe); metadata mudcrack:frame, mudcrack:time, mudcrack:substeps,
+/// A simulation frame <-> its cache: P, id, and the attributes present in `frame` (those of
+/// MC_CACHED_ATTRIBUTES, under their VDB names); metadata mudcrack:frame, mudcrack:time, mudcrack:substeps,
 /// mudcrack:stage = "sim".
 PointCloud frame_to_points(const ParticleFrame& frame);
 /// Inverse of frame_to_points. Throws InputError (naming `source`) if ids are not 0..n-1.

@@ -385,15 +385,50 @@ std::optional<RenderParams> build_render(const json& tree) {
     return r;
 }
 
-CacheAttributes derive_cache(const SimModel& sim, const std::optional<SurfaceParams>& surface) {
-    const bool has_moisture = sim.moisture.has_value();
+namespace {
+
+// whether the shot has the physics a cached attribute needs
+bool has_cache_physics(CachePhysics physics, const SimModel& sim, const std::optional<SurfaceParams>& surface) {
+    switch (physics) {
+        case CachePhysics::Always: return true;
+        case CachePhysics::Moisture: return sim.moisture.has_value();
+        case CachePhysics::Plasticity: return sim.nacc.has_value();
+        case CachePhysics::Damage: return sim.nacc.has_value() && sim.nacc->damage_strain > 0;
+        case CachePhysics::Surfacing: return surface.has_value();
+    }
+    return false;
+}
+
+const char* cache_physics_text(CachePhysics physics) {
+    switch (physics) {
+        case CachePhysics::Always: return "";
+        case CachePhysics::Moisture: return "/moisture";
+        case CachePhysics::Plasticity: return "/plasticity";
+        case CachePhysics::Damage: return "/plasticity/damage_strain";
+        case CachePhysics::Surfacing: return "/surfacing";
+    }
+    return "";
+}
+
+}  // namespace
+
+CacheAttributes derive_cache(const json& tree, const SimModel& sim, const std::optional<SurfaceParams>& surface,
+                             Issues& issues) {
     CacheAttributes cache;
-    cache.velocity = true;
-    cache.theta = has_moisture;
-    cache.saturation = has_moisture;
-    cache.Jw = has_moisture;
-    cache.alpha = sim.nacc.has_value();
-    cache.Fe = surface.has_value();  // core rotation R of Eq. 13: only the surfacing reads it
+    for (size_t i = 0; i < kCachedAttributeCount; ++i) {
+        const CachedAttributeInfo& a = kCachedAttributes[i];
+        const bool has_physics = has_cache_physics(a.physics, sim, surface);
+        if (a.policy == CachePolicy::ByPhysics) {
+            cache[i] = has_physics;
+            continue;
+        }
+        const std::string pointer = std::string("/sim/cache/") + a.shot_key;
+        const bool is_requested = has(tree, pointer) && boolean(tree, pointer);
+        if (is_requested && !has_physics)
+            issues.add(pointer, "true", std::string("the shot has no ") + a.vdb_name + " to cache: needs " +
+                                            cache_physics_text(a.physics));
+        cache[i] = is_requested && has_physics;
+    }
     return cache;
 }
 

@@ -36,11 +36,13 @@ std::optional<SurfaceParams> build_surface(const nlohmann::json& tree);
 /// /render, or nullopt when the section is off.
 std::optional<RenderParams> build_render(const nlohmann::json& tree);
 
-/// What the frame caches carry: the state the shot's physics has (velocity always; theta,
-/// saturation and Jw with moisture; alpha with plasticity), plus Fe when the shot surfaces (only
-/// the surfacing reads it, and it is 9 floats a particle). Never what a render draws: a render key
-/// must not change the sim's slice, or editing it would re-simulate.
-CacheAttributes derive_cache(const SimModel& sim, const std::optional<SurfaceParams>& surface);
+/// What the frame caches carry (MC_CACHED_ATTRIBUTES): each attribute the shot's physics has,
+/// velocity always; theta, saturation and Jw with moisture; alpha with plasticity; Fe when the
+/// shot surfaces (only the surfacing reads it, and it is 9 floats a particle); and an on-request
+/// attribute only when /sim/cache/<key> asks for it (an error without its physics). Never what a
+/// render draws: a render key must not change the sim's slice, or editing it would re-simulate.
+CacheAttributes derive_cache(const nlohmann::json& tree, const SimModel& sim,
+                             const std::optional<SurfaceParams>& surface, Issues& issues);
 
 /// Checks between sections: the box source inside the domain, the ground inside the domain, the
 /// turntable frame inside the frame range.

@@ -57,9 +57,13 @@ std::string slice_text(const json& canonical, Stage stage) {
     return slice.dump(2) + "\n";
 }
 
+// /derived/cache: each by-physics attribute as true or false, an on-request one only when cached
 json cache_json(const CacheAttributes& c) {
-    return {{"velocity", c.velocity}, {"theta", c.theta}, {"saturation", c.saturation},
-            {"alpha", c.alpha},       {"Jw", c.Jw},       {"Fe", c.Fe}};
+    json out = json::object();
+    for (size_t i = 0; i < kCachedAttributeCount; ++i) {
+        if (kCachedAttributes[i].policy == CachePolicy::ByPhysics || c[i]) out[kCachedAttributes[i].shot_key] = c[i];
+    }
+    return out;
 }
 
 // 64-bit FNV-1a: tiny, dependency-free and stable across platforms (not cryptographic)
@@ -108,7 +112,7 @@ Shot parse_shot(const std::string& text, const std::string& path) {
     shot.sim = spec::build_sim(tree, issues);
     shot.surface = spec::build_surface(tree);
     shot.render = spec::build_render(tree);
-    shot.sim.cache = spec::derive_cache(shot.sim, shot.surface);
+    shot.sim.cache = spec::derive_cache(tree, shot.sim, shot.surface, issues);
     spec::check_across(tree, shot.init, shot.sim, shot.render, issues);
     issues.throw_if_any();
     spec::warn_doubtful(shot.sim, shot.surface, path);

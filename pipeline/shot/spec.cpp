@@ -2,8 +2,12 @@
 // Ranges and defaults follow Tu et al. 2023 Table 1 and physics.md 1.7, 4.7 and 5.5.
 #include "pipeline/shot/spec.h"
 
+#include <algorithm>
 #include <cstdio>
 #include <map>
+#include <string>
+
+#include "sim/core/particle_attributes.h"
 
 namespace mudcrack::spec {
 namespace {
@@ -54,7 +58,7 @@ using T = KeyType;
 
 json vec(double a, double b, double c) { return json::array({a, b, c}); }
 
-std::vector<KeySpec> build_table() {
+std::vector<KeySpec> build_fixed_table() {
     // clang-format off
     return {
     // --- format and identity
@@ -224,6 +228,30 @@ std::vector<KeySpec> build_table() {
     Key("/render/fps", T::Number).def(24.0).gt(0).units("1/s").doc("movie frame rate"),
     };
     // clang-format on
+}
+
+// /sim/cache/<key>: one Bool per on-request cached attribute (MC_CACHED_ATTRIBUTES), after /sim's keys
+void add_cache_request_keys(std::vector<KeySpec>& rows) {
+    std::vector<KeySpec> keys = {
+        Key("/sim/cache", T::Section).optional()
+            .doc("extra attributes the frame caches carry (those the shot's physics has but does not cache by "
+                 "default); omit for the default set (/derived/cache)"),
+    };
+    for (const CachedAttributeInfo& a : kCachedAttributes) {
+        if (a.policy != CachePolicy::OnRequest) continue;
+        const std::string pointer = std::string("/sim/cache/") + a.shot_key;
+        KeySpec key = Key(pointer.c_str(), T::Bool).def(false).units("");
+        key.doc = std::string("cache \"") + a.vdb_name + "\": " + a.doc + "; needs the physics that has it";
+        keys.push_back(key);
+    }
+    const auto frames = std::find_if(rows.begin(), rows.end(), [](const KeySpec& k) { return k.pointer == "/frames"; });
+    rows.insert(frames, keys.begin(), keys.end());
+}
+
+std::vector<KeySpec> build_table() {
+    std::vector<KeySpec> rows = build_fixed_table();
+    add_cache_request_keys(rows);
+    return rows;
 }
 
 std::string number_text(double v) {

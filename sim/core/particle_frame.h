@@ -4,23 +4,20 @@
 /// shot did not cache are empty.
 #include <vector>
 
+#include "sim/core/particle_attributes.h"
 #include "sim/core/types.h"
 
 namespace mudcrack {
-
-using Mat3f = Eigen::Matrix<float, 3, 3>;
 
 struct ParticleFrame {
     int frame = 0;                 // 1-based frame number
     double time = 0;               // simulated time at the end of the frame [s]
     int substeps = 0;              // MPM steps taken during this frame
     std::vector<Vec3f> P;          // positions [m], (n_particles), index = particle id
-    std::vector<Vec3f> v;          // velocities [m/s]
-    std::vector<float> theta;      // volumetric water content in [0, eta]
-    std::vector<float> saturation; // s = theta/eta in [0,1]
-    std::vector<float> alpha;      // NACC hardening state (log Jp plus eps log Jw)
-    std::vector<float> Jw;         // pore deformation determinant, 1 - eta (1 - s)
-    std::vector<Mat3f> Fe;         // elastic deformation gradient
+    // one array per cached attribute (MC_CACHED_ATTRIBUTES), (n_particles), index = particle id
+#define MC_FRAME_ARRAY(T, member, key, vdb, physics, policy, doc) std::vector<T> member;
+    MC_CACHED_ATTRIBUTES(MC_FRAME_ARRAY)
+#undef MC_FRAME_ARRAY
     size_t size() const { return P.size(); }
 };
 

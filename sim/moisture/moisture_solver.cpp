@@ -378,7 +378,7 @@ int64_t MoistureGrid::memory_bytes() const {
     return capacity_bytes(W) + capacity_bytes(theta) + capacity_bytes(diag) + capacity_bytes(evaporation) +
            capacity_bytes(x) + capacity_bytes(r) + capacity_bytes(p) + capacity_bytes(Ap) +
            capacity_bytes(surface) + capacity_bytes(particle_is_boundary) + capacity_bytes(block_partial) +
-           capacity_bytes(block_face_neighbors) + history.memory_bytes();
+           capacity_bytes(block_face_neighbors);
 }
 
 void begin_moisture_p2g(MoistureGrid& mg, const SparseGrid& grid) {
@@ -390,7 +390,7 @@ void begin_moisture_p2g(MoistureGrid& mg, const SparseGrid& grid) {
 
 MoistureSolveStats solve_moisture(const MoistureParams& mp, const MoistureSeal& seal, const SparseGrid& grid,
                                   const MoistureParticles& pp, Real dt, MoistureGrid& mg,
-                                  std::vector<std::vector<Real>>& windows) {
+                                  MoistureFluxHistory& history, std::vector<std::vector<Real>>& windows) {
     const mpm::GridGeometry& geo = grid.geo;
     const int64_t n_nodes = node_count(grid);
     const Real inv_dt = 1 / dt;
@@ -425,8 +425,8 @@ MoistureSolveStats solve_moisture(const MoistureParams& mp, const MoistureSeal& 
     else std::fill(mg.particle_is_boundary.begin(), mg.particle_is_boundary.end(), uint8_t(0));
     const bool explicit_evaporation =
         !mp.implicit_robin && mp.lambda > 0 && mp.evaporation == MoistureParams::Evaporation::Grid;
-    const bool predicted = mg.history.count > 0;
-    if (predicted) predict_moisture_flux(mg.history, grid, dt, mg.x.data());
+    const bool predicted = history.count > 0;
+    if (predicted) predict_moisture_flux(history, grid, dt, mg.x.data());
     // from here on diag holds the inverse Jacobi diagonal (0 off the material)
     std::vector<Real>& inv_diag = mg.diag;
     parallel_for(n_nodes, [&](int64_t i) {
@@ -504,7 +504,7 @@ MoistureSolveStats solve_moisture(const MoistureParams& mp, const MoistureSeal& 
         const Real evaporation_step = explicit_evaporation ? mg.evaporation[i] * inv_diag[i] : Real(0);
         mg.Ap[i] = m * (mg.x[i] - evaporation_step);
     });
-    record_moisture_flux(mg.history, grid, mg.Ap.data(), dt);
+    record_moisture_flux(history, grid, mg.Ap.data(), dt);
     return stats;
 }
 

@@ -28,7 +28,6 @@ struct MoistureGrid {
     std::vector<uint8_t> particle_is_boundary;  // per slot: evaporates this step
     std::vector<Real> block_partial;            // per-block partial sums (deterministic dots)
     std::vector<std::array<int32_t, 6>> block_face_neighbors;  // slots of the 6 face-adjacent blocks or -1
-    MoistureFluxHistory history;                // kept from solve to solve: the CG's initial guess
 
     int64_t memory_bytes() const;
 };
@@ -60,13 +59,14 @@ void begin_moisture_p2g(MoistureGrid& mg, const mpm::SparseGrid& grid);
 /// sum V |grad w|^2, and the mechanics grid holds the nodal masses (for the surface test).
 /// On return mg.x holds theta^{n+1} - theta^n per node (zero off the material) and
 /// mg.particle_is_boundary flags the evaporating particles. The CG starts from theta^n plus the
-/// Jacobi step on the explicit evaporation plus the flux mg.history predicts, and this solve's
+/// Jacobi step on the explicit evaporation plus the flux `history` predicts, and this solve's
 /// flux is recorded there (flux_history.h).
 /// @param dt moisture time step [s] (k dt when solving every k MPM steps)
 /// @param windows per-thread scratch, at least 5 * 224 values each
 MoistureSolveStats solve_moisture(const MoistureParams& params, const MoistureSeal& seal,
                                   const mpm::SparseGrid& grid, const MoistureParticles& particles,
-                                  Real dt, MoistureGrid& mg, std::vector<std::vector<Real>>& windows);
+                                  Real dt, MoistureGrid& mg, MoistureFluxHistory& history,
+                                  std::vector<std::vector<Real>>& windows);
 
 /// Equivalent-sphere cross-section S = pi R^2, R = (3 V / (4 pi))^(1/3) of a particle of
 /// volume V (physics.md 4.4) [m^2].

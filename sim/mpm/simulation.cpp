@@ -10,6 +10,7 @@
 #include "sim/core/parallel.h"
 #include "sim/core/stats.h"
 #include "sim/moisture/pore.h"
+#include "sim/mpm/cached_values.h"
 #include "sim/mpm/transfer.h"
 #include "sim/mpm/workspace.h"
 
@@ -40,23 +41,16 @@ void permute_components(std::vector<T>& a, const std::vector<int32_t>& order, st
     }
 }
 
+// reorders a slot-index array (id) through the same Real buffer: int32 values are exact in a double
+void permute_components(std::vector<int32_t>& a, const std::vector<int32_t>& order, std::vector<Real>& buf) {
+    const int64_t n = static_cast<int64_t>(a.size());
+    parallel_for(n, [&](int64_t i) { buf[i] = static_cast<Real>(a[order[i]]); });
+    parallel_for(n, [&](int64_t i) { a[i] = static_cast<int32_t>(buf[i]); });
+}
+
 void permute_state(SimState& s, const std::vector<int32_t>& order, std::vector<Real>& buf) {
-    const int64_t n = static_cast<int64_t>(s.size());
-    buf.resize(n);
-    parallel_for(n, [&](int64_t i) { buf[i] = static_cast<Real>(s.id[order[i]]); });
-    parallel_for(n, [&](int64_t i) { s.id[i] = static_cast<int32_t>(buf[i]); });
-    permute_components(s.x, order, buf);
-    permute_components(s.v, order, buf);
-    permute_components(s.C, order, buf);
-    permute_components(s.Fe, order, buf);
-    permute_components(s.J, order, buf);
-    permute_components(s.alpha, order, buf);
-    permute_components(s.V0, order, buf);
-    permute_components(s.mass, order, buf);
-    permute_components(s.theta, order, buf);
-    permute_components(s.Jw, order, buf);
-    permute_components(s.strength, order, buf);
-    permute_components(s.damage, order, buf);
+    buf.resize(s.size());
+    s.for_each_array([&](const char*, auto& array, ArrayPresence) { permute_components(array, order, buf); });
 }
 
 bool is_identity(const std::vector<int32_t>& order) {
@@ -66,8 +60,7 @@ bool is_identity(const std::vector<int32_t>& order) {
 }
 
 SimWorkspace& ensure_workspace(const SimModel& model, SimState& state) {
-    if (!state.workspace) state.workspace = std::make_shared<SimWorkspace>();
-    SimWorkspace& ws = *state.workspace;
+    SimWorkspace& ws = state.workspace.get_or_create();
     ws.grid.geo = mpm::make_grid_geometry(state.domain_min, state.domain_max, model.h, model.domain.padding);
     const int nt = std::max(1, thread_count());
     ws.windows.resize(nt);
@@ -297,7 +290,8 @@ StepStats step(const SimModel& model, SimState& state, Real dt) {
         seal.has_ground = model.ground.has_value();
         if (seal.has_ground) seal.ground_height = model.ground->height;
         const MoistureParticles mp{state.x.data(), state.V0.data(), state.J.data(), state.theta.data()};
-        const MoistureSolveStats ms = solve_moisture(*model.moisture, seal, ws.grid, mp, interval * dt, *mg, ws.windows);
+        const MoistureSolveStats ms = solve_moisture(*model.moisture, seal, ws.grid, mp, interval * dt, *mg,
+                                                     state.moisture_flux, ws.windows);
         stats.cg_iterations = ms.iterations;
         stats.cg_residual = ms.residual;
     }
@@ -342,43 +336,31 @@ StepStats step(const SimModel& model, SimState& state, Real dt) {
     return stats;
 }
 
-void forget_step_history(SimState& state) {
-    if (state.workspace) state.workspace->moisture.history.clear();
-}
-
 ParticleFrame state_to_frame(const SimModel& model, const SimState& state, const CacheAttributes& attrs) {
     const size_t n = state.size();
     ParticleFrame f;
     f.time = state.time;
     f.P.resize(n);
-    if (attrs.velocity) f.v.resize(n);
-    if (attrs.theta) f.theta.resize(n);
-    if (attrs.saturation) f.saturation.resize(n);
-    if (attrs.alpha) f.alpha.resize(n);
-    if (attrs.Jw) f.Jw.resize(n);
-    if (attrs.Fe) f.Fe.resize(n);
-    const Real eta = model.moisture ? model.moisture->eta : 0;
-    const bool has_theta = !state.theta.empty();
+#define MC_RESIZE_CACHED(T, member, key, vdb, physics, policy, doc) \
+    if (attrs.key) f.member.resize(n);
+    MC_CACHED_ATTRIBUTES(MC_RESIZE_CACHED)
+#undef MC_RESIZE_CACHED
     for (size_t p = 0; p < n; ++p) {
         const int32_t id = state.id[p];
         MC_CHECK(id >= 0 && static_cast<size_t>(id) < n);
         f.P[id] = state.x[p].cast<float>();
-        if (attrs.velocity) f.v[id] = state.v[p].cast<float>();
-        // without moisture the soil counts as saturated (theta = eta = 0, s = 1, Jw = 1)
-        if (attrs.theta) f.theta[id] = has_theta ? static_cast<float>(state.theta[p]) : 0.f;
-        if (attrs.saturation) f.saturation[id] = has_theta ? static_cast<float>(saturation_of(state.theta[p], eta)) : 1.f;
-        if (attrs.alpha) f.alpha[id] = state.alpha.empty() ? 0.f : static_cast<float>(state.alpha[p]);
-        if (attrs.Jw) f.Jw[id] = has_theta ? static_cast<float>(state.Jw[p]) : 1.f;
-        if (attrs.Fe) f.Fe[id] = state.Fe[p].cast<float>();
+#define MC_FILL_CACHED(T, member, key, vdb, physics, policy, doc) \
+        if (attrs.key) f.member[id] = cached_value::member(model, state, p);
+        MC_CACHED_ATTRIBUTES(MC_FILL_CACHED)
+#undef MC_FILL_CACHED
     }
     return f;
 }
 
 int64_t state_memory_bytes(const SimState& s) {
-    int64_t total = capacity_bytes(s.id) + capacity_bytes(s.x) + capacity_bytes(s.v) + capacity_bytes(s.C) +
-                    capacity_bytes(s.Fe) + capacity_bytes(s.J) + capacity_bytes(s.alpha) + capacity_bytes(s.V0) +
-                    capacity_bytes(s.mass) + capacity_bytes(s.theta) + capacity_bytes(s.Jw) +
-                    capacity_bytes(s.strength) + capacity_bytes(s.damage);
+    int64_t total = 0;
+    s.for_each_array([&](const char*, const auto& array, ArrayPresence) { total += capacity_bytes(array); });
+    total += s.moisture_flux.memory_bytes();
     if (s.workspace) total += s.workspace->memory_bytes();
     return total;
 }

@@ -4,16 +4,43 @@
 /// Tu et al. 2023 Sections 4-5; the consolidated step of physics.md Section 7.
 #include <cstdint>
 #include <functional>
-#include <memory>
 #include <vector>
 
 #include "sim/core/particle_frame.h"
+#include "sim/core/scratch.h"
 #include "sim/core/types.h"
 #include "sim/model.h"
+#include "sim/moisture/flux_history.h"
 
 namespace mudcrack {
 
-struct SimWorkspace;  // grid and scratch, rebuilt every step; never serialized
+struct SimWorkspace;  // grid and scratch, rebuilt every step; carries nothing from step to step
+
+/// Mutable simulation state. Particle arrays are SoA, (n_particles), periodically reordered by
+/// grid block for memory coherence; `id` maps a slot to its particle id (ids are 0..n-1). The
+/// step processes particles in (grid block, id) order whatever the slot order, so a state saved
+/// and restored in any slot order (e.g. by id) continues bit for bit. Moisture arrays are empty
+/// when the model has no moisture section; alpha is empty without plasticity.
+// SimState's per-particle arrays, (n_particles) each, listed once: the list drives their
+// declaration, slot reordering, memory accounting and the checkpoint's save and load.
+// X(element type, name, presence, doc); presence Always: n elements, Optional: n or none.
+#define MC_SIM_STATE_ARRAYS(X)                                                                    \
+    X(int32_t, id, Always, "particle id per slot")                                                \
+    X(Vec3, x, Always, "position [m]")                                                            \
+    X(Vec3, v, Always, "velocity [m/s]")                                                          \
+    X(Mat3, C, Always, "APIC affine velocity [1/s]")                                              \
+    X(Mat3, Fe, Always, "elastic deformation gradient")                                           \
+    X(Real, J, Always, "det of the total deformation gradient (volume tracking)")                 \
+    X(Real, alpha, Optional, "NACC hardening state (empty without plasticity)")                   \
+    X(Real, V0, Always, "rest volume [m^3]")                                                      \
+    X(Real, mass, Always, "[kg]")                                                                 \
+    X(Real, theta, Optional, "water content in [0, eta] (moisture only)")                         \
+    X(Real, Jw, Optional, "pore determinant 1 - eta (1 - s) (moisture only)")                     \
+    X(Real, strength, Optional, "p0 multiplier of a heterogeneous soil (empty: uniform)")         \
+    X(Real, damage, Optional, "tensile damage in [0, 1], never decreasing (NACC with damage)")
+
+/// Whether a state array may be empty (the model lacks its physics) or always has n elements.
+enum class ArrayPresence { Always, Optional };
 
 /// Mutable simulation state. Particle arrays are SoA, (n_particles), periodically reordered by
 /// grid block for memory coherence; `id` maps a slot to its particle id (ids are 0..n-1). The
@@ -23,24 +50,30 @@ struct SimWorkspace;  // grid and scratch, rebuilt every step; never serialized
 struct SimState {
     double time = 0;               // simulated time [s]
     int64_t step_count = 0;        // substeps taken since t = 0
-    std::vector<int32_t> id;       // particle id per slot
-    std::vector<Vec3> x;           // position [m]
-    std::vector<Vec3> v;           // velocity [m/s]
-    std::vector<Mat3> C;           // APIC affine velocity [1/s]
-    std::vector<Mat3> Fe;          // elastic deformation gradient
-    std::vector<Real> J;           // det of the total deformation gradient (volume tracking)
-    std::vector<Real> alpha;       // NACC hardening state (empty without plasticity)
-    std::vector<Real> V0;          // rest volume [m^3]
-    std::vector<Real> mass;        // [kg]
-    std::vector<Real> theta;       // water content in [0, eta] (moisture only)
-    std::vector<Real> Jw;          // pore determinant 1 - eta (1 - s) (moisture only)
-    std::vector<Real> strength;    // p0 multiplier of a heterogeneous soil (empty: uniform)
-    std::vector<Real> damage;      // tensile damage in [0, 1], never decreasing (NACC with damage)
+#define MC_STATE_ARRAY_MEMBER(T, name, presence, doc) std::vector<T> name;
+    MC_SIM_STATE_ARRAYS(MC_STATE_ARRAY_MEMBER)
+#undef MC_STATE_ARRAY_MEMBER
     Vec3 domain_min = Vec3::Zero(); // simulation box, fixed at t = 0 (derived once when the
     Vec3 domain_max = Vec3::Zero(); //   model's domain is auto) [m]; part of the checkpoint
-    std::shared_ptr<SimWorkspace> workspace;  // scratch; recreated on demand
+    MoistureFluxHistory moisture_flux;  // the moisture CG's last two solves (its initial guess);
+                                        //   part of the checkpoint, so a resumed run is exact
+    Scratch<SimWorkspace> workspace;    // a copy gets its own, recreated on demand
 
     size_t size() const { return x.size(); }
+
+    /// Calls fn(name, array, presence) for each particle array, in MC_SIM_STATE_ARRAYS order.
+    template <class Fn>
+    void for_each_array(Fn&& fn) {
+#define MC_STATE_ARRAY_VISIT(T, name, presence, doc) fn(#name, name, ArrayPresence::presence);
+        MC_SIM_STATE_ARRAYS(MC_STATE_ARRAY_VISIT)
+#undef MC_STATE_ARRAY_VISIT
+    }
+    template <class Fn>
+    void for_each_array(Fn&& fn) const {
+#define MC_STATE_ARRAY_VISIT(T, name, presence, doc) fn(#name, name, ArrayPresence::presence);
+        MC_SIM_STATE_ARRAYS(MC_STATE_ARRAY_VISIT)
+#undef MC_STATE_ARRAY_VISIT
+    }
 };
 
 /// Counters of one step, for progress lines and the manifest.
@@ -70,11 +103,6 @@ Real stable_dt(const SimModel& model, const SimState& state);
 /// Advances one substep of length dt. After the step every particle is checked for finite
 /// state; a failure throws RuntimeError naming the particle id and its state (theta, J, alpha).
 StepStats step(const SimModel& model, SimState& state, Real dt);
-
-/// Forgets what the steps carry from one to the next outside the state (the moisture CG's
-/// flux history, which only shapes its initial guess), so the steps that follow are bit for bit
-/// those of a run resumed here from a checkpoint. The frame stepper calls it at every frame.
-void forget_step_history(SimState& state);
 
 /// The cacheable view of the state in particle-id order, with only the requested attributes.
 ParticleFrame state_to_frame(const SimModel& model, const SimState& state, const CacheAttributes& attrs);

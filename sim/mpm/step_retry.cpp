@@ -13,8 +13,7 @@ RetryingStepper::RetryingStepper(const RetryPolicy& policy) : m_policy(policy) {
 
 void RetryingStepper::take_snapshot(const SimState& state) {
     // copy assignment reuses the arrays' capacity: no allocation after the first snapshot
-    m_snapshot = state;
-    m_snapshot.workspace.reset();
+    m_snapshot = state;  // the snapshot holds no workspace (a copy gets its own)
     m_accepted_since = 0;
 }
 
@@ -55,11 +54,8 @@ StepAttempt RetryingStepper::attempt(const SimModel& model, SimState& state, Rea
         throw RuntimeError(a.failure + note);
     }
 
-    // roll back: every array bit for bit, the workspace kept, the step history forgotten
-    std::shared_ptr<SimWorkspace> workspace = std::move(state.workspace);
+    // roll back: every array and the moisture flux history bit for bit (the workspace stays)
     state = m_snapshot;
-    state.workspace = std::move(workspace);
-    forget_step_history(state);
     m_accepted_since = 0;
     ++m_halvings;
     ++m_retries;

@@ -1,6 +1,7 @@
 #pragma once
-/// The step's scratch (never serialized): the sparse grid, the moisture node fields (empty
-/// without moisture), per-thread scatter windows and the particle-permutation buffer.
+/// The step's scratch: the sparse grid, the moisture node fields (empty without moisture),
+/// per-thread scatter windows and the particle-permutation buffer. Never serialized: it carries
+/// nothing from one step to the next (what does, such as the moisture flux history, is SimState's).
 #include <cstdint>
 #include <vector>
 

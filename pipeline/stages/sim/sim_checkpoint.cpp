@@ -15,7 +15,7 @@ namespace mudcrack {
 namespace {
 
 // bump when the set or meaning of the saved arrays changes; a reader refuses other versions
-constexpr int64_t kSimCheckpointVersion = 2;  // 2: strength and damage arrays
+constexpr int64_t kSimCheckpointVersion = 3;  // 2: strength and damage arrays; 3: the moisture flux history
 
 // Eigen fixed-size types are plain arrays of their scalar (column-major, no padding), so the
 // state's arrays are copied as raw doubles: a restored state is bitwise the saved one
@@ -39,6 +39,26 @@ std::vector<Element> unflatten(const Checkpoint& c, const std::string& name, siz
     std::vector<Element> values(flat.size() / kWidth);
     if (!flat.empty()) std::memcpy(static_cast<void*>(values.data()), flat.data(), flat.size() * sizeof(double));
     return values;
+}
+
+void save_array(Checkpoint& c, const char* name, const std::vector<int32_t>& values) { c.i32[name] = values; }
+
+template <class Element>
+void save_array(Checkpoint& c, const char* name, const std::vector<Element>& values) {
+    c.f64[name] = flatten(values);
+}
+
+void load_array(const Checkpoint& c, const char* name, size_t n, ArrayPresence presence,
+                std::vector<int32_t>& values) {
+    const bool is_empty_optional =
+        presence == ArrayPresence::Optional && c.i32.count(name) && c.i32.at(name).empty();
+    values = is_empty_optional ? std::vector<int32_t>{} : c.require_i32(name, n);
+}
+
+template <class Element>
+void load_array(const Checkpoint& c, const char* name, size_t n, ArrayPresence presence,
+                std::vector<Element>& values) {
+    values = unflatten<Element>(c, name, n, presence == ArrayPresence::Optional);
 }
 
 }  // namespace
@@ -76,19 +96,14 @@ void write_sim_checkpoint(const fs::path& path, const SimCheckpoint& checkpoint)
     c.meta_double["time"] = s.time;
     c.meta_int["step_count"] = s.step_count;
     c.meta_int["particles"] = int64_t(s.size());
-    c.i32["id"] = s.id;
-    c.f64["x"] = flatten(s.x);
-    c.f64["v"] = flatten(s.v);
-    c.f64["C"] = flatten(s.C);
-    c.f64["Fe"] = flatten(s.Fe);
-    c.f64["J"] = s.J;
-    c.f64["alpha"] = s.alpha;
-    c.f64["V0"] = s.V0;
-    c.f64["mass"] = s.mass;
-    c.f64["theta"] = s.theta;
-    c.f64["Jw"] = s.Jw;
-    c.f64["strength"] = s.strength;
-    c.f64["damage"] = s.damage;
+    s.for_each_array([&](const char* name, const auto& array, ArrayPresence) { save_array(c, name, array); });
+    // the moisture CG's flux history (block keys as int64: they are uint32)
+    c.meta_int["moisture_flux.count"] = s.moisture_flux.count;
+    c.meta_double["moisture_flux.dt"] = s.moisture_flux.dt;
+    c.meta_double["moisture_flux.dt_prev"] = s.moisture_flux.dt_prev;
+    c.i64["moisture_flux.keys"].assign(s.moisture_flux.keys.begin(), s.moisture_flux.keys.end());
+    c.f64["moisture_flux.flux"] = s.moisture_flux.flux;
+    c.f64["moisture_flux.flux_prev"] = s.moisture_flux.flux_prev;
     c.f64["domain_min"] = flatten(std::vector<Vec3>{s.domain_min});
     c.f64["domain_max"] = flatten(std::vector<Vec3>{s.domain_max});
     // the run's counters, so a resumed run's manifest covers every frame
@@ -123,19 +138,19 @@ SimCheckpoint read_sim_checkpoint(const fs::path& path) {
     SimState& s = sc.state;
     s.time = c.require_double("time");
     s.step_count = c.require_int("step_count");
-    s.id = c.require_i32("id", n);
-    s.x = unflatten<Vec3>(c, "x", n, false);
-    s.v = unflatten<Vec3>(c, "v", n, false);
-    s.C = unflatten<Mat3>(c, "C", n, false);
-    s.Fe = unflatten<Mat3>(c, "Fe", n, false);
-    s.J = unflatten<Real>(c, "J", n, false);
-    s.alpha = unflatten<Real>(c, "alpha", n, true);
-    s.V0 = unflatten<Real>(c, "V0", n, false);
-    s.mass = unflatten<Real>(c, "mass", n, false);
-    s.theta = unflatten<Real>(c, "theta", n, true);
-    s.Jw = unflatten<Real>(c, "Jw", n, true);
-    s.strength = unflatten<Real>(c, "strength", n, true);
-    s.damage = unflatten<Real>(c, "damage", n, true);
+    s.for_each_array([&](const char* name, auto& array, ArrayPresence presence) {
+        load_array(c, name, n, presence, array);
+    });
+    MoistureFluxHistory& h = s.moisture_flux;
+    h.count = int(c.require_int("moisture_flux.count"));
+    h.dt = c.require_double("moisture_flux.dt");
+    h.dt_prev = c.require_double("moisture_flux.dt_prev");
+    const std::vector<int64_t>& keys = c.require_i64("moisture_flux.keys");
+    h.keys.assign(keys.begin(), keys.end());
+    h.flux = c.require_f64("moisture_flux.flux", keys.size() * mpm::kBlockNodes);
+    h.flux_prev = c.require_f64("moisture_flux.flux_prev", keys.size() * mpm::kBlockNodes);
+    if (h.count < 0 || h.count > 2)
+        throw InputError(path.string() + ": moisture_flux.count = " + std::to_string(h.count) + ": expected 0, 1 or 2");
     s.domain_min = unflatten<Vec3>(c, "domain_min", 1, false)[0];
     s.domain_max = unflatten<Vec3>(c, "domain_max", 1, false)[0];
     SimTotals& t = sc.totals;

@@ -49,8 +49,6 @@ int advance_frame(const SimModel& model, SimState& state, int frame, RetryingSte
     const double t_end = frame_end_time(model, frame);
     const double frame_length = 1.0 / model.time.fps;
     int substeps = 0;
-    // a run resumed from this frame's checkpoint starts without it: so does this one
-    forget_step_history(state);
     stepper.restart(state);
     // what a rollback returns to besides the state: the counters at the rollback point
     int substeps_at_rollback_point = substeps;
