@@ -126,11 +126,8 @@ SimState make_initial_state(const SimModel& model, const std::vector<Vec3>& X, c
         os << "initial particles: " << V0.size() << " rest volumes for " << n << " positions: must match";
         throw InputError(os.str());
     }
-    if (!(model.h > 0) || !std::isfinite(model.h)) {
-        std::ostringstream os;
-        os << "grid spacing h = " << model.h << ": must be finite and > 0 [m]";
-        throw InputError(os.str());
-    }
+    // the shot spec refuses a bad /sim/h with the file, key and value; here it is a precondition
+    MC_CHECK(model.h > 0 && std::isfinite(model.h));
     if (!strength.empty()) {
         if (!model.nacc) throw InputError("initial particles: a strength field needs plasticity (/plasticity)");
         if (strength.size() != n) {
