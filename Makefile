@@ -118,7 +118,7 @@ clean-shot:
 clean:
 	rm -rf $(BUILD)
 
-# ---- make report (issue 7): error against run time, and the stability matrix ----------------
+# ---- make report: error against run time, and the stability matrix ----------------
 # Writes $(OUT)/report/report.md with PNG Pareto plots (gnuplot, installed here when missing,
 # with the same "missing packages" logic as deps). REPORT_ARGS=--quick runs the reduced version.
 REPORT_PACKAGES := gnuplot-nox

@@ -1,4 +1,4 @@
-# Running shots on a Slurm cluster (issue 8; scripts in pipeline/farm/). Included by the root
+# Running shots on a Slurm cluster (scripts in pipeline/farm/). Included by the root
 # Makefile; `make shot SHOT=x FARM=slurm` calls farm-submit instead of the local stage rules.
 #
 #   make shot SHOT=demo FARM=slurm               submit what is not done; returns at once

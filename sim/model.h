@@ -19,7 +19,7 @@ struct ElasticParams {
     Real lambda() const {
         return youngs_modulus * poisson_ratio / ((1 + poisson_ratio) * (1 - 2 * poisson_ratio));
     }
-    /// 3D bulk modulus kappa = lambda + 2/3 mu (physics.md 1.6).
+    /// 3D bulk modulus kappa = lambda + 2/3 mu (docs/physics.md §1.6).
     Real kappa() const { return lambda() + Real(2) / 3 * mu(); }
     /// P-wave speed sqrt((lambda + 2 mu)/rho) [m/s], for the elastic time-step bound.
     Real wave_speed() const;
@@ -33,13 +33,13 @@ struct NaccParams {
     Real xi = 1;           // hardening factor in p0 = kappa sinh(xi max(-alpha, 0)) [-]
     Real M = 1.87;         // critical-state slope (friction) [-]
     bool hardening = true; // update alpha in the return mapping
-    /// Tensile damage (docs/physics.md, Tensile damage): the softening returns' alpha increments,
+    /// Tensile damage (docs/physics.md §6.2): the softening returns' alpha increments,
     /// divided by this, add to a particle's damage d in [0, 1], and its cohesion is beta (1 - d).
     /// 0: no damage (no array, no cost).
     Real damage_strain = 0;
 };
 
-/// Pore water (Tu et al. 2023 Sections 4.1, 5.2; physics.md 3-4).
+/// Pore water (Tu et al. 2023 Sections 4.1, 5.2; docs/physics.md §3-4).
 struct MoistureParams {
     Real eta = 0.5;          // porosity: theta in [0, eta], Jw = 1 - eta (1 - s) [-]
     Real k_r = 1;            // rho_s / rho_w [-]
@@ -54,10 +54,10 @@ struct MoistureParams {
     bool implicit_robin = false; // evaporation term in the matrix instead of the rhs
     /// Grid: the paper's r term scattered from the particles whose stencil touches a surface node.
     /// Surface: the particles of the exposed layer lose water themselves, exactly (an exponential
-    /// decay towards theta0), and the CG carries only diffusion (docs/physics.md, Evaporation).
+    /// decay towards theta0), and the CG carries only diffusion (docs/physics.md §6.3).
     enum class Evaporation { Grid, Surface } evaporation = Evaporation::Grid;
     int interval = 1;            // solve moisture every k MPM steps with dt_m = k dt
-    Real max_log_jw_step = 1e-3; // cap on |log(Jw^n/Jw^{n+1})| per step (physics.md 3.2)
+    Real max_log_jw_step = 1e-3; // cap on |log(Jw^n/Jw^{n+1})| per step (docs/physics.md §3.2)
 };
 
 enum class ColliderMode { Sticky, Slip, Separate };

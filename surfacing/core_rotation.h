@@ -1,5 +1,5 @@
 #pragma once
-/// The rotation of a particle core (physics.md 5.3 step 2; Tu et al. 2023 Eq. 13).
+/// The rotation of a particle core (docs/physics.md §5.3 step 2; Tu et al. 2023 Eq. 13).
 #include "sim/core/types.h"
 
 namespace mudcrack {

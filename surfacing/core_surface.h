@@ -1,5 +1,5 @@
 #pragma once
-/// Per-frame particle-core surfacing (Tu et al. 2023 Section 6; physics.md 5.3): extrapolate
+/// Per-frame particle-core surfacing (Tu et al. 2023 Section 6; docs/physics.md §5.3): extrapolate
 /// the core-vertex copies with Eq. 13, weld them across intact edges, and emit the boundary
 /// skin and the crack faces of broken edges as two meshes.
 #include <cstdint>

@@ -1,5 +1,5 @@
 #pragma once
-/// The frame-independent part of the particle-core surfacing (physics.md 5.1), built once per
+/// The frame-independent part of the particle-core surfacing (docs/physics.md §5.1), built once per
 /// tet mesh: unique edges with rest lengths, unique faces, the tet -> edge/face incidence, the
 /// edge -> tet incidence that lists a broken edge's interface triangles, and the layout of the
 /// boundary skin triangles with their UVs.
@@ -82,7 +82,7 @@ struct CoreTopology {
     size_t memory_bytes() const;
 };
 
-/// Builds the surfacing topology of a rest tet mesh (physics.md 5.1). Linear time: edges and
+/// Builds the surfacing topology of a rest tet mesh (docs/physics.md §5.1). Linear time: edges and
 /// faces are bucketed by their smallest particle id. Throws InputError (prefixed "tet mesh: ")
 /// on an empty mesh, out-of-range ids, a tet with non-positive rest volume, a face shared by more
 /// than two tets, or `boundary` not being exactly the outward single-tet faces.

@@ -17,7 +17,7 @@ namespace mudcrack {
 constexpr int32_t kNeverBroken = std::numeric_limits<int32_t>::max();
 
 /// The stretch-ratio threshold of an edge (Eq. 14): 0.5 (Jw_p + Jw_q) zeta in Ours mode,
-/// 0.5 (Jw_p^(1/3) + Jw_q^(1/3)) zeta with length_consistent (physics.md 5.5), zeta in
+/// 0.5 (Jw_p^(1/3) + Jw_q^(1/3)) zeta with length_consistent (docs/physics.md §5.5), zeta in
 /// Wang2019 mode (Jw = 1). @param jw_p, jw_q pore deformation determinants [-]
 Real break_threshold(Real jw_p, Real jw_q, const SurfaceParams& params);
 

@@ -1,5 +1,5 @@
 #pragma once
-/// Fragments (physics.md 5.3 step 7): the connected components of particles through unbroken
+/// Fragments (docs/physics.md §5.3 step 7): the connected components of particles through unbroken
 /// edges. Each fragment's boundary and crack pieces form a closed surface.
 #include <cstdint>
 #include <vector>

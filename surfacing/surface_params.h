@@ -1,5 +1,5 @@
 #pragma once
-/// Settings of the particle-core surfacing (Tu et al. 2023 Section 6; physics.md 5).
+/// Settings of the particle-core surfacing (Tu et al. 2023 Section 6; docs/physics.md §5).
 #include <string>
 #include <vector>
 
@@ -15,7 +15,7 @@ enum class SurfaceMode {
 struct SurfaceParams {
     SurfaceMode mode = SurfaceMode::Ours;
     Real zeta = 2;                  // edge-stretch threshold of Eq. 14 [-]
-    bool length_consistent = false; // threshold 0.5 (Jw_p^(1/3) + Jw_q^(1/3)) zeta (physics.md 5.5)
+    bool length_consistent = false; // threshold 0.5 (Jw_p^(1/3) + Jw_q^(1/3)) zeta (docs/physics.md §5.5)
     bool cracks = true;             // mesh crack surfaces (false: boundary only, no crack mesh)
     std::string format = "glb";     // glb | obj | ply | dae
     int min_fragment_particles = 1; // fragments smaller than this are culled as debris

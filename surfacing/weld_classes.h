@@ -1,9 +1,9 @@
 #pragma once
-/// Welding of core-vertex copies across intact edges (physics.md 5.3 step 4), as lookup tables.
-/// A rest point is owned by the corners of its simplex; the copies of two owners are welded when
-/// the edge between them is unbroken, transitively. Because every owner pair of a simplex is one
-/// of its edges, welding is local to the simplex: a union-find over at most 4 owners and 6 edges,
-/// tabulated once for every broken-edge mask.
+/// Welding of core-vertex copies across intact edges (docs/physics.md §5.3 step 4), as lookup
+/// tables. A rest point is owned by the corners of its simplex; the copies of two owners are welded
+/// when the edge between them is unbroken, transitively. Because every owner pair of a simplex is
+/// one of its edges, welding is local to the simplex: a union-find over at most 4 owners and 6
+/// edges, tabulated once for every broken-edge mask.
 #include <array>
 #include <cstdint>
 

@@ -1,9 +1,9 @@
 #!/usr/bin/env bash
-# Two builds' step loop on issue 3's reference scene (tests/mpm/mpm_bench.cpp), alternated: one
-# run of OLD_BUILD's mpm_bench then one of NEW_BUILD's, PAIRS times per configuration, so a VM
-# whose speed drifts (or another job on the machine) weighs on both alike. Prints each pair's
-# particle-steps/s (wall, and per CPU second: what an idle machine would give on 1 thread) and
-# the time ratio new/old, then the medians.
+# Two builds' step loop on the simulation benchmarks' reference scene (tests/mpm/mpm_bench.cpp),
+# alternated: one run of OLD_BUILD's mpm_bench then one of NEW_BUILD's, PAIRS times per
+# configuration, so a VM whose speed drifts (or another job on the machine) weighs on both alike.
+# Prints each pair's particle-steps/s (wall, and per CPU second: what an idle machine would give on
+# 1 thread) and the time ratio new/old, then the medians.
 #
 #   tools/bench_compare.sh OLD_BUILD NEW_BUILD [PAIRS] [CONFIG/THREADS...]
 #       default: 5 pairs of NoMoisture/1 Moisture/1 NoMoisture/2 Moisture/2

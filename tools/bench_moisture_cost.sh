@@ -1,8 +1,8 @@
 #!/usr/bin/env bash
-# Moisture's cost on issue 3's reference scene (tests/mpm/mpm_bench.cpp): NACC alone and NACC +
-# moisture run alternately, one 404-step run each, PAIRS pairs per thread count, so a VM whose
-# speed drifts between runs (by a few % here) weighs on both configurations alike. Prints each
-# pair's particle-steps/s and time ratio, then the medians.
+# Moisture's cost on the simulation benchmarks' reference scene (tests/mpm/mpm_bench.cpp): NACC
+# alone and NACC + moisture run alternately, one 404-step run each, PAIRS pairs per thread count, so
+# a VM whose speed drifts between runs (by a few % here) weighs on both configurations alike. Prints
+# each pair's particle-steps/s and time ratio, then the medians.
 #
 #   tools/bench_moisture_cost.sh [BUILD_DIR] [PAIRS] [THREADS...]   (default: build 5 1 2)
 #

@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# mc-sim on a shared node (issue 17): the demo shot's first frames on 2 threads, (a) alone and
+# mc-sim on a shared node: the demo shot's first frames on 2 threads, (a) alone and
 # (b) beside a competing CPU-bound load (2 busy-looping processes, one per core), alternated PAIRS
 # times. Prints every run, the medians, and (b)/(a): a fair share of the 2 cores gives 2, while
 # OpenMP threads that spin at barriers make it many times that. Given a second build, the two

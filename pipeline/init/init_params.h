@@ -1,5 +1,5 @@
 #pragma once
-/// What mc-init builds the particles from, and how finely (issue 2). Paths are absolute
+/// What mc-init builds the particles from, and how finely. Paths are absolute
 /// (resolved against the shot file by pipeline/shot).
 #include <optional>
 #include <string>
@@ -46,7 +46,7 @@ struct HeightfieldSource {
 
 /// A shot value the builders refuse, as "<pointer> = <value>: <expectation>": they see the values,
 /// not the shot file, so mc-init puts the file's name in front and the message reads like every
-/// other bad-input error (style.md 5).
+/// other bad-input error (docs/architecture.md §5).
 class ShotValueError : public InputError {
 public:
     using InputError::InputError;

@@ -1,7 +1,8 @@
 #pragma once
-/// Atomic outputs (style.md 2): make trusts mtimes, so a stage never leaves a half-written file or
-/// folder where a complete one is expected. Files go through `name.tmp` + rename; a stage's whole
-/// output folder is built as `.<name>.partial/` next to it and renamed on success.
+/// Atomic outputs (docs/architecture.md §3): make trusts mtimes, so a stage never leaves a
+/// half-written file or folder where a complete one is expected. Files go through `name.tmp` +
+/// rename; a stage's whole output folder is built as `.<name>.partial/` next to it and renamed on
+/// success.
 #include <filesystem>
 #include <functional>
 #include <string>

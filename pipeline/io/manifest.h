@@ -1,7 +1,7 @@
 #pragma once
-/// Each stage writes manifest.json last (style.md 2): stage, tool version, the hash of the shot
-/// slice it read, its input manifests, frame range, wall time, measured rates, peak memory, and
-/// what it ran and allocated.
+/// Each stage writes manifest.json last (docs/architecture.md §3): stage, tool version, the hash of
+/// the shot slice it read, its input manifests, frame range, wall time, measured rates, peak
+/// memory, and what it ran and allocated.
 #include <filesystem>
 #include <string>
 

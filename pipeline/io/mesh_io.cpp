@@ -329,7 +329,7 @@ std::string mesh_format_refusal(const std::string& format) {
     if (is_supported_mesh_format(format)) return "";
     if (format == "fbx") {
         return "fbx is not supported: assimp 5.2.5 (Debian 12) writes binary FBX that no reader accepts, "
-               "not even assimp itself (upstream assimp issue 4686, fixed after 5.2.5); use glb, obj, ply or dae";
+               "not even assimp itself (upstream bug assimp/assimp#4686, fixed after 5.2.5); use glb, obj, ply or dae";
     }
     return "unknown mesh format '" + format + "': expected glb, obj, ply or dae";
 }

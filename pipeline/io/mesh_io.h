@@ -24,7 +24,7 @@ struct InputSurface {
 InputSurface load_input_surface(const std::filesystem::path& path);
 
 /// The export formats: "glb", "obj", "ply", "dae". "fbx" is refused (assimp 5.2.5 writes binary
-/// FBX that no reader accepts: upstream issue 4686).
+/// FBX that no reader accepts: upstream bug assimp/assimp#4686).
 bool is_supported_mesh_format(const std::string& format);
 /// Why a format is not supported (empty when it is).
 std::string mesh_format_refusal(const std::string& format);

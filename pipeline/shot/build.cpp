@@ -206,7 +206,7 @@ void build_plasticity(json& tree, SimModel& model) {
                              {"xi", &NaccParams::xi},
                              {"M", &NaccParams::M},
                              {"hardening", &NaccParams::hardening}});
-    // Table 1 gives one beta; beta0 and beta1 default to it (physics.md 4.8 T21)
+    // Table 1 gives one beta; beta0 and beta1 default to it (docs/physics.md §4.8 T21)
     const Real beta = has(tree, "/plasticity/beta") ? number(tree, "/plasticity/beta") : Real(1);
     nacc.beta0 = has(tree, "/plasticity/beta0") ? number(tree, "/plasticity/beta0") : beta;
     nacc.beta1 = has(tree, "/plasticity/beta1") ? number(tree, "/plasticity/beta1") : beta;
@@ -259,7 +259,7 @@ void build_time(const json& tree, SimModel& model, Issues& issues) {
                    "must be >= /frames/start = " + std::to_string(t.frame_start));
     if (!has(tree, "/sim/dt")) return;
     t.dt_fixed = number(tree, "/sim/dt");
-    // explicit MPM blows up above the elastic wave bound (physics.md 1.7): refuse it at load
+    // explicit MPM blows up above the elastic wave bound (docs/physics.md §1.7): refuse it at load
     const bool are_inputs_ok = !issues.has("/material") && !issues.has("/sim/h") &&
                                !issues.has("/sim/cfl_elastic");
     const Real bound = elastic_dt_bound(model);
@@ -476,7 +476,7 @@ void warn_doubtful(const SimModel& sim, const std::optional<SurfaceParams>& surf
     if (surface->zeta >= bound) return;
     const std::string why = is_jw_scaled
         ? "(1 - eta)^(-2/3) = " + g(bound) + " for /moisture/eta = " + g(eta) +
-              ": intact soil that dries fully will crack everywhere (physics.md 5.5)"
+              ": intact soil that dries fully will crack everywhere (docs/physics.md §5.5)"
         : "1: intact material breaks at rest";
     log::warn("zeta-below-bound",
               shot_path + ": /surfacing/zeta = " + g(surface->zeta) + " is below " + why);

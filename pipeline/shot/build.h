@@ -49,8 +49,8 @@ CacheAttributes derive_cache(const nlohmann::json& tree, const SimModel& sim,
 void check_across(const nlohmann::json& tree, const InitParams& init, const SimModel& sim,
                   const std::optional<RenderParams>& render, Issues& issues);
 
-/// Warnings for valid but doubtful settings: zeta below the bound of physics.md 5.5, under which
-/// intact dried material breaks spuriously.
+/// Warnings for valid but doubtful settings: zeta below the bound of docs/physics.md §5.5, under
+/// which intact dried material breaks spuriously.
 void warn_doubtful(const SimModel& sim, const std::optional<SurfaceParams>& surface,
                    const std::string& shot_path);
 

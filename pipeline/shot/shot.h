@@ -1,6 +1,6 @@
 #pragma once
-/// A validated shot (style.md 8): the typed parameters of every stage, built from one JSON file
-/// by the spec table in spec.cpp. Past pipeline/shot no code touches JSON.
+/// A validated shot (docs/architecture.md §4): the typed parameters of every stage, built from one
+/// JSON file by the spec table in spec.cpp. Past pipeline/shot no code touches JSON.
 #include <optional>
 #include <string>
 #include <vector>

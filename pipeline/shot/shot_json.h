@@ -1,8 +1,8 @@
 #pragma once
-/// Reading a shot file's JSON text. Comments are allowed (style.md 8: TDs annotate shots), and
-/// what nlohmann's parser accepts silently is refused: a key written twice in one object, where
-/// the parser would keep the last value and drop the first without a word. Internal to
-/// pipeline/shot.
+/// Reading a shot file's JSON text. Comments are allowed (docs/architecture.md §4: TDs annotate
+/// shots), and what nlohmann's parser accepts silently is refused: a key written twice in one
+/// object, where the parser would keep the last value and drop the first without a word. Internal
+/// to pipeline/shot.
 #include <string>
 
 #include <nlohmann/json.hpp>

@@ -1,5 +1,6 @@
-// The shot spec table: every key's doc lives here, next to the code that reads it (style.md 4).
-// Ranges and defaults follow Tu et al. 2023 Table 1 and physics.md 1.7, 4.7 and 5.5.
+// The shot spec table: every key's doc lives here, next to the code that reads it
+// (docs/architecture.md §4). Ranges and defaults follow Tu et al. 2023 Table 1 and docs/physics.md
+// §1.7, §4.7 and §5.5.
 #include "pipeline/shot/spec.h"
 
 #include <algorithm>
@@ -68,7 +69,7 @@ std::vector<KeySpec> build_fixed_table() {
         .doc("another shot in this folder (its file's stem, e.g. \"fig8_c\"): take the stages whose slices are "
              "identical from its outputs (pipeline/shot.mk); that shot may not set /reuse itself; in no slice"),
 
-    // --- source: what mc-init builds the particles from (issue 2)
+    // --- source: what mc-init builds the particles from
     Key("/source", T::Section).required().doc("what mc-init fills with particles"),
     Key("/source/type", T::Enum).required().choices({"mesh", "box", "heightfield"}).units("")
         .doc("source kind; its settings live in /source/<type>"),
@@ -113,7 +114,7 @@ std::vector<KeySpec> build_fixed_table() {
     Key("/init/seed", T::Integer).def(1).ge(0).le(4294967295.0).units("").doc("jitter, mesher and strength-field seed"),
     Key("/init/strength_field", T::Section).optional()
         .doc("heterogeneous soil: a seeded random field of multipliers on the NACC yield pressure p0, "
-             "cached as the particles' \"strength\" (docs/physics.md, Heterogeneous strength); needs "
+             "cached as the particles' \"strength\" (docs/physics.md §6.1); needs "
              "/plasticity; omit for uniform soil"),
     Key("/init/strength_field/correlation_length", T::Number).def(0.05).gt(0).units("m")
         .doc("l of the field's covariance exp(-r^2 / (2 l^2)): the size of weak and strong patches"),
@@ -139,15 +140,15 @@ std::vector<KeySpec> build_fixed_table() {
     Key("/plasticity/damage_strain", T::Number).optional().gt(0).units("-")
         .doc("permanent tensile damage: the softening a particle's tension and dry-side returns add to "
              "alpha, summed, removes its cohesion beta linearly and for good once it reaches this "
-             "(docs/physics.md, Tensile damage); omit for none"),
+             "(docs/physics.md §6.2); omit for none"),
 
-    // --- moisture: pore water (Tu et al. 2023 Sections 4.1, 5.2; physics.md 3-4)
+    // --- moisture: pore water (Tu et al. 2023 Sections 4.1, 5.2; docs/physics.md §3-4)
     Key("/moisture", T::Section).optional().doc("pore water, shrinkage and drying (Sections 4.1, 5.2); omit for none"),
     Key("/moisture/eta", T::Number).def(0.5).ge(0).lt(1).units("-").doc("porosity: theta in [0, eta], Jw = 1 - eta (1 - s) (Table 1: 0.4-0.5)"),
     Key("/moisture/k_r", T::Number).def(1.0).gt(0).units("-").doc("rho_s / rho_w (Table 1: 1 or 2)"),
     Key("/moisture/eps", T::Number).def(0.5).ge(0).units("-").doc("saturation hardening rate epsilon (Table 1: 0.2-1)"),
-    Key("/moisture/D", T::Number).def(0.02).ge(0).units("m^2/s").doc("moisture diffusivity (physics.md 4.7: 0.01-0.05)"),
-    Key("/moisture/lambda", T::Number).def(0.1).ge(0).units("m/s").doc("evaporation coefficient (physics.md 4.7: 0.05-0.2)"),
+    Key("/moisture/D", T::Number).def(0.02).ge(0).units("m^2/s").doc("moisture diffusivity (docs/physics.md §4.7: 0.01-0.05)"),
+    Key("/moisture/lambda", T::Number).def(0.1).ge(0).units("m/s").doc("evaporation coefficient (docs/physics.md §4.7: 0.05-0.2)"),
     Key("/moisture/theta0", T::Number).def(0.0).ge(0).lt(1).units("-").doc("ambient moisture; <= eta"),
     Key("/moisture/theta_init", T::Number).derived().ge(0).lt(1).units("-")
         .doc("initial moisture in [0, eta]; default: eta (fully saturated, Section 7.1)"),
@@ -158,12 +159,12 @@ std::vector<KeySpec> build_fixed_table() {
     Key("/moisture/evaporation", T::Enum).def("grid").choices({"grid", "surface"}).units("")
         .doc("grid: the paper's r term, from particles whose stencil touches a surface node (a drying "
              "front about 2 cells deep); surface: the exposed particle layer loses water itself, so a "
-             "crust can be one particle layer thin when D is small (docs/physics.md, Evaporation)"),
+             "crust can be one particle layer thin when D is small (docs/physics.md §6.3)"),
     Key("/moisture/interval", T::Integer).def(1).ge(1).units("steps").doc("solve moisture every k MPM steps with dt_m = k dt"),
     Key("/moisture/max_log_jw_step", T::Number).def(1e-3).gt(0).units("-")
-        .doc("cap on |log(Jw^n / Jw^n+1)| per step (physics.md 3.2)"),
+        .doc("cap on |log(Jw^n / Jw^n+1)| per step (docs/physics.md §3.2)"),
 
-    // --- sim: grid and time stepping (physics.md 1.7)
+    // --- sim: grid and time stepping (docs/physics.md §1.7)
     Key("/sim", T::Section).def(json::object()).doc("MPM grid and time stepping"),
     Key("/sim/h", T::Number).def(0.05).gt(0).units("m").doc("grid cell size (Table 1 'Grid Res.': 0.02-0.2)"),
     Key("/sim/dt_max", T::Number).def(1e-3).gt(0).units("s").doc("largest step; adaptive steps obey both CFL bounds (Table 1: 1e-3)"),
@@ -193,19 +194,19 @@ std::vector<KeySpec> build_fixed_table() {
     Key("/colliders/domain/max", T::Vec3).def(vec(1, 1, 1)).units("m").doc("upper corner; > min on every axis"),
     Key("/colliders/domain/padding", T::Integer).def(3).ge(1).units("cells").doc("wall layer that removes outward velocity"),
 
-    // --- surfacing (Tu et al. 2023 Section 6; physics.md 5)
+    // --- surfacing (Tu et al. 2023 Section 6; docs/physics.md §5)
     Key("/surfacing", T::Section).optional().doc("particle-core surfacing (mc-surface); omit for none"),
     Key("/surfacing/mode", T::Enum).def("ours").choices({"ours", "wang2019"}).units("")
         .doc("ours: moisture-aware Eq. 13-14; wang2019: the baseline"),
     Key("/surfacing/zeta", T::Number).def(2.0).gt(0).units("-")
-        .doc("edge-stretch threshold of Eq. 14 (physics.md 5.5: >= (1-eta)^(-2/3))"),
+        .doc("edge-stretch threshold of Eq. 14 (docs/physics.md §5.5: >= (1-eta)^(-2/3))"),
     Key("/surfacing/length_consistent", T::Bool).def(false).units("")
-        .doc("threshold 0.5 (Jw_p^(1/3) + Jw_q^(1/3)) zeta (physics.md 5.5)"),
+        .doc("threshold 0.5 (Jw_p^(1/3) + Jw_q^(1/3)) zeta (docs/physics.md §5.5)"),
     Key("/surfacing/cracks", T::Bool).def(true).units("").doc("mesh crack surfaces (false: boundary only)"),
     Key("/surfacing/format", T::Enum).def("glb").choices({"glb", "obj", "ply", "dae"}).units("")
         .refuse("fbx", "FBX is not offered: the binary FBX writer of assimp 5.2.5 (Debian 12) fails or writes "
-                       "corrupt files (upstream assimp issue 4686); use \"glb\" (or \"dae\") and convert in your DCC")
-        .doc("mesh file format (assimp exporter); not fbx (assimp issue 4686)"),
+                       "corrupt files (upstream bug assimp/assimp#4686); use \"glb\" (or \"dae\") and convert in your DCC")
+        .doc("mesh file format (assimp exporter); not fbx (assimp/assimp#4686)"),
     Key("/surfacing/min_fragment_particles", T::Integer).def(1).ge(1).units("particles")
         .doc("fragments smaller than this are culled as debris"),
 

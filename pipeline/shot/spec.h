@@ -1,7 +1,7 @@
 #pragma once
-/// The shot spec (style.md 8): one table with every key of a shot file, its type, default,
-/// range, units and one-line doc (polyfem's spec, MuJoCo's single source of truth). The table
-/// drives validation, defaults, `mc-shot keys` and which keys each stage's slice holds.
+/// The shot spec (docs/architecture.md §4): one table with every key of a shot file, its type,
+/// default, range, units and one-line doc (polyfem's spec, MuJoCo's single source of truth). The
+/// table drives validation, defaults, `mc-shot keys` and which keys each stage's slice holds.
 /// Internal to pipeline/shot; other modules use shot.h.
 #include <optional>
 #include <string>

@@ -1,7 +1,7 @@
 #pragma once
 /// Checking a parsed shot against the spec table: unknown keys, types, ranges, required keys, and
 /// the defaults of every present section. Every problem is collected, so the user sees all of
-/// them at once (style.md 5, pbrt's ErrorExitDeferred). Internal to pipeline/shot.
+/// them at once (docs/architecture.md §5, pbrt's ErrorExitDeferred). Internal to pipeline/shot.
 #include <set>
 #include <string>
 #include <vector>

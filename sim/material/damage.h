@@ -1,5 +1,5 @@
 #pragma once
-/// Permanent tensile damage (docs/physics.md, "Tensile damage"): the "traditional softening-based
+/// Permanent tensile damage (docs/physics.md §6.2): the "traditional softening-based
 /// fracture" Tu et al. 2023 combine with their model for the bunny (Section 7.2), in its simplest
 /// form. NACC softens a particle that fails in tension (the tension tip, and the dry side of the
 /// ellipse): alpha rises, p0 falls. Drying then hardens the same particle again

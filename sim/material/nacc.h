@@ -1,11 +1,11 @@
 #pragma once
 /// Non-associated Cam-Clay (NACC) return mapping of CD-MPM (Wolper et al. 2019), as used by
-/// Tu et al. 2023 Eq. (7)-(9): physics.md 2.1-2.2, in exactly that order, with the semantics of
-/// ziran2020's NonAssociativeCamClay::projectStrain (hardening mode 0, "fake p", qHard off).
+/// Tu et al. 2023 Eq. (7)-(9): docs/physics.md §2.1-2.2, in exactly that order, with the semantics
+/// of ziran2020's NonAssociativeCamClay::projectStrain (hardening mode 0, "fake p", qHard off).
 /// Differences from the reference code, all documented at their constants below:
-///   - the "inside" and hardening-guard tolerances are relative to kappa (physics.md 2.2 asks for
-///     this when stresses are scaled away from E ~ 1e3); they equal ziran's absolute 1e-4 at the
-///     paper's kappa = 2222 Pa;
+///   - the "inside" and hardening-guard tolerances are relative to kappa (docs/physics.md §2.2 asks
+/// for     this when stresses are scaled away from E ~ 1e3); they equal ziran's absolute 1e-4 at
+/// the     paper's kappa = 2222 Pa;
 ///   - the sinh argument of p0 is capped, so p0 never overflows;
 ///   - J is floored at the smallest normal double in the logs and powers, so the map stays finite
 ///     for J -> 0+ and for huge stretch; an inverted trial (det < 0) uses |J|.
@@ -22,7 +22,7 @@
 
 namespace mudcrack {
 
-/// Which branch of physics.md 2.2 a return mapping took.
+/// Which branch of docs/physics.md §2.2 a return mapping took.
 enum NaccYieldCase : int {
     kNaccInside = 0,          // case 3a: y below tolerance, Fe unchanged
     kNaccCompressionTip = 1,  // case 1: p > p0
@@ -74,7 +74,7 @@ inline Real nacc_p0_lower_bound(Real alpha, Real xi, Real kappa) {
     return kappa * (Real(1e-5) + sinh_x);
 }
 
-/// Yield function of Eq. (8) in the a ||s||^2 form (physics.md 2.1 item 7) [Pa^2]:
+/// Yield function of Eq. (8) in the a ||s||^2 form (docs/physics.md §2.1 item 7) [Pa^2]:
 /// y = 3/2 (1 + 2 beta) ||s||^2 + M^2 (p + beta p0)(p - p0); y <= 0 is admissible.
 inline Real nacc_yield(Real p, Real s_norm, Real p0, Real beta, Real M) {
     const Real a = Real(1.5) * (1 + 2 * beta);
@@ -84,10 +84,10 @@ inline Real nacc_yield(Real p, Real s_norm, Real p0, Real beta, Real M) {
 /// Singular values with det = J whose isochoric left Cauchy-Green eigenvalues b_bar = J^(-2/3)
 /// sigma^2 have the deviator d (sum d = 0): b_bar = d + m with m the root of
 /// prod(m + d_k) = 1. The reference code instead keeps tr b_hat, which changes J slightly
-/// (physics.md 2.2 "fine point"; a uniform rescale afterwards would restore J but not s, since s
-/// is measured with the state's own J). f(m) = prod(m + d_k) - 1 is convex and increasing where
-/// every factor is positive, and m_start (the trial's isochoric mean, whose deviator is larger) has
-/// f >= 0, so Newton from there converges monotonically; 8 steps bound the work.
+/// (docs/physics.md §2.2 "fine point"; a uniform rescale afterwards would restore J but not s,
+/// since s is measured with the state's own J). f(m) = prod(m + d_k) - 1 is convex and increasing
+/// where every factor is positive, and m_start (the trial's isochoric mean, whose deviator is
+/// larger) has f >= 0, so Newton from there converges monotonically; 8 steps bound the work.
 inline Vec3 volume_preserving_sigma(const Vec3& d, Real m_start, Real J) {
     Real m = m_start;
     for (int it = 0; it < 8; ++it) {
@@ -103,9 +103,9 @@ inline Vec3 volume_preserving_sigma(const Vec3& d, Real m_start, Real J) {
     return sigma;
 }
 
-/// Which case of physics.md 2.2 a trial state with pressure p and deviatoric norm ||s_hat|| falls
-/// in, in the reference order: the tips first, then inside (y below the relative tolerance) or
-/// projected.
+/// Which case of docs/physics.md §2.2 a trial state with pressure p and deviatoric norm ||s_hat||
+/// falls in, in the reference order: the tips first, then inside (y below the relative tolerance)
+/// or projected.
 inline int nacc_yield_case(Real p, Real s_norm, Real p0, Real beta, Real M, Real kappa) {
     if (p > p0) return kNaccCompressionTip;
     if (p < -beta * p0) return kNaccTensionTip;
@@ -125,7 +125,7 @@ struct NaccPrincipalReturn {
     int yield_case;  // NaccYieldCase
 };
 
-/// Return mapping on the trial singular values (physics.md 2.2). beta = beta0 (1-s) + beta1 s
+/// Return mapping on the trial singular values (docs/physics.md §2.2). beta = beta0 (1-s) + beta1 s
 /// comes from the caller; nacc.beta0/beta1 are not read here. With preserve_volume the case-3b
 /// result keeps det Fe_new = |J_trial| exactly, so it satisfies y = 0 exactly (see
 /// volume_preserving_sigma; off by default, as in the reference code). `strength` multiplies p0:
@@ -195,8 +195,8 @@ inline NaccPrincipalReturn nacc_return_principal(const Vec3& sigma, Real alpha, 
     return out;
 }
 
-/// Return mapping of one particle (physics.md 2.2). NaccReturn::svd is the SVD of the returned
-/// Fe, so the stress (neo_hookean_kirchhoff(svd, ...)) needs no second SVD.
+/// Return mapping of one particle (docs/physics.md §2.2). NaccReturn::svd is the SVD of the
+/// returned Fe, so the stress (neo_hookean_kirchhoff(svd, ...)) needs no second SVD.
 struct NaccReturn {
     Mat3 Fe;         // returned elastic deformation gradient
     Real alpha;      // updated hardening state

@@ -1,6 +1,6 @@
 #pragma once
 /// The paper's elastic model, Tu et al. 2023 Eq. (4)-(5), ziran's "NeoHookeanBorden" with g = 1
-/// (physics.md 1.6), on the elastic deformation gradient F = Fe, J = det Fe, b = F F^T:
+/// (docs/physics.md §1.6), on the elastic deformation gradient F = Fe, J = det Fe, b = F F^T:
 ///   psi = mu/2 (J^(-2/3) tr b - 3) + kappa/2 ((J^2 - 1)/2 - log J)
 ///   tau = mu J^(-2/3) dev(b) + kappa/2 (J^2 - 1) I
 /// Pure functions, defined inline for the MPM particle loop.
@@ -16,7 +16,8 @@
 
 namespace mudcrack {
 
-/// Shear and 3D bulk modulus [Pa] (physics.md 1.6: kappa = lambda + 2/3 mu, also used by NACC).
+/// Shear and 3D bulk modulus [Pa] (docs/physics.md §1.6: kappa = lambda + 2/3 mu, also used by
+/// NACC).
 struct LameParams {
     Real mu, kappa;
 };

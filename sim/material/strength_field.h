@@ -1,6 +1,6 @@
 #pragma once
 /// Heterogeneous soil strength: a seeded, spatially correlated random field of multipliers on the
-/// NACC yield pressure p0 (docs/physics.md, "Heterogeneous strength").
+/// NACC yield pressure p0 (docs/physics.md §6.1).
 ///
 /// Why: a uniform slab has no place to start a crack but its corners and the grid's own axes, so
 /// the cracks it grows draw the grid; real soil has weak spots a few grains to a few centimetres

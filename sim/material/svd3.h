@@ -1,8 +1,8 @@
 #pragma once
 /// Fast, robust singular value decomposition of a 3x3 matrix for the per-particle constitutive
-/// kernels (physics.md 2.1 step 1). Not Eigen's JacobiSVD (about 700 ns a call here, ~4x slower).
-/// Structure of McAdams et al. 2011 ("V first, then a QR of A V for U and sigma"), with the
-/// iterative Jacobi eigen-solve replaced by a closed form:
+/// kernels (docs/physics.md §2.1 item 1). Not Eigen's JacobiSVD (about 700 ns a call here, ~4x
+/// slower). Structure of McAdams et al. 2011 ("V first, then a QR of A V for U and sigma"), with
+/// the iterative Jacobi eigen-solve replaced by a closed form:
 ///   1. eigenbasis V of S = A^T A: eigenvalues from the characteristic cubic (Halley-refined, no
 ///      trigonometry), eigenvectors of the two extreme eigenvalues from cross products of the rows
 ///      of S - lambda I, orthonormalised;

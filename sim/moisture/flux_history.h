@@ -8,9 +8,9 @@
 /// smoothly in time: grid nodes sit at fixed positions, and the flux follows the material's
 /// volume around a node as it moves. Extrapolated linearly through the last two solves it is
 /// off by O(dt^2), often inside the CG tolerance, and the solve then needs no CG iteration.
-/// (Measured on issue 3's reference scene: extrapolated rates instead of fluxes, or the whole
-/// increment without the exact evaporation step, need more iterations; a quadratic
-/// extrapolation amplifies the step-to-step noise and needs more too.)
+/// (Measured on the simulation benchmarks' reference scene (tests/mpm/mpm_bench.cpp): extrapolated
+/// rates instead of fluxes, or the whole increment without the exact evaporation step, need more
+/// iterations; a quadratic extrapolation amplifies the step-to-step noise and needs more too.)
 #include <cstdint>
 #include <vector>
 

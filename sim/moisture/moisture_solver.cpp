@@ -143,8 +143,8 @@ inline void add_lanes(Real* p, const Lanes& v) { Eigen::Map<Lanes>(p) += v; }
 // exposed layer is one particle thick; corners and edges lie lower still.
 constexpr Real kExposedVolumeFraction = 0.75;
 
-// The evaporation pass (physics.md 4.2, 4.4): finds the boundary particles (a surface node in
-// their stencil; the containing-cell variant of physics.md 4.4 misses flat faces: with 2
+// The evaporation pass (docs/physics.md §4.2, §4.4): finds the boundary particles (a surface node
+// in their stencil; the containing-cell variant of docs/physics.md §4.4 misses flat faces: with 2
 // particles per cell the last massive node lies 1.25 h above the top layer, outside its cell)
 // and scatters their evaporation: r into mg.evaporation (zeroed), and lambda S w^2 into mg.diag when
 // the Robin term is implicit. Particle blocks whose window holds no surface node are skipped.
@@ -248,12 +248,12 @@ struct OperatorParticle {
 // independent gathers of a batch overlap in the out-of-order window
 constexpr int kOperatorBatch = 32;
 
-// One gather/scatter pass over the particles (physics.md 4.5): y = L x (+ R x with the implicit
-// Robin term, on the particles the evaporation pass flagged). The 3x3x3 gather and scatter run
-// on z rows of 4 lanes (the z weights with a zero 4th lane), which the compiler maps to one SIMD
-// operation per row, and are factored axis by axis (the stencil is a tensor product): the gather
-// contracts the rows over y, then over x; the scatter builds the z-row profiles per y once and
-// combines them per x. Particles go in batches, all gathers then all scatters: one particle's
+// One gather/scatter pass over the particles (docs/physics.md §4.5): y = L x (+ R x with the
+// implicit Robin term, on the particles the evaporation pass flagged). The 3x3x3 gather and scatter
+// run on z rows of 4 lanes (the z weights with a zero 4th lane), which the compiler maps to one
+// SIMD operation per row, and are factored axis by axis (the stencil is a tensor product): the
+// gather contracts the rows over y, then over x; the scatter builds the z-row profiles per y once
+// and combines them per x. Particles go in batches, all gathers then all scatters: one particle's
 // gather-reduce-scatter is a long dependency chain, and the batch's gathers are independent.
 template <bool kImplicitRobin>
 void operator_pass(const MoistureParams& mp, const SparseGrid& grid, const MoistureParticles& pp,
@@ -407,7 +407,7 @@ MoistureSolveStats solve_moisture(const MoistureParams& mp, const MoistureSeal& 
         }
     });
 
-    // surface nodes (physics.md 4.4)
+    // surface nodes (docs/physics.md §4.4)
     build_face_neighbors(grid, mg);
     mark_surface_nodes(grid, seal, mg);
     resize_zero(mg.evaporation, n_nodes);

@@ -1,11 +1,12 @@
 #pragma once
-/// The implicit moisture diffusion on the MPM grid (Tu et al. 2023 Section 5.2; physics.md 4):
-///   (M + L) theta^{n+1} = M theta^n + r,   M_ii = W_i/dt,  W_i = sum_p V_p w_ip,
+/// The implicit moisture diffusion on the MPM grid (Tu et al. 2023 Section 5.2; docs/physics.md
+/// §4):   (M + L) theta^{n+1} = M theta^n + r,   M_ii = W_i/dt,  W_i = sum_p V_p w_ip,
 ///   L_ij = sum_p V_p D grad w_ip . grad w_jp,   r_i = -sum_{p boundary} S_p lambda (theta_p - theta_0) w_ip
-/// (the minus sign of r is required, physics.md 4.2), solved matrix-free with Jacobi-preconditioned
-/// CG from theta^n plus one Jacobi step on the explicit evaporation, theta^n + r / diag (that
-/// step removes most of the initial residual: usually one CG iteration reaches 1e-6). Node fields
-/// live on the sparse grid's allocated blocks; they exist only when the model has moisture.
+/// (the minus sign of r is required, docs/physics.md §4.2), solved matrix-free with
+/// Jacobi-preconditioned CG from theta^n plus one Jacobi step on the explicit evaporation, theta^n
+/// + r / diag (that step removes most of the initial residual: usually one CG iteration reaches
+/// 1e-6). Node fields live on the sparse grid's allocated blocks; they exist only when the model
+/// has moisture.
 #include <cstdint>
 #include <vector>
 
@@ -24,7 +25,7 @@ struct MoistureGrid {
     std::vector<Real> evaporation;  // r (explicit), or r_0 = sum S lambda theta_0 w (implicit Robin)
     std::vector<Real> x;        // CG iterate; after the solve: theta^{n+1} - theta^n
     std::vector<Real> r, p, Ap; // CG residual, direction, operator times direction
-    std::vector<Real> surface;  // 1 at surface nodes (physics.md 4.4), else 0
+    std::vector<Real> surface;  // 1 at surface nodes (docs/physics.md §4.4), else 0
     std::vector<uint8_t> particle_is_boundary;  // per slot: evaporates this step
     std::vector<Real> block_partial;            // per-block partial sums (deterministic dots)
     std::vector<std::array<int32_t, 6>> block_face_neighbors;  // slots of the 6 face-adjacent blocks or -1
@@ -32,7 +33,8 @@ struct MoistureGrid {
     int64_t memory_bytes() const;
 };
 
-/// Which empty neighbours of a surface node are walls rather than air (physics.md 4.4 item 3).
+/// Which empty neighbours of a surface node are walls rather than air (docs/physics.md §4.4 item
+/// 3).
 struct MoistureSeal {
     bool seal_colliders = true;   // faces against the ground / domain walls do not evaporate
     bool has_ground = false;
@@ -69,7 +71,7 @@ MoistureSolveStats solve_moisture(const MoistureParams& params, const MoistureSe
                                   std::vector<std::vector<Real>>& windows);
 
 /// Equivalent-sphere cross-section S = pi R^2, R = (3 V / (4 pi))^(1/3) of a particle of
-/// volume V (physics.md 4.4) [m^2].
+/// volume V (docs/physics.md §4.4) [m^2].
 Real particle_area(Real volume);
 
 }  // namespace mudcrack

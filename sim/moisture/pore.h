@@ -1,6 +1,6 @@
 #pragma once
 /// Porosity and saturation update of one particle (Tu et al. 2023 Eq. 6, 10, 11, 12;
-/// physics.md 3.2 and 4.6). Pure functions for the G2P particle loop.
+/// docs/physics.md §3.2 and §4.6). Pure functions for the G2P particle loop.
 #include <algorithm>
 #include <cmath>
 
@@ -9,7 +9,8 @@
 
 namespace mudcrack {
 
-/// Saturation s = theta/eta clamped to [0, 1]; eta = 0 means s = 1 (no pores, physics.md 3.2).
+/// Saturation s = theta/eta clamped to [0, 1]; eta = 0 means s = 1 (no pores, docs/physics.md
+/// §3.1).
 /// @note Multiplies by 1/eta (computed once per loop when eta is loop-invariant) rather than
 /// dividing: in the G2P the division sat on every particle's dependency chain. theta >= eta is
 /// exactly 1, as with the division.
@@ -22,7 +23,7 @@ inline Real saturation_of(Real theta, Real eta) {
 inline Real pore_jw(Real saturation, Real eta) { return 1 - eta * (1 - saturation); }
 
 /// Particle mass from its water content, m = V0 (rho_s (1 - eta) + rho_w eta s) with
-/// rho_w = rho_s / k_r: the closed form of Eq. 11 (physics.md 4.6), drift-free. [kg]
+/// rho_w = rho_s / k_r: the closed form of Eq. 11 (docs/physics.md §4.6), drift-free. [kg]
 /// @param V0 rest volume [m^3]  @param rho_s solid density [kg/m^3]
 inline Real moist_mass(Real V0, Real rho_s, Real saturation, const MoistureParams& mp) {
     const Real rho_w = rho_s / mp.k_r;
@@ -47,7 +48,7 @@ struct PoreStep {
 
 /// Moves J_w towards the target 1 - eta (1 - s) of the particle's current saturation, with
 /// |log(J_w ratio)| capped at max_log_step per step; the remainder is carried to later steps
-/// because the target is recomputed from theta every step (physics.md 3.2: one large jump
+/// because the target is recomputed from theta every step (docs/physics.md §3.2: one large jump
 /// of Fe injects elastic energy, a spurious "pop").
 inline PoreStep pore_step(Real Jw_old, Real saturation, Real eta, Real max_log_step) {
     PoreStep r;

@@ -1,13 +1,14 @@
 #pragma once
-/// Quadratic B-spline weights of MLS-MPM (physics.md 1.1): the 3x3x3 stencil of a particle, its
-/// weights and their gradients. Pure functions, no grid access.
+/// Quadratic B-spline weights of MLS-MPM (docs/physics.md §1.1): the 3x3x3 stencil of a particle,
+/// its weights and their gradients. Pure functions, no grid access.
 #include <cmath>
 
 #include "sim/core/types.h"
 
 namespace mudcrack::mpm {
 
-/// D_p^{-1} = 4/h^2 of the quadratic B-spline, in units of 1/h^2 (physics.md 1.1, paper typo T4).
+/// D_p^{-1} = 4/h^2 of the quadratic B-spline, in units of 1/h^2 (docs/physics.md §1.1, paper typo
+/// T4).
 constexpr Real kInertiaInvScale = 4;
 
 /// One axis of the quadratic B-spline stencil: nodes base, base+1, base+2.

@@ -1,4 +1,4 @@
-// G2P and the per-particle update of physics.md 7 steps 4-8.
+// G2P and the per-particle update of docs/physics.md §7 steps 4-8.
 #include <algorithm>
 #include <cmath>
 
@@ -19,10 +19,10 @@ constexpr int kStride = 4;
 // relative margin that keeps the SVD-free inside test on the safe side of the kernel's own test
 constexpr Real kInsideMargin = 1e-9;
 
-// The NACC inside test (physics.md 2.1, case 3a) without an SVD: J = det Fe, and ||dev b_hat|| is
-// the rotation-invariant ||dev(Fe Fe^T)||. True only when the state is inside with a relative
-// margin, so the return map (which would return Fe unchanged) can be skipped; near the surface
-// and at the tips the full kernel decides.
+// The NACC inside test (docs/physics.md §2.2, case 3a) without an SVD: J = det Fe, and ||dev
+// b_hat|| is the rotation-invariant ||dev(Fe Fe^T)||. True only when the state is inside with a
+// relative margin, so the return map (which would return Fe unchanged) can be skipped; near the
+// surface and at the tips the full kernel decides.
 inline bool clearly_inside_yield_surface(const Mat3& Fe, Real alpha, Real beta, Real strength,
                                          const NaccParams& nacc, const LameParams& lame) {
     const Real J = Fe.determinant();
@@ -54,7 +54,7 @@ G2PResult g2p_impl(const SimModel& model, SimState& state, const SparseGrid& gri
     const NaccParams nacc = kNacc ? *model.nacc : NaccParams{};
     const MoistureParams moist = kPore ? *model.moisture : MoistureParams{};
     const Real rho_s = model.elastic.density;
-    // without pores the soil counts as saturated: beta = beta1 (physics.md 2.3)
+    // without pores the soil counts as saturated: beta = beta1 (docs/physics.md §2.3)
     const Real beta_saturated = nacc.beta1;
     const bool has_strength = kNacc && !state.strength.empty();
     const bool has_damage = kNacc && !state.damage.empty();

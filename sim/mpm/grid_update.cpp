@@ -1,4 +1,4 @@
-// Grid velocity update and boundary conditions (physics.md 1.3).
+// Grid velocity update and boundary conditions (docs/physics.md §1.3).
 #include <cmath>
 
 #include "sim/mpm/transfer.h"

@@ -1,4 +1,5 @@
-// P2G: mass, APIC momentum with the fused MLS stress, and the moisture fields (physics.md 1.2, 4.3).
+// P2G: mass, APIC momentum with the fused MLS stress, and the moisture fields (docs/physics.md
+// §1.2, §4.3).
 #include <algorithm>
 
 #include <Eigen/Core>

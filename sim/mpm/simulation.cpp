@@ -1,4 +1,5 @@
-// The MPM driver: initial state, time step, the consolidated step of physics.md 7, cache views.
+// The MPM driver: initial state, time step, the consolidated step of docs/physics.md §7, cache
+// views.
 #include "sim/mpm/simulation.h"
 
 #include <algorithm>
@@ -193,7 +194,7 @@ SimState make_initial_state(const SimModel& model, const std::vector<Vec3>& X, c
             // a free body: whole cells on both sides of a node at the particles' centre. On a
             // grid not symmetric about them, opposite faces reach different nodes (a face on a
             // node spreads mass one cell further than a face between two), so they evaporate
-            // and shrink unalike and the body drifts (4 mm in 4 s of drying, issue 17)
+            // and shrink unalike and the body drifts (4 mm in 4 s of drying in a TD's shot)
             if (!model.ground) {
                 const Real centre = (lo[d] + hi[d]) / 2;
                 const Real cells = std::ceil((centre - s.domain_min[d]) / h);

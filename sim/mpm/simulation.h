@@ -1,7 +1,7 @@
 #pragma once
 /// The MPM simulation's state and step (MuJoCo's mjData / mj_step split): SimModel is immutable,
 /// SimState holds particles, time and scratch; `step` advances one substep.
-/// Tu et al. 2023 Sections 4-5; the consolidated step of physics.md Section 7.
+/// Tu et al. 2023 Sections 4-5; the consolidated step of docs/physics.md §7.
 #include <cstdint>
 #include <functional>
 #include <vector>

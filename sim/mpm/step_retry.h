@@ -1,5 +1,5 @@
 #pragma once
-/// Recovering from a failed substep (issue 17): a substep that fails its checks (an inverted
+/// Recovering from a failed substep: a substep that fails its checks (an inverted
 /// particle, J <= 0; a non-finite state; a particle moved more than 2 cells) is rolled back and
 /// retried with half the time step, down to a floor, after which the run stops with the step's
 /// own message. After enough accepted steps the time step doubles back.

@@ -1,6 +1,6 @@
 #pragma once
-/// The three grid passes of one MLS-MPM step (physics.md 1.2-1.4 and 7): P2G with the fused MLS
-/// stress, the grid velocity update with colliders, and G2P with the per-particle constitutive
+/// The three grid passes of one MLS-MPM step (docs/physics.md §1.2-1.4 and §7): P2G with the fused
+/// MLS stress, the grid velocity update with colliders, and G2P with the per-particle constitutive
 /// update (kinematics, pore update, return mapping, advection, finite-ness check).
 #include <cstdint>
 #include <vector>
@@ -14,15 +14,16 @@
 namespace mudcrack::mpm {
 
 /// Scatters mass and APIC momentum with the MLS stress term
-/// A_p = m_p C_p - dt V0_p (4/h^2) tau_p (physics.md 1.2) into grid.nodes, which
+/// A_p = m_p C_p - dt V0_p (4/h^2) tau_p (docs/physics.md §1.2) into grid.nodes, which
 /// bin_particles zeroed. With `moisture` non-null also W_i, (V theta)_i and
-/// sum_p V_p |grad w_ip|^2 (physics.md 7 step 1); those fields must be zeroed (begin_moisture_p2g).
+/// sum_p V_p |grad w_ip|^2 (docs/physics.md §7 step 1); those fields must be zeroed
+/// (begin_moisture_p2g).
 /// @param dt time step [s]  @param windows per-thread scratch of 8 * 216 values
 void particle_to_grid(const SimModel& model, const SimState& state, SparseGrid& grid, MoistureGrid* moisture,
                       Real dt, std::vector<std::vector<Real>>& windows);
 
 /// Grid update v_i = (m v)_i / m_i + dt g, then the ground collider and the domain walls
-/// (physics.md 1.3). Nodes without mass get v = 0.
+/// (docs/physics.md §1.3). Nodes without mass get v = 0.
 void update_grid_velocity(const SimModel& model, SparseGrid& grid, Real dt);
 
 /// What G2P found.
@@ -38,7 +39,7 @@ struct MoistureUpdate {
     Real dt = 0;                           // the moisture step dt_m = k dt [s]
 };
 
-/// G2P and the particle update of physics.md 7 steps 4-8: v, C, theta (FLIP increment from
+/// G2P and the particle update of docs/physics.md §7 steps 4-8: v, C, theta (FLIP increment from
 /// moisture.dtheta, if non-null, then the exact decay of the evaporating particles), Fe_trial =
 /// (I + dt C) Fe, J *= det(I + dt C), the pore update when `pore_update`, the NACC return mapping
 /// with the particle's strength and damage (when the model has plasticity), x += dt v clamped

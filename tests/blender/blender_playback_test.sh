@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# Issue 15: the Blender add-on (tools/blender/mudcrack_blender) in real Blender, headless, on the
+# The Blender add-on (tools/blender/mudcrack_blender) in real Blender, headless, on the
 # demo shot's output:
 #
 #   blender_playback_test.sh SOURCE_DIR BIN_DIR ADDON_ZIP [SHOT_FILE]   (SHOT_FILE default: demo.json)

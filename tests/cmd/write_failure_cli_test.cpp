@@ -1,4 +1,4 @@
-// What every stage does when it cannot write (issue 17): a full disk and a read-only output folder
+// What every stage does when it cannot write: a full disk and a read-only output folder
 // end mc-init, mc-sim, mc-surface and mc-render with exit 1 and one error line naming the path,
 // leave no .partial folder, temporary or half-written file behind, and mc-sim --resume after space
 // is freed gives caches byte-identical to an uninterrupted run.

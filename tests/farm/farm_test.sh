@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# Issue 8 acceptance: the demo shot run through Slurm gives the same files as a local run, and a
+# The farm's promise: the demo shot run through Slurm gives the same files as a local run, and a
 # killed surfacing task is all that a re-run resubmits.
 #
 #   farm_test.sh SOURCE_DIR BIN_DIR [SHOT_FILE]     (SHOT_FILE default: SOURCE_DIR/shots/demo.json,

@@ -1,4 +1,4 @@
-// The paper's claims about its figures, as numbers (issue 6), on the shipped shots:
+// The paper's claims about its figures, as numbers, on the shipped shots:
 // - Fig. 8: NACC alone (fig8_b, eps = 0) shrinks without a horizontal crack, while the full model
 //   (fig8_c, eps = 1) peels and curls; without porous shrinkage (fig8_a, eta = 0) nothing compacts
 //   or curls.

@@ -1,6 +1,6 @@
-// mc-init's command line (style.md 7, MuJoCo's compile_test.sh): usage errors exit 2, --help
-// exits 0, a bad shot or a bad mesh exits 1 naming the problem and leaves no output, and a tiny
-// valid shot produces particles.vdb, tets.vtu and manifest.json.
+// mc-init's command line (docs/architecture.md §10, MuJoCo's compile_test.sh): usage errors exit 2,
+// --help exits 0, a bad shot or a bad mesh exits 1 naming the problem and leaves no output, and a
+// tiny valid shot produces particles.vdb, tets.vtu and manifest.json.
 #include <gtest/gtest.h>
 #include <sys/wait.h>
 #include <unistd.h>

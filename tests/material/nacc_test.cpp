@@ -1,4 +1,4 @@
-// NACC return mapping (physics.md 2.2): inside states unchanged, outside states on the yield
+// NACC return mapping (docs/physics.md §2.2): inside states unchanged, outside states on the yield
 // surface, both tips, hardening on/off, wet side hardens and dry side softens, agreement with an
 // independent plain-Eigen evaluation of 2.2 on a random sweep, and finiteness at the extremes.
 #include "sim/material/nacc.h"
@@ -41,7 +41,7 @@ Real yield_scale(Real p0, Real beta, Real M) { return M * M * std::pow((1 + beta
 Vec3 sigma_with(Real J, Real dev) { return std::cbrt(J) * Vec3(std::exp(dev), 1, std::exp(-dev)); }
 
 // ---------------------------------------------------------------------------------------------
-// Independent evaluation of physics.md 2.2, written from the text with plain Eigen: JacobiSVD
+// Independent evaluation of docs/physics.md §2.2, written from the text with plain Eigen: JacobiSVD
 // with its own sign fix, std::pow for the powers, the case-3b hardening as the PhysBAM-form
 // quadratic in p (ziran2019), not the ray intersection the kernel uses.
 struct Reference {

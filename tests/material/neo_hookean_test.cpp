@@ -34,7 +34,7 @@ struct NamedCase {
     Mat3 F;
 };
 
-/// Random states plus the named regimes of style.md 7: J -> 0+, large stretch, near identity.
+/// Random states plus named degenerate regimes: J -> 0+, large stretch, near identity.
 std::vector<NamedCase> derivative_cases() {
     std::mt19937_64 rng(11);
     std::vector<NamedCase> cases;

@@ -1,5 +1,5 @@
-// The G2P's per-particle update (physics.md 7 steps 4-8) against the paper's equations, one step
-// on a handful of particles: the pore update (Eq. 6 Jw, Eq. 10 Fe compensation, Eq. 11 mass,
+// The G2P's per-particle update (docs/physics.md §7 steps 4-8) against the paper's equations, one
+// step on a handful of particles: the pore update (Eq. 6 Jw, Eq. 10 Fe compensation, Eq. 11 mass,
 // Eq. 12 saturation hardening) and the SVD-free "clearly inside" test in front of the NACC return
 // map (Eq. 8). Each check is written from the equation, not from the kernels the G2P calls, so a
 // changed sign, factor or exponent in the G2P or in sim/moisture/pore.h fails here in
@@ -95,8 +95,8 @@ TEST(G2pPoreUpdate, OneStepFollowsEquations6To12) {
     }
 }
 
-// the per-step cap on |log Jw ratio| (physics.md 3.2): Jw moves by exactly the cap towards its
-// target, and alpha by eps times it, with the sign of the change
+// the per-step cap on |log Jw ratio| (docs/physics.md §3.2): Jw moves by exactly the cap towards
+// its target, and alpha by eps times it, with the sign of the change
 TEST(G2pPoreUpdate, CappedStepHardensByEpsTimesTheCap) {
     SimModel model = pore_model();
     model.moisture->max_log_jw_step = 2e-3;

@@ -283,7 +283,7 @@ TEST(Moisture, FreeBlockThatDriesFullyEndsAtDryVolume) {
 // gravity off and no colliders: the block dries on every face, to (1 - eta) V0, and stays where
 // it is. (The domain derived from the particles used to put whole cells below the lowest
 // particle: on mc-init's lattice the bottom face sat on a node and the top face between two, they
-// dried unalike, and the block moved by 0.7 mm here, 4 mm in 4 s in a TD's shot; issue 17.)
+// dried unalike, and the block moved by 0.7 mm here, 4 mm in 4 s in a TD's shot.)
 TEST(Moisture, FreeBlockStaysWhereItIsWhileItDries) {
     SimModel model = plain_model(0.1);
     model.elastic.youngs_modulus = 1e5;
@@ -449,7 +449,7 @@ TEST(Pore, MassFollowsEquation11) {
 // the nodes, L x vanishes (the weight gradients sum to zero) and sum_i W_i (theta_i^{n+1} -
 // theta_i^n) = dt sum_i r_i, so the particles' water changes by exactly
 // -dt sum_{p boundary} lambda S_p (theta_p - theta_0): drying, never wetting, and by the r of
-// physics.md 4.2 alone.
+// docs/physics.md §4.2 alone.
 TEST(Moisture, WaterLostInAStepIsTheEvaporationTermR) {
     SimModel model = still_model(0.1);
     MoistureParams& mp = *model.moisture;

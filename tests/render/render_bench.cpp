@@ -1,4 +1,4 @@
-// Seconds per 1920x1080 preview frame of a ~1M-triangle mesh (issue 5 target: <= 1 s on 2 cores;
+// Seconds per 1920x1080 preview frame of a ~1M-triangle mesh (target: <= 1 s on 2 cores;
 // set LP_NUM_THREADS=2 to give llvmpipe two threads). Reports the render alone (mesh already
 // uploaded, what a turntable pays per view) and upload + render (what an animation pays).
 #include <benchmark/benchmark.h>

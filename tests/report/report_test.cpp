@@ -1,4 +1,4 @@
-// The reduced `make report` (issue 7): the accuracy sweeps at small scale with their fitted
+// The reduced `make report`: the accuracy sweeps at small scale with their fitted
 // orders asserted, and every stability case asserted to end without a silent NaN, hang or crash.
 // The bounds below were set from measured orders (mc-report --quick, see tools/report) with margin.
 #include <gtest/gtest.h>
@@ -30,7 +30,7 @@ constexpr Real kMinDiffusion3dOrderInH = 1.3;
 constexpr Real kMinColumnOrderInH = 0.8;
 // measured 1.4e-2 at h = 0.025 (H = 0.5 m, 20 cells)
 constexpr Real kMaxColumnErrorFinest = 0.03;
-// issue 3: a free block that dries fully ends at (1 - eta) V0 within 1 % (measured <= 3e-4)
+// a free block that dries fully ends at (1 - eta) V0 within 1 % (measured <= 3e-4)
 constexpr Real kMaxShrinkageError = 0.01;
 
 Real last_error(const Sweep& s) { return s.points.back().error; }

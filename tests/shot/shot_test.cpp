@@ -1,5 +1,6 @@
 // The shot spec: defaults, every class of bad input, sections that turn features off, path
-// resolution, slices, and the shipped shots (style.md 7-8). Shots are inline raw-string JSON.
+// resolution, slices, and the shipped shots (docs/architecture.md §10 and §4). Shots are inline
+// raw-string JSON.
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -113,7 +114,7 @@ TEST_F(ShotTest, PresentSectionsGetDefaultsAndDerivedValues) {
     const Shot shot = parse_shot(kFull, "shots/full.json");
     EXPECT_EQ(shot.name, "full");
     ASSERT_TRUE(shot.sim.nacc && shot.sim.moisture && shot.sim.ground && shot.surface && shot.render);
-    // beta is shorthand for beta0 = beta1 (physics.md T21)
+    // beta is shorthand for beta0 = beta1 (docs/physics.md §4.8 T21)
     EXPECT_EQ(shot.sim.nacc->beta0, 1);
     EXPECT_EQ(shot.sim.nacc->beta1, 1);
     EXPECT_EQ(shot.sim.nacc->alpha0, -0.04);

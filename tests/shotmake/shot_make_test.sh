@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# Issue 6's Makefile claims on the demo shot, through the make rules themselves (pipeline/shot.mk,
+# The shot Makefile's claims on the demo shot, through the make rules themselves (pipeline/shot.mk,
 # run the way the root Makefile's `shot` target runs them, without its build and deps steps):
 #
 #   shot_make_test.sh SOURCE_DIR BIN_DIR [SHOT_FILE]     (SHOT_FILE default: SOURCE_DIR/shots/demo.json)

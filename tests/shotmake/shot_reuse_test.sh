@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# Issue 6's shared caches (/reuse, as fig9 reuses fig8_c): pipeline/shot.mk run the way the root
+# Shared caches (/reuse, as fig9 reuses fig8_c): pipeline/shot.mk run the way the root
 # Makefile's `shot` target runs it, on two tiny shots derived from the demo shot in a temporary
 # shots folder:
 #

@@ -1,4 +1,4 @@
-// Particle-core surfacing (physics.md 5): topology, welding, closed surfaces, volumes, UVs,
+// Particle-core surfacing (docs/physics.md §5): topology, welding, closed surfaces, volumes, UVs,
 // crack faces, the moisture-aware break criterion and frame-order independence.
 #include <gtest/gtest.h>
 

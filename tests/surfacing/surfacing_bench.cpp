@@ -1,4 +1,4 @@
-// Per-frame particle-core surfacing speed (physics.md 5): tets/s and triangles/s on a ~1M-tet
+// Per-frame particle-core surfacing speed (docs/physics.md §5): tets/s and triangles/s on a ~1M-tet
 // box lattice with a smooth synthetic deformation and ~1% broken edges, at 1 and 2 threads;
 // bytes per tet of the preprocessed topology and of one frame's output.
 #include <benchmark/benchmark.h>

@@ -1,4 +1,4 @@
-// Accuracy sweeps against analytic solutions (issue 7). Every run builds its SimModel in code and
+// Accuracy sweeps against analytic solutions. Every run builds its SimModel in code and
 // steps the library in-process; wall time covers the initial state and the step loop.
 #include "tools/report/accuracy.h"
 

@@ -1,5 +1,5 @@
 #pragma once
-/// Accuracy sweeps of `make report` (issue 7): the simulation against analytic solutions, each
+/// Accuracy sweeps of `make report`: the simulation against analytic solutions, each
 /// knob swept with its error and wall time, and the fitted convergence order.
 #include <functional>
 #include <vector>

@@ -1,4 +1,4 @@
-// mc-report: `make report` (issue 7). Accuracy sweeps against analytic solutions with their
+// mc-report: `make report`. Accuracy sweeps against analytic solutions with their
 // Pareto plots, and the stability matrix, written to <out>/report.md.
 #include <CLI/CLI.hpp>
 

@@ -1,5 +1,5 @@
 #pragma once
-/// Results of the accuracy sweeps and the stability matrix of `make report` (issue 7).
+/// Results of the accuracy sweeps and the stability matrix of `make report`.
 #include <cstdint>
 #include <string>
 #include <vector>

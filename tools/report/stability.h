@@ -1,5 +1,5 @@
 #pragma once
-/// The stability matrix of `make report` (issue 7): stiff and extreme cases, each bounded by a
+/// The stability matrix of `make report`: stiff and extreme cases, each bounded by a
 /// step budget and a wall-time limit, classified as completed / refused / stopped with an error,
 /// or as a failure of the product (silent NaN, hang, crash).
 #include <string>

@@ -162,7 +162,7 @@ SimCheckpoint read_sim_checkpoint(const fs::path& path) {
     t.active_nodes_max = c.require_int("totals.active_nodes_max");
     t.allocated_nodes_max = c.require_int("totals.allocated_nodes_max");
     t.max_speed = c.require_double("totals.max_speed");
-    // written since issue 17; an older checkpoint's run retried nothing
+    // written since step retries were added; an older checkpoint's run retried nothing
     t.retries = c.meta_int.count("totals.retries") ? c.meta_int.at("totals.retries") : 0;
     return sc;
 }

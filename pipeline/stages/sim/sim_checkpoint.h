@@ -1,5 +1,5 @@
 #pragma once
-/// mc-sim's full-precision checkpoints (issue 3): every SimState array bit for bit (in its sorted
+/// mc-sim's full-precision checkpoints: every SimState array bit for bit (in its sorted
 /// slot order), the time and step count, the run's counters, and the shot's sim slice hash, in
 /// DIR/sim/checkpoint.####.bin (#### = the frame whose end the state is at). `--resume` restarts
 /// from one and must then produce caches bitwise identical to an uninterrupted run.

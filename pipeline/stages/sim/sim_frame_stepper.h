@@ -1,5 +1,5 @@
 #pragma once
-/// Advancing the simulation frame by frame (issue 3): frame k covers simulated time
+/// Advancing the simulation frame by frame: frame k covers simulated time
 /// ((k-1)/fps, k/fps]; each frame is substepped with the stable dt, clamped so that the frame
 /// ends exactly at k/fps, and run-wide counters are accumulated for the manifest.
 #include <cstdint>

@@ -1,5 +1,5 @@
 #pragma once
-/// mc-sim's progress report on stderr (issue 3): frame, substeps, simulated time,
+/// mc-sim's progress report on stderr: frame, substeps, simulated time,
 /// particle-steps/s and ETA. On a terminal one line is rewritten in place with '\r' (at most a
 /// few times a second); otherwise (a log file, make -j) one plain line per finished frame.
 #include <cstdint>

@@ -1,5 +1,5 @@
 #pragma once
-/// The mc-sim stage (issue 3): reads DIR/init/, runs the shot's frames, and writes
+/// The mc-sim stage: reads DIR/init/, runs the shot's frames, and writes
 /// DIR/sim/particles.####.vdb per frame (each atomically), checkpoint.####.bin every
 /// model.checkpoint_every frames (the last two kept), and manifest.json last.
 #include "pipeline/cmd/stage_cli.h"
