@@ -137,14 +137,16 @@ void check_off_header(const fs::path& path) {
     std::ifstream is(path, std::ios::binary);
     std::string word;
     std::vector<std::string> counts;
+    bool first = true;
     while (counts.size() < 2 && is >> word) {
         if (word[0] == '#') {
             std::string rest;
             std::getline(is, rest);
             continue;
         }
-        if (word.size() >= 3 && word.compare(word.size() - 3, 3, "OFF") == 0) continue;  // OFF, COFF, NOFF, ...
-        counts.push_back(word);
+        const bool magic = first && word.size() >= 3 && word.compare(word.size() - 3, 3, "OFF") == 0;
+        first = false;
+        if (!magic) counts.push_back(word);  // the first word may be OFF, COFF, NOFF, ...
     }
     std::error_code ec;
     const uint64_t size = fs::file_size(path, ec);
