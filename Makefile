@@ -22,11 +22,18 @@ CGAL_DATA  := /usr/share/doc/libcgal-dev/data.tar.gz
 BUNNY      := shots/assets/bunny00.off
 
 .PHONY: help deps test-deps configure build build-stages demo test bench clean assets shot shots clean-shot \
-        blender-addon blender-still
+        blender-addon blender-still fuzz-deps fuzz-build fuzz sanitize
 
 # What only `make test` needs: Debian's Blender 3.4 (the add-on's playback test runs it headless).
 # `make demo` never installs it.
 TEST_PACKAGES := blender
+
+# What only `make fuzz` needs: clang and libFuzzer's runtime (Debian 12: clang 14). `make demo`
+# and `make test` never install them.
+FUZZ_PACKAGES := clang libclang-rt-14-dev
+BUILD_FUZZ    ?= build-fuzz
+BUILD_ASAN    ?= build-asan
+FUZZ_SECONDS  ?= 60
 
 help:
 	@echo "make demo                  install missing packages, build, run the demo shot end to end"
@@ -36,6 +43,8 @@ help:
 	@echo "make farm-status SHOT=x    queued/running/done/failed tasks of a Slurm run"
 	@echo "make report                accuracy against run time and the stability matrix (out/report)"
 	@echo "make bench                 build and run the benchmarks"
+	@echo "make fuzz                  libFuzzer on every input reader, FUZZ_SECONDS (60) each ($(BUILD_FUZZ))"
+	@echo "make sanitize              the unit and stage tests under ASan + UBSan ($(BUILD_ASAN))"
 	@echo "make blender-addon         the Blender add-on as $(BUILD)/mudcrack_blender.zip (tools/blender)"
 	@echo "make blender-still         the demo's last frame rendered by Blender next to mc-render's (docs/blender)"
 	@echo "make clean                 remove the build tree"
@@ -81,6 +90,36 @@ build-stages: deps configure
 
 test: test-deps build assets
 	cd $(BUILD) && ctest --output-on-failure -j $(JOBS) --timeout 900
+
+# ---- hostile input and memory errors --------------------------------------------------------
+# make fuzz: the fuzz targets of tests/fuzz built with clang's libFuzzer, AddressSanitizer and
+# UndefinedBehaviorSanitizer, each run FUZZ_SECONDS from its seeds (tools/fuzz.sh)
+fuzz-deps: deps
+	$(call install_missing,$(FUZZ_PACKAGES))
+
+$(BUILD_FUZZ)/CMakeCache.txt: | fuzz-deps
+	CC=clang CXX=clang++ cmake -S . -B $(BUILD_FUZZ) -DCMAKE_BUILD_TYPE=RelWithDebInfo \
+	  -DCMAKE_CXX_FLAGS_RELWITHDEBINFO="-O1 -g" -DCMAKE_C_FLAGS_RELWITHDEBINFO="-O1 -g" \
+	  -DMUDCRACK_FUZZ=ON -DMUDCRACK_SANITIZE="address;undefined" -DMUDCRACK_BUILD_BENCHMARKS=OFF $(CMAKE_ARGS)
+
+fuzz-build: fuzz-deps $(BUILD_FUZZ)/CMakeCache.txt
+	cmake --build $(BUILD_FUZZ) -j $(JOBS) --target mudcrack_fuzz_targets
+
+fuzz: fuzz-build
+	tools/fuzz.sh $(BUILD_FUZZ) $(FUZZ_SECONDS)
+
+# make sanitize: the unit and stage tests (ctest label "unit", which includes the fuzz targets'
+# replays of their seeds and regressions) built with g++ -O1 -g under ASan + UBSan; the end-to-end
+# tests (figures, report, farm, make, Blender), benchmarks and tools are not built
+$(BUILD_ASAN)/CMakeCache.txt: | deps
+	cmake -S . -B $(BUILD_ASAN) -DCMAKE_BUILD_TYPE=RelWithDebInfo \
+	  -DCMAKE_CXX_FLAGS_RELWITHDEBINFO="-O1 -g -DNDEBUG" -DCMAKE_C_FLAGS_RELWITHDEBINFO="-O1 -g -DNDEBUG" \
+	  -DMUDCRACK_SANITIZE="address;undefined" -DMUDCRACK_BUILD_BENCHMARKS=OFF -DMUDCRACK_NATIVE=OFF $(CMAKE_ARGS)
+
+sanitize: deps assets $(BUILD_ASAN)/CMakeCache.txt
+	cmake --build $(BUILD_ASAN) -j $(JOBS) --target mudcrack_unit_tests
+	cd $(BUILD_ASAN) && LSAN_OPTIONS=suppressions=$(CURDIR)/tests/fuzz/lsan.supp UBSAN_OPTIONS=print_stacktrace=1 \
+	  ctest -L unit --output-on-failure -j $(JOBS) --timeout 900
 
 # the README's Blender still of a shot's last frame next to mc-render's (tools/blender_still.sh)
 blender-still: test-deps

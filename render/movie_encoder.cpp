@@ -7,6 +7,7 @@
 #include <ctime>
 #include <pthread.h>
 #include <spawn.h>
+#include <sys/mman.h>
 #include <sys/wait.h>
 #include <unistd.h>
 #include <vector>
@@ -37,6 +38,17 @@ std::string find_on_path(const std::string& program) {
 }
 
 namespace {
+
+// the last non-empty line ffmpeg wrote to `fd` (an in-memory file), trimmed; "" when none
+std::string last_line_of(int fd) {
+    if (fd < 0 || ::lseek(fd, 0, SEEK_SET) != 0) return {};
+    std::string text;
+    char buf[4096];
+    for (ssize_t n; (n = ::read(fd, buf, sizeof buf)) > 0;) text.append(buf, size_t(n));
+    while (!text.empty() && (text.back() == '\n' || text.back() == '\r' || text.back() == ' ')) text.pop_back();
+    const size_t start = text.find_last_of("\r\n");
+    return start == std::string::npos ? text : text.substr(start + 1);
+}
 
 /// write() that reports a closed pipe as an error code instead of a fatal SIGPIPE: the signal
 /// is blocked on this thread during the write and a pending one is consumed.
@@ -97,6 +109,10 @@ MovieEncoder::MovieEncoder(fs::path path, int width, int height, double fps)
     posix_spawn_file_actions_adddup2(&actions, pipe_fd[0], 0);
     posix_spawn_file_actions_addclose(&actions, pipe_fd[1]);
     posix_spawn_file_actions_addclose(&actions, pipe_fd[0]);
+    // ffmpeg's own error lines go to a memory file, not the terminal: a failure is reported as
+    // one line naming the movie, with ffmpeg's reason in it (a file would fail on a full disk)
+    m_log_fd = ::memfd_create("ffmpeg-stderr", MFD_CLOEXEC);
+    if (m_log_fd >= 0) posix_spawn_file_actions_adddup2(&actions, m_log_fd, 2);
     const int rc = posix_spawn(&m_pid, ffmpeg.c_str(), &actions, nullptr, argv.data(), environ);
     posix_spawn_file_actions_destroy(&actions);
     ::close(pipe_fd[0]);
@@ -114,8 +130,14 @@ void MovieEncoder::add_frame(const RenderedImage& image) {
                          std::to_string(image.width) + "x" + std::to_string(image.height) +
                          ", expected " + std::to_string(m_width) + "x" + std::to_string(m_height));
     if (m_fd < 0 || !write_all(m_fd, image.rgba.data(), image.rgba.size()))
-        throw RuntimeError(m_path.string() + ": ffmpeg stopped reading frames (see its message above)");
+        throw RuntimeError(m_path.string() + ": ffmpeg stopped reading frames" + ffmpeg_reason());
     ++m_frames;
+}
+
+std::string MovieEncoder::ffmpeg_reason() {
+    if (m_fd >= 0 || m_pid > 0) close_and_wait(nullptr);  // ffmpeg's message is complete once it exited
+    const std::string line = last_line_of(m_log_fd);
+    return line.empty() ? std::string() : ": " + line;
 }
 
 void MovieEncoder::close_and_wait(int* status) {
@@ -136,12 +158,11 @@ void MovieEncoder::finish() {
     std::error_code ec;
     if (!WIFEXITED(status) || WEXITSTATUS(status) != 0 || m_frames == 0) {
         fs::remove(m_tmp, ec);
-        // ffmpeg's own message (a full disk: "No space left on device") is the line above
         const std::string how = WIFEXITED(status)     ? "exit code " + std::to_string(WEXITSTATUS(status))
                                 : WIFSIGNALED(status) ? "signal " + std::to_string(WTERMSIG(status))
                                                       : "status " + std::to_string(status);
         throw RuntimeError(m_path.string() + ": ffmpeg failed (" + how + ", " + std::to_string(m_frames) +
-                           " frames sent)");
+                           " frames sent)" + ffmpeg_reason());
     }
     fs::rename(m_tmp, m_path, ec);
     if (ec) {
@@ -152,6 +173,7 @@ void MovieEncoder::finish() {
 }
 
 MovieEncoder::~MovieEncoder() {
+    if (m_log_fd >= 0) ::close(m_log_fd);
     if (m_finished) return;
     if (m_pid > 0) kill(m_pid, SIGTERM);
     close_and_wait(nullptr);

@@ -34,10 +34,13 @@ public:
 
 private:
     void close_and_wait(int* status);
+    /// ": <ffmpeg's last error line>", or "" when it wrote none (waits for ffmpeg to exit).
+    std::string ffmpeg_reason();
 
     std::filesystem::path m_path, m_tmp;
     int m_width, m_height;
     int m_fd = -1;
+    int m_log_fd = -1;  // ffmpeg's stderr, in memory: its message joins ours in one line
     pid_t m_pid = -1;
     int m_frames = 0;
     bool m_finished = false;

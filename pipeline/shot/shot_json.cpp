@@ -1,6 +1,5 @@
 #include "pipeline/shot/shot_json.h"
 
-#include <regex>
 #include <utility>
 #include <vector>
 
@@ -10,6 +9,29 @@ namespace mudcrack::spec {
 namespace {
 
 using nlohmann::json;
+
+// No shot nests deeper than a few levels; a hostile file nested thousands deep would cost memory
+// quadratic in its depth here (each level's pointer) and recursion later (dump, destruction).
+constexpr size_t kMaxDepth = 64;
+
+// nlohmann's parse_error text: "[json.exception.parse_error.101] parse error at line 3, column 5: ..."
+bool split_parse_error(const std::string& what, std::string& line, std::string& column, std::string& rest) {
+    const size_t at = what.find("line ");
+    if (at == std::string::npos) return false;
+    const size_t comma = what.find(", column ", at);
+    const size_t colon = comma == std::string::npos ? comma : what.find(": ", comma);
+    if (colon == std::string::npos) return false;
+    line = what.substr(at + 5, comma - at - 5);
+    column = what.substr(comma + 9, colon - comma - 9);
+    rest = what.substr(colon + 2);
+    // the message quotes the token read so far: a runaway string would make it the whole file
+    constexpr size_t kMaxRest = 200;
+    if (rest.size() > kMaxRest) rest = rest.substr(0, kMaxRest) + "...";
+    const auto is_number = [](const std::string& t) {
+        return !t.empty() && t.find_first_not_of("0123456789") == std::string::npos;
+    };
+    return is_number(line) && is_number(column);
+}
 
 // Builds the tree from nlohmann's SAX events, as its own DOM parser does, and in addition knows
 // each value's JSON pointer, so a key seen twice in one object is reported with both values.
@@ -88,6 +110,9 @@ private:
     }
 
     bool open(json empty) {
+        if (m_open.size() >= kMaxDepth)
+            throw InputError(m_issues.file() + ": JSON nested deeper than " + std::to_string(kMaxDepth) +
+                             " levels: a shot is a few levels deep");
         std::string pointer;
         if (!m_open.empty()) {
             const Container& parent = m_open.back();
@@ -121,12 +146,12 @@ json read_shot_json(const std::string& text, Issues& issues) {
         json::sax_parse(text, &builder, json::input_format_t::json, /*strict=*/true, /*ignore_comments=*/true);
     } catch (const json::parse_error& e) {
         // nlohmann says "[json.exception.parse_error.101] parse error at line 3, column 5: ..."
-        static const std::regex where(R"(line (\d+), column (\d+): (.*))");
+        // (no std::regex: its recursive matcher overflows the stack on a long message)
         const std::string what = e.what();
-        std::smatch m;
-        if (std::regex_search(what, m, where))
-            throw InputError(issues.file() + ":" + m[1].str() + ":" + m[2].str() + ": malformed JSON (line " +
-                             m[1].str() + ", column " + m[2].str() + "): " + m[3].str());
+        std::string line, column, rest;
+        if (split_parse_error(what, line, column, rest))
+            throw InputError(issues.file() + ":" + line + ":" + column + ": malformed JSON (line " + line +
+                             ", column " + column + "): " + rest);
         throw InputError(issues.file() + ": malformed JSON: " + what);
     }
     return builder.take_root();

@@ -280,6 +280,23 @@ TEST_F(WriteFailureCli, FullDiskUnderFfmpegFailsTheRender) {
     const int code = run("render", out, first_on_path(wrapper_dir));
     expect_one_error_line("render", code, out, "preview.mp4: ffmpeg failed (exit code 1");
     expect_no_output("render", out);
+    // ffmpeg's own message is folded into that line, not printed beside it
+    std::istringstream lines(m_stderr);
+    for (std::string line; std::getline(lines, line);) {
+        if (!line.empty()) {
+            EXPECT_EQ(line.rfind("mc-render: ", 0), 0u) << "a line not from mc-render: " << line;
+        }
+    }
+    EXPECT_NE(m_stderr.find("File too large"), std::string::npos) << "ffmpeg's reason is missing:\n" << m_stderr;
+}
+
+TEST_F(WriteFailureCli, FullDiskFailsARenderChunkAndLeavesNoFolder) {
+    run_good_chain();
+    // a farm chunk (--frames) into an output root without render/: its PNG cannot be written
+    const fs::path out = inputs_for("render", "chunk_full");
+    const int code = run("render", out, file_size_limit(smallest_file(good() / "render", ".png") / 2), {"--frames", "1-2"});
+    expect_one_error_line("render", code, out, "File too large");
+    expect_no_output("render", out);
 }
 
 TEST_F(WriteFailureCli, FullDiskAtACheckpointThenResumeGivesTheSameCaches) {

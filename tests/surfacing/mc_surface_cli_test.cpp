@@ -9,6 +9,7 @@
 #include <filesystem>
 #include <fstream>
 #include <iterator>
+#include <map>
 #include <string>
 
 #include "pipeline/io/manifest.h"
@@ -156,6 +157,45 @@ TEST_F(McSurfaceCli, FramesInAnyOrderGiveByteIdenticalFilesThatRoundTrip) {
     EXPECT_GT(manifest["tets_per_second"].get<double>(), 0.0);
     EXPECT_TRUE(fs::exists(in_order / "surface" / "edge_breaks.bin"));
     EXPECT_FALSE(fs::exists(in_order / ".surface.partial"));
+}
+
+TEST_F(McSurfaceCli, AFailedUpdateInPlaceKeepsThePreviousFiles) {
+    const fs::path out = m_dir / "out";
+    write_inputs(out);
+    ASSERT_EQ(mc_surface(out).code, 0);
+    const fs::path surface = out / "surface";
+    std::map<std::string, std::string> before;
+    for (const auto& e : fs::directory_iterator(surface)) before[e.path().filename().string()] = read_bytes(e.path());
+    // --frames over the finished folder updates it in place. A disk that fills between a frame's
+    // boundary mesh and its (larger) crack mesh: files limited to whole 512-byte blocks (ulimit
+    // -f), SIGXFSZ ignored so the write fails with EFBIG
+    int frame = 0;
+    size_t blocks = 0;
+    for (int n = 1; n <= kFrames && frame == 0; ++n) {
+        const std::string crack = frame_path({}, "crack", n, "glb").string();
+        const std::string boundary = frame_path({}, "boundary", n, "glb").string();
+        if (!before.count(crack) || before[crack].empty()) continue;
+        blocks = (before[crack].size() - 1) / 512;
+        if (before[boundary].size() <= blocks * 512) frame = n;
+    }
+    ASSERT_NE(frame, 0) << "no frame has a crack file larger than its boundary mesh by a 512-byte block";
+    const fs::path e = m_dir / "stderr.txt";
+    const std::string cmd = "trap '' XFSZ; ulimit -f " + std::to_string(blocks) + "; " +
+                            std::string(MUDCRACK_BIN_DIR) + "/mc-surface --threads 1 --shot " + m_shot_path.string() +
+                            " --out " + out.string() + " --frames " + std::to_string(frame) + " >/dev/null 2>" + e.string();
+    const int status = std::system(cmd.c_str());
+    ASSERT_TRUE(WIFEXITED(status));
+    EXPECT_EQ(WEXITSTATUS(status), 1) << read_bytes(e);
+    EXPECT_NE(read_bytes(e).find("File too large"), std::string::npos) << read_bytes(e);
+    // every file of the folder is as it was (crack meshes included), and nothing was added
+    std::map<std::string, std::string> after;
+    for (const auto& f : fs::directory_iterator(surface)) after[f.path().filename().string()] = read_bytes(f.path());
+    EXPECT_EQ(after.size(), before.size());
+    for (const auto& [name, bytes] : before) {
+        ASSERT_TRUE(after.count(name)) << name << " was lost";
+        EXPECT_TRUE(after[name] == bytes) << name << " changed";
+    }
+    EXPECT_FALSE(fs::exists(out / ".surface.partial"));
 }
 
 TEST_F(McSurfaceCli, ObjAndWang2019Work) {

@@ -292,16 +292,25 @@ int run_frames(const StageOptions& opt, const RenderJob& job) {
     const Bounds stage = stage_bounds(job);
     std::unique_ptr<Renderer> renderer = make_renderer(opt, job);
     const fs::path dir = fs::path(opt.out) / "render";
+    // a chunk that fails takes back the folder it made (other chunks' folder it leaves alone)
+    std::error_code ec;
+    const bool made_dir = !fs::exists(dir, ec);
     fs::create_directories(dir);
-    fs::remove(dir / "manifest.json");
-    const FrameStats stats = render_frames(job, *renderer, stage, a, b, dir, {});
-    json chunk = {{"first", a}, {"last", b}, {"frames", json::array()}};
     double seconds = 0;
-    for (int f = a; f <= b; ++f) {
-        chunk["frames"].push_back({{"frame", f}, {"triangles", stats.triangles.at(f)}, {"seconds", stats.seconds.at(f)}});
-        seconds += stats.seconds.at(f);
+    try {
+        fs::remove(dir / "manifest.json");
+        const FrameStats stats = render_frames(job, *renderer, stage, a, b, dir, {});
+        json chunk = {{"first", a}, {"last", b}, {"frames", json::array()}};
+        for (int f = a; f <= b; ++f) {
+            chunk["frames"].push_back(
+                {{"frame", f}, {"triangles", stats.triangles.at(f)}, {"seconds", stats.seconds.at(f)}});
+            seconds += stats.seconds.at(f);
+        }
+        write_text_atomically(chunk_stats_path(dir, a, b), chunk.dump(2) + "\n");
+    } catch (...) {
+        if (made_dir) fs::remove_all(dir, ec);
+        throw;
     }
-    write_text_atomically(chunk_stats_path(dir, a, b), chunk.dump(2) + "\n");
     log::info("rendered frames " + std::to_string(a) + "-" + std::to_string(b) + " (run --assemble when all are done)");
     print_table(job, renderer.get(), "frames (chunk)", a, b, {}, seconds / (b - a + 1), "none (--assemble makes them)", dir);
     return 0;

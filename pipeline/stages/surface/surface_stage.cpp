@@ -85,6 +85,25 @@ void for_each_item(int n, Fn&& fn) {
         if (e) std::rethrow_exception(e);
 }
 
+/// Gives `to` every file of `from` (same file system): hard links, so nothing is copied and the
+/// files keep their times (make trusts them); a copy with the time kept where links fail.
+/// Writers replace files by rename, so a link never carries a change back to `from`.
+void link_folder_contents(const fs::path& from, const fs::path& to) {
+    for (const fs::directory_entry& e : fs::recursive_directory_iterator(from)) {
+        const fs::path target = to / fs::relative(e.path(), from);
+        if (e.is_directory()) {
+            fs::create_directories(target);
+            continue;
+        }
+        std::error_code ec;
+        fs::create_hard_link(e.path(), target, ec);
+        if (ec) {
+            fs::copy_file(e.path(), target);
+            fs::last_write_time(target, fs::last_write_time(e.path()));
+        }
+    }
+}
+
 /// The break history of frames first..last: Eq. 14 on every cached frame (order-free: a minimum).
 BreakHistory scan_breaks(const fs::path& sim_dir, int first, int last, const CoreTopology& topo,
                          const SurfaceParams& params, uint64_t source_hash) {
@@ -183,9 +202,11 @@ int run_surface_stage(const StageOptions& options, const SurfaceStageOptions& su
                previous.value("mode", "") == surface_mode_name(params.mode) &&
                previous.value("format", "") == params.format;
     }();
-    std::optional<StagingDir> staging;
-    if (!update_in_place) staging.emplace(surface_dir, options.keep_partial);
-    const fs::path dir = update_in_place ? surface_dir : staging->path();
+    // an update in place is staged like a full run, its folder starting as hard links to the
+    // current files: a failed run leaves the previous outputs exactly as they were
+    StagingDir staging(surface_dir, options.keep_partial);
+    if (update_in_place) link_folder_contents(surface_dir, staging.path());
+    const fs::path dir = staging.path();
 
     // the break history: reused when it matches the inputs and covers the frames, else scanned
     timer.reset();
@@ -277,7 +298,7 @@ int run_surface_stage(const StageOptions& options, const SurfaceStageOptions& su
     m["peak_memory_bytes"] = peak_rss_bytes();
     m["per_frame"] = per_frame;
     write_manifest(dir, m);
-    if (staging) staging->commit();
+    staging.commit();
 
     // results table on stdout
     std::printf("frame  boundary_faces  crack_faces  broken_edges  fragments\n");
