@@ -5,7 +5,7 @@
 #include <vector>
 
 #include "fuzz_input.h"
-#include "pipeline/cmd/sim_checkpoint.h"
+#include "pipeline/stages/sim/sim_checkpoint.h"
 #include "pipeline/io/checksum.h"
 
 extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
