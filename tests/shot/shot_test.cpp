@@ -171,6 +171,31 @@ TEST_F(ShotTest, RenderColorModeLeavesTheSimSliceOfAShotWithoutSurfacing) {
     }
 }
 
+// An on-request attribute (MC_CACHED_ATTRIBUTES' OnRequest policy: the damage) is cached only when
+// asked for, and asking changes only that shot's sim slice; asking without its physics is refused.
+TEST_F(ShotTest, OnRequestAttributeIsCachedOnlyWhenAskedAndNeedsItsPhysics) {
+    const std::string base = R"({"mudcrack": 1, "source": {"type": "box"}, "material": {},
+        "plasticity": {"damage_strain": 0.01}, "moisture": {}SIM})";
+    auto with = [&](const std::string& sim) {
+        std::string text = base;
+        text.replace(text.find("SIM"), 3, sim);
+        return text;
+    };
+    const Shot plain = parse_shot(with(""), "t.json");
+    EXPECT_FALSE(plain.sim.cache.damage);
+    EXPECT_EQ(plain.slice(Stage::Sim).find("damage\":"), std::string::npos) << plain.slice(Stage::Sim);
+    const Shot asked = parse_shot(with(R"(, "sim": {"cache": {"damage": true}})"), "t.json");
+    EXPECT_TRUE(asked.sim.cache.damage);
+    EXPECT_NE(asked.slice(Stage::Sim), plain.slice(Stage::Sim));
+    EXPECT_EQ(asked.slice(Stage::Init), plain.slice(Stage::Init));
+    const Shot declined = parse_shot(with(R"(, "sim": {"cache": {"damage": false}})"), "t.json");
+    EXPECT_FALSE(declined.sim.cache.damage);
+    // no damage physics (no /plasticity/damage_strain): the request names the key and what it needs
+    expect_contains(error_of(R"({"mudcrack": 1, "source": {"type": "box"}, "material": {}, "plasticity": {},
+        "sim": {"cache": {"damage": true}}})"),
+                    {"shots/t.json: /sim/cache/damage = true", "/plasticity/damage_strain"});
+}
+
 TEST_F(ShotTest, MalformedJsonNamesFileLineAndColumn) {
     const std::string msg = error_of("{\n  \"mudcrack\": 1,\n  \"source\": {\"type\": \"box\",}\n}", "shots/x.json");
     expect_contains(msg, {"shots/x.json:3:", "line 3", "malformed JSON"});
