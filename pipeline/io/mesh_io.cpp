@@ -240,6 +240,27 @@ void check_ply_header(const fs::path& path) {
              "(truncated?)");
 }
 
+// assimp 5.2.5's triangulation asserts (an abort, not an error) that a mesh flagged as holding
+// polygons holds at least one face of more than 3 corners; a damaged PLY face list (a face of 0
+// corners, which its validation lets through) leaves a mesh that breaks that (found by
+// tests/fuzz). The scene is checked here between reading and triangulating.
+void check_polygon_flags(const fs::path& path, const aiScene& scene) {
+    for (unsigned m = 0; m < scene.mNumMeshes; ++m) {
+        const aiMesh& mesh = *scene.mMeshes[m];
+        if ((mesh.mPrimitiveTypes & aiPrimitiveType_POLYGON) == 0) continue;
+        unsigned polygons = 0, empty = 0;
+        for (unsigned f = 0; f < mesh.mNumFaces; ++f) {
+            polygons += mesh.mFaces[f].mNumIndices > 3 ? 1 : 0;
+            empty += mesh.mFaces[f].mNumIndices == 0 ? 1 : 0;
+        }
+        if (polygons == 0)
+            throw InputError(path.string() + ": cannot read the mesh: mesh " + std::to_string(m) +
+                             " is declared to hold polygons but its " + std::to_string(mesh.mNumFaces) +
+                             " faces (" + std::to_string(empty) +
+                             " with no corner) have at most 3 corners each (damaged file?)");
+    }
+}
+
 }  // namespace
 
 InputSurface load_input_surface(const fs::path& path) {
@@ -255,9 +276,15 @@ InputSurface load_input_surface(const fs::path& path) {
     // ValidateDataStructure runs before the other steps: assimp 5.2.5's readers can leave faces
     // whose indices leave the mesh or whose sizes contradict the mesh's primitive types, and its
     // triangulation then reads out of bounds or aborts (found by tests/fuzz); validated, such a
-    // file is refused with assimp's reason
-    const aiScene* scene = importer.ReadFile(
-        path.string(), aiProcess_ValidateDataStructure | aiProcess_Triangulate | aiProcess_JoinIdenticalVertices);
+    // file is refused with assimp's reason. Validation alone does not catch every such
+    // file, so read and validate first, check what the triangulation assumes, then post-process
+    // (the same steps in the same order as one ReadFile with all three flags)
+    const aiScene* scene = importer.ReadFile(path.string(), aiProcess_ValidateDataStructure);
+    if (scene == nullptr || scene->mRootNode == nullptr) {
+        throw InputError(path.string() + ": cannot read the mesh: " + importer.GetErrorString());
+    }
+    check_polygon_flags(path, *scene);
+    scene = importer.ApplyPostProcessing(aiProcess_Triangulate | aiProcess_JoinIdenticalVertices);
     if (scene == nullptr || scene->mRootNode == nullptr) {
         throw InputError(path.string() + ": cannot read the mesh: " + importer.GetErrorString());
     }

@@ -186,6 +186,14 @@ TEST(LoadInputSurface, BadFilesNameTheFile) {
     test::expect_input_error_naming([&] { load_input_surface(dir / "lines.obj"); }, "lines.obj");
     write_file(dir / "empty.off", "");
     test::expect_input_error_naming([&] { load_input_surface(dir / "empty.off"); }, "empty.off");
+    // a PLY face of no corner leaves a mesh flagged as polygons without one, on which assimp's
+    // triangulation would abort the process
+    write_file(dir / "empty_face.ply",
+               "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\n"
+               "property float z\nelement face 1\nproperty list uchar int vertex_indices\nend_header\n"
+               "0 0 0\n1 0 0\n0 1 0\n0\n");
+    test::expect_input_error_naming([&] { load_input_surface(dir / "empty_face.ply"); },
+                                    "empty_face.ply: cannot read the mesh: mesh 0 is declared to hold polygons");
 }
 
 }  // namespace
