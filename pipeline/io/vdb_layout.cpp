@@ -2,6 +2,7 @@
 
 #include <fstream>
 #include <utility>
+#include <vector>
 
 #include "sim/core/error.h"
 
@@ -20,6 +21,13 @@ constexpr uint32_t kNewestFileVersion = 224;  // OpenVDB 10's own
 constexpr int64_t kUuidLength = 36;
 // a root tile: int32 x, y, z, the value, then the active flag as one raw bool byte
 constexpr int64_t kTileCoordBytes = 12;
+// io/Compression.h: a grid's compression flags and a node's value metadata
+constexpr uint32_t kCompressZip = 0x1, kCompressActiveMask = 0x2, kCompressBlosc = 0x4;
+constexpr uint8_t kNoMaskAndOneInactiveValue = 2, kMaskAndNoInactiveValues = 3, kMaskAndOneInactiveValue = 4,
+                  kMaskAndTwoInactiveValues = 5, kNoMaskAndAllValues = 6;
+// the 5-4-3 tree of a points grid: two internal levels, then 8^3 leaves
+constexpr uint32_t kInternalLog2Dims[2] = {5, 4};
+constexpr uint32_t kLeafValues = 512;
 
 // The standard metadata types OpenVDB registers and the bytes it reads for each: it reads a
 // fixed-size value by its own size whatever byte count the file states, so a mismatch would make
@@ -100,6 +108,67 @@ public:
             }
         }
     }
+    // a node mask of `bits` bits, as words
+    std::vector<uint64_t> mask(uint32_t bits, const std::string& what) {
+        std::vector<uint64_t> words(bits / 64);
+        const int64_t bytes = int64_t(words.size() * sizeof(uint64_t));
+        if (bytes > m_size - m_pos) fail(what + " runs past the end of the file");
+        m_is.read(reinterpret_cast<char*>(words.data()), std::streamsize(bytes));
+        m_pos += bytes;
+        return words;
+    }
+    // io::readData's value block: zip or blosc chunks carry an int64 byte count, positive for
+    // compressed bytes, minus the raw byte count otherwise; OpenVDB allocates the first and reads
+    // the second into a buffer of the node's size before comparing, so both are checked here
+    void value_block(uint32_t compression, int64_t raw_bytes, const std::string& what) {
+        if ((compression & (kCompressZip | kCompressBlosc)) == 0) {
+            skip(raw_bytes, what);
+            return;
+        }
+        const auto stated = read<int64_t>((what + " size").c_str());
+        if (stated <= 0) {
+            if (stated != -raw_bytes)
+                fail(what + " holds " + std::to_string(-stated) + " uncompressed bytes, the node has " +
+                     std::to_string(raw_bytes));
+            skip(raw_bytes, what);
+        } else {
+            skip(stated, what + " of " + std::to_string(stated) + " compressed bytes");
+        }
+    }
+    // an internal node's topology (tree/InternalNode.h readTopology, io/Compression.h
+    // readCompressedValues): child and value masks, the compressed values, then each child
+    void internal_node(uint32_t log2dim, uint32_t compression, uint32_t value_bytes, const std::string& what) {
+        const uint32_t values = 1u << (3 * log2dim);
+        const std::vector<uint64_t> children = mask(values, what + " child mask");
+        const std::vector<uint64_t> active = mask(values, what + " value mask");
+        const uint8_t metadata = read<uint8_t>((what + " value metadata").c_str());
+        if (metadata > kNoMaskAndAllValues) fail(what + " value metadata " + std::to_string(metadata) + ", expected 0 to 6");
+        if (metadata == kNoMaskAndOneInactiveValue || metadata == kMaskAndOneInactiveValue ||
+            metadata == kMaskAndTwoInactiveValues)
+            skip(int64_t(value_bytes) * (metadata == kMaskAndTwoInactiveValues ? 2 : 1), what + " inactive values");
+        if (metadata == kMaskAndNoInactiveValues || metadata == kMaskAndOneInactiveValue ||
+            metadata == kMaskAndTwoInactiveValues)
+            mask(values, what + " selection mask");
+        int64_t stored = values;
+        if ((compression & kCompressActiveMask) != 0 && metadata != kNoMaskAndAllValues) {
+            stored = 0;
+            for (uint64_t w : active) stored += __builtin_popcountll(w);
+        }
+        value_block(compression, stored * value_bytes, what + " values");
+        uint32_t child = 0;
+        for (size_t w = 0; w < children.size(); ++w) {
+            for (int b = 0; b < 64; ++b) {
+                if (((children[w] >> b) & 1u) == 0) continue;
+                const std::string name = what + " child " + std::to_string(child++);
+                if (log2dim > kInternalLog2Dims[1]) {
+                    internal_node(kInternalLog2Dims[1], compression, value_bytes, name);
+                } else {
+                    mask(kLeafValues, name + " value mask");  // a leaf's topology
+                }
+            }
+        }
+    }
+
 private:
     fs::path m_path;
     std::ifstream m_is;
@@ -136,7 +205,7 @@ void check_vdb_layout(const fs::path& path, const VdbLayoutExpectation& expected
         const auto end_pos = in.read<int64_t>("grid descriptor");
         if (end_pos < grid_pos) in.fail(grid + " ends at byte " + std::to_string(end_pos) + ", before it starts");
         in.seek(grid_pos, grid + " data");
-        in.read<uint32_t>((grid + " compression").c_str());
+        const auto compression = in.read<uint32_t>((grid + " compression").c_str());
         in.metadata(grid);
         const std::string map_type = in.string(grid + " transform type");
         if (map_type != expected.map_type)
@@ -145,10 +214,15 @@ void check_vdb_layout(const fs::path& path, const VdbLayoutExpectation& expected
         in.read<uint32_t>((grid + " buffer count").c_str());
         in.skip(expected.root_value_bytes, grid + " background");
         const uint32_t tiles = in.read<uint32_t>((grid + " root tile count").c_str());
-        in.read<uint32_t>((grid + " root child count").c_str());
+        const uint32_t children = in.read<uint32_t>((grid + " root child count").c_str());
         for (uint32_t t = 0; t < tiles; ++t) {
             in.skip(kTileCoordBytes + expected.root_value_bytes, grid + " root tile " + std::to_string(t));
             in.bool_byte(grid + " root tile " + std::to_string(t) + " active flag");
+        }
+        for (uint32_t c = 0; c < children; ++c) {
+            const std::string child = grid + " root child " + std::to_string(c);
+            in.skip(kTileCoordBytes, child + " origin");
+            in.internal_node(kInternalLog2Dims[0], compression, expected.root_value_bytes, child);
         }
         in.seek(end_pos, grid + " end");
     }

@@ -18,9 +18,12 @@ struct VdbLayoutExpectation {
 /// OpenVDB 10 trusts the file it reads: it allocates what a stored string length or metadata
 /// size asks for, reads a metadata or root-tile bool as a raw byte (a byte other than 0 or 1 is
 /// undefined behaviour), and reads the last leaf without noticing that the file's final bytes are
-/// missing. This walks what OpenVDB reads before the tree's internal nodes: the header, the file
+/// missing; and its zip and blosc readers allocate the byte count a node's value block states, or
+/// read that many raw bytes into the node's buffer before comparing with its size (a heap
+/// overflow). This walks what OpenVDB reads before the leaf buffers: the header, the file
 /// metadata, each grid descriptor (its tree type, its end offset inside the file), the grid's
-/// metadata, transform and root node, and throws InputError naming the file and the first fault.
+/// metadata, transform, root node and internal nodes of a 5-4-3 tree (masks, value blocks), and
+/// throws InputError naming the file and the first fault.
 void check_vdb_layout(const std::filesystem::path& path, const VdbLayoutExpectation& expected);
 
 }  // namespace mudcrack
