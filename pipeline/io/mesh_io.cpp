@@ -20,6 +20,7 @@
 #include <system_error>
 
 #include "pipeline/io/atomic_output.h"
+#include "pipeline/io/ply_lists.h"
 #include "sim/core/error.h"
 
 namespace fs = std::filesystem;
@@ -174,18 +175,26 @@ size_t ply_type_size(const std::string& type) {
 }
 
 // assimp 5.2.5's PLY reader runs past its buffer on a header without end_header or a binary body
-// shorter than its header declares (found by tests/fuzz): the header is checked here first.
+// shorter than its header declares, and sizes a list by whatever count the body states (found by
+// tests/fuzz): the header, then the body's list counts, are checked here first.
 void check_ply_header(const fs::path& path) {
     std::ifstream is(path, std::ios::binary);
     std::string line;
-    if (!std::getline(is, line) || line.rfind("ply", 0) != 0) return;  // not PLY: assimp decides
+    // assimp takes "ply" in any case as the magic (a "pLy" file without end_header hung its reader)
+    const auto is_ply_magic = [](const std::string& first) {
+        return first.size() >= 3 && std::tolower(static_cast<unsigned char>(first[0])) == 'p' &&
+               std::tolower(static_cast<unsigned char>(first[1])) == 'l' &&
+               std::tolower(static_cast<unsigned char>(first[2])) == 'y';
+    };
+    if (!std::getline(is, line) || !is_ply_magic(line)) return;  // not PLY: assimp decides
     const auto fail = [&](const std::string& why) {
         throw InputError(path.string() + ": malformed PLY header: " + why);
     };
     std::string format;
-    uint64_t min_body = 0, elements = 0;
+    uint64_t min_body = 0, element_count = 0;
     uint64_t count = 0;
     bool ended = false;
+    std::vector<PlyElement> elements;
     for (int n = 0; n < 100000 && std::getline(is, line); ++n) {
         if (!line.empty() && line.back() == '\r') line.pop_back();
         std::istringstream words(line);
@@ -203,7 +212,8 @@ void check_ply_header(const fs::path& path) {
             if (number.empty() || number.size() > 10 || number.find_first_not_of("0123456789") != std::string::npos)
                 fail("element '" + name + "' count '" + number + "': expected a count below 10^10");
             count = std::stoull(number);
-            elements += count;
+            element_count += count;
+            elements.push_back(PlyElement{name, count, {}});
         } else if (key == "property") {
             std::string type;
             words >> type;
@@ -214,9 +224,11 @@ void check_ply_header(const fs::path& path) {
                 size = ply_type_size(count_type);
                 if (size == 0 || ply_type_size(item_type) == 0)
                     fail("property list " + count_type + " " + item_type + ": unknown type");
+                if (!elements.empty()) elements.back().properties.push_back(PlyProperty{true, count_type, item_type});
             } else {
                 size = ply_type_size(type);
                 if (size == 0) fail("property type '" + type + "': unknown type");
+                if (!elements.empty()) elements.back().properties.push_back(PlyProperty{false, "", type});
             }
             min_body += count * size;
         } else if (key != "comment" && key != "obj_info" && !key.empty()) {
@@ -233,11 +245,33 @@ void check_ply_header(const fs::path& path) {
     const uint64_t size = fs::file_size(path, ec);
     const uint64_t body = ec || body_start < 0 ? 0 : size - uint64_t(body_start);
     // ascii: every element takes at least one byte of text
-    const uint64_t needed = format == "ascii" ? elements : min_body;
+    const uint64_t needed = format == "ascii" ? element_count : min_body;
     if (body < needed)
-        fail("the header declares " + std::to_string(elements) + " elements needing at least " +
+        fail("the header declares " + std::to_string(element_count) + " elements needing at least " +
              std::to_string(needed) + " bytes, the file holds " + std::to_string(body) + " after the header "
              "(truncated?)");
+    check_ply_list_counts(path, uint64_t(body_start), format, elements);
+}
+
+// assimp 5.2.5's triangulation asserts (an abort, not an error) that a mesh flagged as holding
+// polygons holds at least one face of more than 3 corners; a damaged PLY face list (a face of 0
+// corners, which its validation lets through) leaves a mesh that breaks that (found by
+// tests/fuzz). The scene is checked here between reading and triangulating.
+void check_polygon_flags(const fs::path& path, const aiScene& scene) {
+    for (unsigned m = 0; m < scene.mNumMeshes; ++m) {
+        const aiMesh& mesh = *scene.mMeshes[m];
+        if ((mesh.mPrimitiveTypes & aiPrimitiveType_POLYGON) == 0) continue;
+        unsigned polygons = 0, empty = 0;
+        for (unsigned f = 0; f < mesh.mNumFaces; ++f) {
+            polygons += mesh.mFaces[f].mNumIndices > 3 ? 1 : 0;
+            empty += mesh.mFaces[f].mNumIndices == 0 ? 1 : 0;
+        }
+        if (polygons == 0)
+            throw InputError(path.string() + ": cannot read the mesh: mesh " + std::to_string(m) +
+                             " is declared to hold polygons but its " + std::to_string(mesh.mNumFaces) +
+                             " faces (" + std::to_string(empty) +
+                             " with no corner) have at most 3 corners each (damaged file?)");
+    }
 }
 
 }  // namespace
@@ -255,9 +289,15 @@ InputSurface load_input_surface(const fs::path& path) {
     // ValidateDataStructure runs before the other steps: assimp 5.2.5's readers can leave faces
     // whose indices leave the mesh or whose sizes contradict the mesh's primitive types, and its
     // triangulation then reads out of bounds or aborts (found by tests/fuzz); validated, such a
-    // file is refused with assimp's reason
-    const aiScene* scene = importer.ReadFile(
-        path.string(), aiProcess_ValidateDataStructure | aiProcess_Triangulate | aiProcess_JoinIdenticalVertices);
+    // file is refused with assimp's reason. Validation alone does not catch every such
+    // file, so read and validate first, check what the triangulation assumes, then post-process
+    // (the same steps in the same order as one ReadFile with all three flags)
+    const aiScene* scene = importer.ReadFile(path.string(), aiProcess_ValidateDataStructure);
+    if (scene == nullptr || scene->mRootNode == nullptr) {
+        throw InputError(path.string() + ": cannot read the mesh: " + importer.GetErrorString());
+    }
+    check_polygon_flags(path, *scene);
+    scene = importer.ApplyPostProcessing(aiProcess_Triangulate | aiProcess_JoinIdenticalVertices);
     if (scene == nullptr || scene->mRootNode == nullptr) {
         throw InputError(path.string() + ": cannot read the mesh: " + importer.GetErrorString());
     }

@@ -20,6 +20,7 @@
 
 #include "pipeline/io/atomic_output.h"
 #include "pipeline/io/checksum.h"
+#include "pipeline/io/vdb_layout.h"
 #include "sim/core/error.h"
 
 namespace fs = std::filesystem;
@@ -210,45 +211,6 @@ public:
     }
 };
 
-// OpenVDB reads the last leaf without noticing when the file's final few bytes are missing, so
-// check the layout ourselves: after the header and the file metadata come the grid descriptors,
-// each ending with the grid's end offset (int64), which must lie inside the file.
-void check_complete_vdb(const fs::path& path) {
-    std::ifstream is(path, std::ios::binary);
-    const auto size = static_cast<int64_t>(fs::file_size(path));
-    auto fail = [&](const std::string& what) {
-        throw InputError(path.string() + ": truncated or damaged points file: " + what + " (file has " +
-                         std::to_string(size) + " bytes)");
-    };
-    auto read_u32 = [&]() {
-        uint32_t v = 0;
-        if (!is.read(reinterpret_cast<char*>(&v), sizeof v)) fail("header ends early");
-        return v;
-    };
-    auto skip = [&](int64_t bytes) {
-        if (bytes < 0 || int64_t(is.tellg()) + bytes > size) fail("header ends early");
-        is.seekg(bytes, std::ios::cur);
-    };
-    is.seekg(kUuidOffset + std::streamoff(kUuidLength));
-    // file-level metadata: name, type name, byte count + value per entry
-    const uint32_t meta_count = read_u32();
-    for (uint32_t i = 0; i < meta_count; ++i) {
-        skip(read_u32());
-        skip(read_u32());
-        skip(read_u32());
-    }
-    const uint32_t grid_count = read_u32();
-    for (uint32_t g = 0; g < grid_count; ++g) {
-        skip(read_u32());  // grid name
-        skip(read_u32());  // tree type
-        skip(read_u32());  // instance parent
-        int64_t offsets[3];  // grid, block and end positions
-        if (!is.read(reinterpret_cast<char*>(offsets), sizeof offsets)) fail("grid descriptor ends early");
-        if (offsets[2] > size) fail("grid " + std::to_string(g) + " ends at byte " + std::to_string(offsets[2]));
-        is.seekg(offsets[2]);
-    }
-}
-
 // opens the file and returns the "particles" grid, data or metadata only; every failure names the file
 openvdb::GridBase::Ptr open_particles_grid(const fs::path& path, bool metadata_only) {
     initialize_openvdb();
@@ -257,6 +219,10 @@ openvdb::GridBase::Ptr open_particles_grid(const fs::path& path, bool metadata_o
         throw InputError(path.string() + ": points file not found (expected a mudcrack OpenVDB "
                                          "points cache)");
     }
+    // ScaleMap and UniformScaleMap store five Vec3d: scale, voxel size, inverse scale, its square
+    // and half the inverse scale
+    check_vdb_layout(path, {vdbp::PointDataGrid::gridType(), openvdb::math::UniformScaleMap::mapType(),
+                            uint32_t(5 * sizeof(openvdb::Vec3d)), uint32_t(sizeof(vdbp::PointDataTree::ValueType))});
     openvdb::GridBase::Ptr grid;
     try {
         openvdb::io::File file(path.string());
@@ -267,7 +233,6 @@ openvdb::GridBase::Ptr open_particles_grid(const fs::path& path, bool metadata_o
         }
         grid = metadata_only ? file.readGridMetadata(kGridName) : file.readGrid(kGridName);
         file.close();
-        check_complete_vdb(path);
     } catch (const InputError&) {
         throw;
     } catch (const std::exception& e) {

@@ -186,6 +186,30 @@ TEST(LoadInputSurface, BadFilesNameTheFile) {
     test::expect_input_error_naming([&] { load_input_surface(dir / "lines.obj"); }, "lines.obj");
     write_file(dir / "empty.off", "");
     test::expect_input_error_naming([&] { load_input_surface(dir / "empty.off"); }, "empty.off");
+    // a PLY face of no corner leaves a mesh flagged as polygons without one, on which assimp's
+    // triangulation would abort the process
+    write_file(dir / "empty_face.ply",
+               "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\n"
+               "property float z\nelement face 1\nproperty list uchar int vertex_indices\nend_header\n"
+               "0 0 0\n1 0 0\n0 1 0\n0\n");
+    test::expect_input_error_naming([&] { load_input_surface(dir / "empty_face.ply"); },
+                                    "empty_face.ply: cannot read the mesh: mesh 0 is declared to hold polygons");
+    // list counts assimp would size a list by: beyond the count's type (ASCII), beyond the file (binary)
+    const std::string header = "element vertex 3\nproperty float x\nproperty float y\nproperty float z\n"
+                               "element face 1\nproperty list uchar int vertex_indices\nend_header\n";
+    write_file(dir / "big_count.ply", "ply\nformat ascii 1.0\n" + header + "0 0 0\n1 0 0\n0 1 0\n666666667 0 1 2\n");
+    test::expect_input_error_naming([&] { load_input_surface(dir / "big_count.ply"); },
+                                    "big_count.ply: malformed PLY body: element 'face' 0: list count 666666667");
+    std::string binary = "ply\nformat binary_little_endian 1.0\n" + header + std::string(36, '\0');
+    binary += '\xff';  // 255 corners, 3 bytes of them in the file
+    binary += std::string(3, '\0');
+    write_file(dir / "short_list.ply", binary);
+    test::expect_input_error_naming([&] { load_input_surface(dir / "short_list.ply"); },
+                                    "short_list.ply: malformed PLY body: element 'face' 0: list count 255");
+    // assimp reads "pLy" as PLY too (and hung on this one without end_header)
+    write_file(dir / "mixed_case.ply", "pLy\nformat ascii 1.0\nelement vertex 3\nproperty float x\n");
+    test::expect_input_error_naming([&] { load_input_surface(dir / "mixed_case.ply"); },
+                                    "mixed_case.ply: malformed PLY header: no end_header");
 }
 
 }  // namespace

@@ -224,5 +224,40 @@ TEST(PointsIo, BadFilesNameTheFile) {
     test::expect_input_error_naming([&] { read_points(dir / "foreign.vdb"); }, "foreign.vdb");
 }
 
+// OpenVDB would load a root tile's active flag byte as a bool (undefined behaviour for a byte
+// other than 0 or 1): such a file is refused before OpenVDB parses it. mudcrack writes no root
+// tiles, so one is spliced into a written file, its grid's block and end offsets moved past it.
+TEST(PointsIo, RootTileActiveFlagMustBeABool) {
+    ScratchDir dir;
+    write_points(dir / "good.vdb", random_cloud(200, 5), kVoxel);
+    std::string bytes = test::read_file(dir / "good.vdb");
+    const std::string tree_type = "Tree_ptdataidx32_5_4_3";
+    const size_t descriptor = bytes.find(tree_type);
+    ASSERT_NE(descriptor, std::string::npos);
+    const size_t offsets_at = descriptor + tree_type.size() + 4;  // the empty instance parent's length
+    const std::string map_type = "UniformScaleMap";
+    const size_t map = bytes.find(map_type);
+    ASSERT_NE(map, std::string::npos);
+    const size_t tile_count_at = map + map_type.size() + 120 + 4 + 4;  // map, buffer count, background
+    uint32_t tiles = 99;
+    std::memcpy(&tiles, &bytes[tile_count_at], 4);
+    ASSERT_EQ(tiles, 0u);
+    tiles = 1;
+    std::memcpy(&bytes[tile_count_at], &tiles, 4);
+    const int32_t tile[4] = {1 << 15, 0, 0, 0};  // origin x, y, z and the value
+    std::string spliced(reinterpret_cast<const char*>(tile), sizeof tile);
+    spliced += '\x5a';
+    bytes.insert(tile_count_at + 8, spliced);
+    for (int k = 1; k <= 2; ++k) {
+        int64_t offset = 0;
+        std::memcpy(&offset, &bytes[offsets_at + 8 * size_t(k)], 8);
+        offset += int64_t(spliced.size());
+        std::memcpy(&bytes[offsets_at + 8 * size_t(k)], &offset, 8);
+    }
+    test::write_file(dir / "tile.vdb", bytes);
+    test::expect_input_error_naming([&] { read_points(dir / "tile.vdb"); }, "root tile 0 active flag is byte 90");
+    test::expect_input_error_naming([&] { read_points_metadata(dir / "tile.vdb"); }, "tile.vdb");
+}
+
 }  // namespace
 }  // namespace mudcrack
