@@ -55,11 +55,10 @@ void check_count(const fs::path& path, const PlyElement& element, uint64_t insta
 // ---- binary: exact ----
 
 int64_t read_integer(const char* p, const PlyType& type, bool big_endian) {
-    unsigned char b[8];
-    std::memcpy(b, p, type.bytes);
-    if (big_endian) std::reverse(b, b + type.bytes);
+    // the bytes from the most significant down, in the file's byte order
+    const auto* b = reinterpret_cast<const unsigned char*>(p);
     uint64_t u = 0;
-    for (size_t i = type.bytes; i-- > 0;) u = (u << 8) | b[i];
+    for (size_t k = 0; k < type.bytes; ++k) u = (u << 8) | b[big_endian ? k : type.bytes - 1 - k];
     if (type.is_signed && (u >> (8 * type.bytes - 1)) != 0) return int64_t(u) - (int64_t(1) << (8 * type.bytes));
     return int64_t(u);
 }
