@@ -119,7 +119,7 @@ $(BUILD_ASAN)/CMakeCache.txt: | deps
 
 sanitize: deps assets $(BUILD_ASAN)/CMakeCache.txt
 	cmake --build $(BUILD_ASAN) -j $(JOBS) --target mudcrack_unit_tests
-	cd $(BUILD_ASAN) && LSAN_OPTIONS=suppressions=$(CURDIR)/tests/fuzz/lsan.supp UBSAN_OPTIONS=print_stacktrace=1 \
+	cd $(BUILD_ASAN) && LSAN_OPTIONS=suppressions=$(CURDIR)/tests/fuzz/lsan.supp:print_suppressions=0 UBSAN_OPTIONS=print_stacktrace=1 \
 	  ctest -L unit --output-on-failure -j $(JOBS) --timeout 900
 
 # the README's Blender still of a shot's last frame next to mc-render's (tools/blender_still.sh)
