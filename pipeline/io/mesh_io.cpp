@@ -163,17 +163,6 @@ void check_off_header(const fs::path& path) {
                          " vertices and faces, more than the file's " + std::to_string(size) + " bytes can hold");
 }
 
-// Bytes of one PLY scalar type, 0 for a name PLY does not have.
-size_t ply_type_size(const std::string& type) {
-    static const std::pair<const char*, size_t> kTypes[] = {
-        {"char", 1},   {"uchar", 1},  {"int8", 1},   {"uint8", 1},   {"short", 2},   {"ushort", 2},
-        {"int16", 2},  {"uint16", 2}, {"int", 4},    {"uint", 4},    {"int32", 4},   {"uint32", 4},
-        {"float", 4},  {"float32", 4}, {"double", 8}, {"float64", 8}};
-    for (const auto& [name, size] : kTypes)
-        if (type == name) return size;
-    return 0;
-}
-
 // assimp 5.2.5's PLY reader runs past its buffer on a header without end_header or a binary body
 // shorter than its header declares, and sizes a list by whatever count the body states (found by
 // tests/fuzz): the header, then the body's list counts, are checked here first.
@@ -221,12 +210,12 @@ void check_ply_header(const fs::path& path) {
             if (type == "list") {
                 std::string count_type, item_type;
                 words >> count_type >> item_type;
-                size = ply_type_size(count_type);
-                if (size == 0 || ply_type_size(item_type) == 0)
+                size = ply_type(count_type).bytes;
+                if (size == 0 || ply_type(item_type).bytes == 0)
                     fail("property list " + count_type + " " + item_type + ": unknown type");
                 if (!elements.empty()) elements.back().properties.push_back(PlyProperty{true, count_type, item_type});
             } else {
-                size = ply_type_size(type);
+                size = ply_type(type).bytes;
                 if (size == 0) fail("property type '" + type + "': unknown type");
                 if (!elements.empty()) elements.back().properties.push_back(PlyProperty{false, "", type});
             }

@@ -13,15 +13,6 @@ namespace fs = std::filesystem;
 
 namespace mudcrack {
 
-namespace {
-
-struct PlyType {
-    size_t bytes = 0;
-    bool is_signed = false;
-    bool is_float = false;
-    uint64_t max = 0;  // the largest count an integer type holds
-};
-
 PlyType ply_type(const std::string& name) {
     static const std::pair<const char*, PlyType> kTypes[] = {
         {"char", {1, true, false, 127}},           {"int8", {1, true, false, 127}},
@@ -36,6 +27,8 @@ PlyType ply_type(const std::string& name) {
         if (name == n) return t;
     return {};
 }
+
+namespace {
 
 [[noreturn]] void refuse(const fs::path& path, const PlyElement& element, uint64_t instance, const std::string& why) {
     throw InputError(path.string() + ": malformed PLY body: element '" + element.name + "' " +

@@ -7,6 +7,17 @@
 
 namespace mudcrack {
 
+/// A PLY scalar type: its size, and for integers the largest value (a list's largest count).
+struct PlyType {
+    size_t bytes = 0;  // 0: a name PLY does not have
+    bool is_signed = false;
+    bool is_float = false;
+    uint64_t max = 0;  // the largest count an integer type holds
+};
+
+/// The type a PLY header names ("uchar", "int32", "float64", ...); bytes = 0 for an unknown name.
+PlyType ply_type(const std::string& name);
+
 /// One property of a PLY element, as its header line declares it.
 struct PlyProperty {
     bool is_list = false;
