@@ -15,6 +15,17 @@ using Vec3i = Eigen::Matrix<int, 3, 1>;
 using Vec3f = Eigen::Matrix<float, 3, 1>;
 using Vec2f = Eigen::Matrix<float, 2, 1>;
 
+/// A symmetric 3x3 matrix (a stress) as its six distinct entries: half a Mat3's memory.
+struct SymMat3 {
+    Real xx, yy, zz, xy, xz, yz;
+
+    Mat3 matrix() const {
+        Mat3 m;
+        m << xx, xy, xz, xy, yy, yz, xz, yz, zz;
+        return m;
+    }
+};
+
 using Tet = std::array<int32_t, 4>;  // particle ids of a tetrahedron's corners
 using Tri = std::array<int32_t, 3>;  // vertex ids of a triangle
 

@@ -21,24 +21,23 @@ constexpr int kStride = 4;
 // relative margin that keeps the SVD-free inside test on the safe side of the kernel's own test
 constexpr Real kInsideMargin = 1e-9;
 
-// The NACC inside test (docs/physics.md §2.2, case 3a) without an SVD: J = det Fe, and ||dev
-// b_hat|| is the rotation-invariant ||dev(Fe Fe^T)||. True only when the state is inside with a
-// relative margin, so the return map (which would return Fe unchanged) can be skipped; near the
-// surface and at the tips the full kernel decides.
-inline bool clearly_inside_yield_surface(const Mat3& Fe, Real alpha, Real beta, Real strength,
+// The NACC inside test (docs/physics.md §2.2, case 3a) without an SVD, on Fe's Neo-Hookean terms
+// (J = det Fe; ||dev b_hat|| is the rotation-invariant ||dev(Fe Fe^T)||). True only when the
+// state is inside with a relative margin, so the return map (which would return Fe unchanged) can
+// be skipped; near the surface and at the tips the full kernel decides.
+inline bool clearly_inside_yield_surface(const NeoHookeanTerms& fe, Real alpha, Real beta, Real strength,
                                          const NaccParams& nacc, const LameParams& lame) {
-    const Real J = Fe.determinant();
+    const Real J = fe.J;
     if (!(J > 0)) return false;
     // p0 from below (its ulps of rounding are far inside kInsideMargin): a smaller ellipse,
     // so "clearly inside" stays on the safe side
     const Real p0 = strength * nacc_p0_lower_bound(alpha, nacc.xi, lame.kappa);
     const Real p = -lame.kappa / 2 * (J * J - 1);
     if (!(p < p0 && p > -beta * p0)) return false;
-    const Mat3 b = Fe * Fe.transpose();
-    const Real mean_b = b.trace() / 3;
-    const Real dev_b2 = b.squaredNorm() - 3 * mean_b * mean_b;  // ||b - mean_b I||^2
-    const Real shear = lame.mu * cbrt_inv_sq(J);
-    const Real s2 = shear * shear * std::max(dev_b2, Real(0));
+    const SymMat3& b = fe.b;
+    const Real b_norm2 = b.xx * b.xx + b.yy * b.yy + b.zz * b.zz + 2 * (b.xy * b.xy + b.xz * b.xz + b.yz * b.yz);
+    const Real dev_b2 = b_norm2 - 3 * fe.mean_b * fe.mean_b;  // ||b - mean_b I||^2
+    const Real s2 = fe.shear * fe.shear * std::max(dev_b2, Real(0));
     const Real a = Real(1.5) * (1 + 2 * beta);
     const Real y_s = a * s2;
     const Real y_p = nacc.M * nacc.M * (p + beta * p0) * (p - p0);  // < 0 between the tips
@@ -108,7 +107,7 @@ inline void gather_velocity(const Real* win, int o0, int o1, int o2, const AxisW
 
 template <bool kTheta, bool kPore, bool kNacc>
 G2PResult g2p_impl(const SimModel& model, SimState& state, const SparseGrid& grid, const MoistureUpdate& moisture,
-                   Real dt, std::vector<std::vector<Real>>& windows) {
+                   Real dt, std::vector<std::vector<Real>>& windows, SymMat3* tau) {
     const Real* dtheta = moisture.dtheta;
     const GridGeometry& geo = grid.geo;
     const Real h = geo.h;
@@ -192,13 +191,16 @@ G2PResult g2p_impl(const SimModel& model, SimState& state, const SparseGrid& gri
             }
 
             // plasticity: NACC return mapping with the particle's strength and damage, else pure
-            // elasticity
+            // elasticity; then the Kirchhoff stress of the new Fe for the next P2G (inside the
+            // yield surface from the terms the inside test already has)
+            const NeoHookeanTerms trial_terms = neo_hookean_terms(Fe_trial, lame);
+            bool is_elastic = true;
             if constexpr (kNacc) {
                 const Real strength = has_strength ? state.strength[p] : Real(1);
                 if (has_damage) beta = damaged_cohesion(beta, state.damage[p]);
-                if (clearly_inside_yield_surface(Fe_trial, alpha, beta, strength, nacc, lame)) {
-                    state.Fe[p] = Fe_trial;  // what the return map returns inside (case 3a)
-                    state.alpha[p] = alpha;
+                is_elastic = clearly_inside_yield_surface(trial_terms, alpha, beta, strength, nacc, lame);
+                if (is_elastic) {
+                    state.alpha[p] = alpha;  // and Fe_trial is what the return map returns (case 3a)
                 } else {
                     const NaccReturn r = nacc_return_map(Fe_trial, alpha, beta, nacc, lame, false, strength);
                     if (has_damage)
@@ -206,9 +208,9 @@ G2PResult g2p_impl(const SimModel& model, SimState& state, const SparseGrid& gri
                     state.Fe[p] = r.Fe;
                     state.alpha[p] = r.alpha;
                 }
-            } else {
-                state.Fe[p] = Fe_trial;
             }
+            if (is_elastic) state.Fe[p] = Fe_trial;
+            tau[p] = neo_hookean_kirchhoff(is_elastic ? trial_terms : neo_hookean_terms(state.Fe[p], lame), lame);
 
             // advect, clamped into the domain box
             Vec3 x = state.x[p] + dt * vp;
@@ -238,19 +240,20 @@ G2PResult g2p_impl(const SimModel& model, SimState& state, const SparseGrid& gri
 
 template <bool kTheta, bool kPore>
 G2PResult dispatch_nacc(const SimModel& model, SimState& state, const SparseGrid& grid,
-                        const MoistureUpdate& moisture, Real dt, std::vector<std::vector<Real>>& windows) {
-    if (model.nacc) return g2p_impl<kTheta, kPore, true>(model, state, grid, moisture, dt, windows);
-    return g2p_impl<kTheta, kPore, false>(model, state, grid, moisture, dt, windows);
+                        const MoistureUpdate& moisture, Real dt, std::vector<std::vector<Real>>& windows,
+                        SymMat3* tau) {
+    if (model.nacc) return g2p_impl<kTheta, kPore, true>(model, state, grid, moisture, dt, windows, tau);
+    return g2p_impl<kTheta, kPore, false>(model, state, grid, moisture, dt, windows, tau);
 }
 
 }  // namespace
 
 G2PResult grid_to_particle(const SimModel& model, SimState& state, const SparseGrid& grid,
                            const MoistureUpdate& moisture, bool pore_update, Real dt,
-                           std::vector<std::vector<Real>>& windows) {
-    if (moisture.dtheta) return dispatch_nacc<true, true>(model, state, grid, moisture, dt, windows);
-    if (pore_update) return dispatch_nacc<false, true>(model, state, grid, MoistureUpdate{}, dt, windows);
-    return dispatch_nacc<false, false>(model, state, grid, MoistureUpdate{}, dt, windows);
+                           std::vector<std::vector<Real>>& windows, SymMat3* tau) {
+    if (moisture.dtheta) return dispatch_nacc<true, true>(model, state, grid, moisture, dt, windows, tau);
+    if (pore_update) return dispatch_nacc<false, true>(model, state, grid, MoistureUpdate{}, dt, windows, tau);
+    return dispatch_nacc<false, false>(model, state, grid, MoistureUpdate{}, dt, windows, tau);
 }
 
 }  // namespace mudcrack::mpm

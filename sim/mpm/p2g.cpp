@@ -21,8 +21,8 @@ constexpr int kMoistureStride = kWindowNodes + 8;
 using Lanes = Eigen::Array<Real, 4, 1>;
 
 template <bool kMoisture>
-void p2g_impl(const SimModel& model, const SimState& state, SparseGrid& grid, MoistureGrid* mg, Real dt,
-              std::vector<std::vector<Real>>& windows) {
+void p2g_impl(const SimModel& model, const SimState& state, const SymMat3* tau_cache, SparseGrid& grid,
+              MoistureGrid* mg, Real dt, std::vector<std::vector<Real>>& windows) {
     constexpr int kStride = kNodeFields;
     const GridGeometry& geo = grid.geo;
     const LameParams lame = lame_params(model.elastic);
@@ -50,7 +50,7 @@ void p2g_impl(const SimModel& model, const SimState& state, SparseGrid& grid, Mo
 
             // affine momentum with the stress folded in: A_p = m C - dt V0 (4/h^2) tau
             const Real m = mass[p];
-            const Mat3 tau = neo_hookean_kirchhoff(Fe[p], lame);
+            const Mat3 tau = (tau_cache ? tau_cache[p] : neo_hookean_kirchhoff(neo_hookean_terms(Fe[p], lame), lame)).matrix();
             const Mat3 Ah = h * (m * C[p] - (stress_scale * V0[p]) * tau);
             // (mass, momentum) at node (a,b,c): w (m, m v + A h ((a,b,c) - fx)), as 4-vectors
             // (mass first, with a zero affine part) so each node update is one SIMD add
@@ -125,12 +125,12 @@ void p2g_impl(const SimModel& model, const SimState& state, SparseGrid& grid, Mo
 
 }  // namespace
 
-void particle_to_grid(const SimModel& model, const SimState& state, SparseGrid& grid, MoistureGrid* moisture,
-                      Real dt, std::vector<std::vector<Real>>& windows) {
+void particle_to_grid(const SimModel& model, const SimState& state, const SymMat3* tau, SparseGrid& grid,
+                      MoistureGrid* moisture, Real dt, std::vector<std::vector<Real>>& windows) {
     if (moisture)
-        p2g_impl<true>(model, state, grid, moisture, dt, windows);
+        p2g_impl<true>(model, state, tau, grid, moisture, dt, windows);
     else
-        p2g_impl<false>(model, state, grid, nullptr, dt, windows);
+        p2g_impl<false>(model, state, tau, grid, nullptr, dt, windows);
 }
 
 }  // namespace mudcrack::mpm

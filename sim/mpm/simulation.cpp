@@ -70,10 +70,12 @@ SimWorkspace& ensure_workspace(const SimModel& model, SimState& state) {
 }
 
 // bins the particles and, every kResortInterval steps (and at t = 0), reorders the arrays by block
-void bin_and_sort(SimState& state, SimWorkspace& ws, bool force_sort) {
+// (and the stress cache with them, when it is current)
+void bin_and_sort(SimState& state, SimWorkspace& ws, bool force_sort, bool tau_is_current) {
     mpm::bin_particles(ws.grid, state.x, state.id);
     if ((force_sort || state.step_count % kResortInterval == 0) && !is_identity(ws.grid.order)) {
         permute_state(state, ws.grid.order, ws.permute_buffer);
+        if (tau_is_current) permute_components(ws.tau, ws.grid.order, ws.permute_buffer);
         for (size_t i = 0; i < ws.grid.order.size(); ++i) ws.grid.order[i] = static_cast<int32_t>(i);
     }
 }
@@ -220,7 +222,7 @@ SimState make_initial_state(const SimModel& model, const std::vector<Vec3>& X, c
 
     // arrays sorted by grid block from the start
     SimWorkspace& ws = ensure_workspace(model, s);
-    bin_and_sort(s, ws, true);
+    bin_and_sort(s, ws, true, false);
     return s;
 }
 
@@ -262,8 +264,13 @@ StepStats step(const SimModel& model, SimState& state, Real dt) {
     SimWorkspace& ws = ensure_workspace(model, state);
     StepStats stats;
 
+    // the stress cache is the last step's (and so Fe's) only if that step was this state's last;
+    // it stays marked stale until this step has succeeded
+    const bool tau_is_current = ws.tau_step == state.step_count && ws.tau.size() == state.size();
+    ws.tau_step = -1;
+
     // 1. bin particles into grid blocks (and every few steps reorder their arrays)
-    bin_and_sort(state, ws, false);
+    bin_and_sort(state, ws, false, tau_is_current);
 
     // which parts of the moisture model run this step
     const bool has_pores = model.moisture && model.moisture->eta > 0;
@@ -276,7 +283,7 @@ StepStats step(const SimModel& model, SimState& state, Real dt) {
         mg = &ws.moisture;
         begin_moisture_p2g(*mg, ws.grid);
     }
-    mpm::particle_to_grid(model, state, ws.grid, mg, dt, ws.windows);
+    mpm::particle_to_grid(model, state, tau_is_current ? ws.tau.data() : nullptr, ws.grid, mg, dt, ws.windows);
 
     // 2. grid velocity update, colliders and walls
     mpm::update_grid_velocity(model, ws.grid, dt);
@@ -302,8 +309,9 @@ StepStats step(const SimModel& model, SimState& state, Real dt) {
         if (model.moisture->evaporation == MoistureParams::Evaporation::Surface && model.moisture->lambda > 0)
             moisture_update.evaporating = mg->particle_is_boundary.data();
     }
+    ws.tau.resize(state.size());
     const mpm::G2PResult g2p =
-        mpm::grid_to_particle(model, state, ws.grid, moisture_update, has_pores, dt, ws.windows);
+        mpm::grid_to_particle(model, state, ws.grid, moisture_update, has_pores, dt, ws.windows, ws.tau.data());
     state.time += dt;
     state.step_count = substep;
     if (g2p.bad_slot >= 0) {
@@ -331,6 +339,7 @@ StepStats step(const SimModel& model, SimState& state, Real dt) {
     for (int64_t i = 0; i < n_nodes; ++i) stats.active_nodes += ws.grid.nodes[i * mpm::kNodeFields] > 0;
     stats.allocated_nodes = n_nodes;
     stats.max_speed = g2p.max_speed;
+    ws.tau_step = state.step_count;  // the step succeeded: tau is the new Fe's
     return stats;
 }
 

@@ -18,9 +18,11 @@ namespace mudcrack::mpm {
 /// bin_particles zeroed. With `moisture` non-null also W_i, (V theta)_i and
 /// sum_p V_p |grad w_ip|^2 (docs/physics.md §7 step 1); those fields must be zeroed
 /// (begin_moisture_p2g).
+/// tau_p is read from `tau` (per slot, the Kirchhoff stress of Fe) when non-null, else computed
+/// from Fe.
 /// @param dt time step [s]  @param windows per-thread scratch of 8 * 216 values
-void particle_to_grid(const SimModel& model, const SimState& state, SparseGrid& grid, MoistureGrid* moisture,
-                      Real dt, std::vector<std::vector<Real>>& windows);
+void particle_to_grid(const SimModel& model, const SimState& state, const SymMat3* tau, SparseGrid& grid,
+                      MoistureGrid* moisture, Real dt, std::vector<std::vector<Real>>& windows);
 
 /// Grid update v_i = (m v)_i / m_i + dt g, then the ground collider and the domain walls
 /// (docs/physics.md §1.3). Nodes without mass get v = 0.
@@ -43,9 +45,10 @@ struct MoistureUpdate {
 /// moisture.dtheta, if non-null, then the exact decay of the evaporating particles), Fe_trial =
 /// (I + dt C) Fe, J *= det(I + dt C), the pore update when `pore_update`, the NACC return mapping
 /// with the particle's strength and damage (when the model has plasticity), x += dt v clamped
-/// into the domain box. Checks every particle for a finite state.
+/// into the domain box. Checks every particle for a finite state. Writes each slot's Kirchhoff
+/// stress of its new Fe to `tau` (n entries), for the next step's P2G.
 G2PResult grid_to_particle(const SimModel& model, SimState& state, const SparseGrid& grid,
                            const MoistureUpdate& moisture, bool pore_update, Real dt,
-                           std::vector<std::vector<Real>>& windows);
+                           std::vector<std::vector<Real>>& windows, SymMat3* tau);
 
 }  // namespace mudcrack::mpm

@@ -7,13 +7,18 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstring>
 #include <random>
+#include <string>
+#include <type_traits>
 
 #include "material/material_samples.h"
 #include "mpm_test_util.h"
 #include "sim/core/parallel.h"
 #include "sim/material/nacc.h"
+#include "sim/material/neo_hookean.h"
 #include "sim/mpm/simulation.h"
+#include "sim/mpm/workspace.h"
 #include "tolerance.h"
 
 namespace mudcrack {
@@ -155,6 +160,72 @@ TEST(G2pYield, FastInsideTestAgreesWithTheReturnMap) {
     }
     EXPECT_GT(inside, 8);
     EXPECT_GT(outside, 8);
+}
+
+// a lattice whose particles start on both sides of Eq. 8's surface (the G2P's "clearly inside"
+// shortcut and the full return map both run) and squeeze under gravity
+SimState mixed_yield_state(const SimModel& model, uint64_t seed) {
+    const test::Lattice l = make_lattice(Vec3::Zero(), Vec3i(4, 4, 4), 0.05);
+    std::mt19937_64 rng(seed);
+    std::uniform_real_distribution<Real> u(0, 1);
+    std::normal_distribution<Real> g(0, 1);
+    SimState s = make_initial_state(model, l.X, l.V0);
+    for (size_t p = 0; p < s.size(); ++p) {
+        const Real log_J = 0.12 * (u(rng) - 0.5), dev = 0.08 * u(rng);
+        const Vec3 sigma = std::exp(log_J / 3) * Vec3(std::exp(dev * g(rng)), std::exp(dev * g(rng)), std::exp(dev * g(rng)));
+        s.Fe[p] = test::with_singular_values(rng, sigma);
+        s.alpha[p] = -0.3 * u(rng);
+    }
+    s.workspace.reset();  // Fe was edited: the stress cache (none yet here) must not be trusted
+    return s;
+}
+
+SimModel mixed_yield_model() {
+    SimModel model = plain_model(0.1);
+    model.nacc = NaccParams{};
+    model.nacc->beta0 = model.nacc->beta1 = 0.4;
+    model.nacc->alpha0 = -0.2;
+    return model;
+}
+
+// the stress G2P leaves for the next P2G is the Kirchhoff stress of the new Fe, bit for bit, on
+// the inside shortcut's particles and on the returned ones alike
+TEST(G2pStressCache, IsTheKirchhoffStressOfTheNewFe) {
+    const SimModel model = mixed_yield_model();
+    const LameParams lame = lame_params(model.elastic);
+    SimState s = mixed_yield_state(model, 19);
+    for (int k = 0; k < 3; ++k) {
+        step(model, s, 1e-4);
+        const SimWorkspace& ws = *s.workspace;
+        ASSERT_EQ(ws.tau_step, s.step_count);
+        ASSERT_EQ(ws.tau.size(), s.size());
+        for (size_t p = 0; p < s.size(); ++p) {
+            const Mat3 want = neo_hookean_kirchhoff(s.Fe[p], lame);
+            const Mat3 got = ws.tau[p].matrix();
+            EXPECT_EQ(0, std::memcmp(want.data(), got.data(), sizeof(Mat3))) << "step " << k << " slot " << p;
+            EXPECT_LT((want - neo_hookean_first_piola(s.Fe[p], lame) * s.Fe[p].transpose()).norm(),
+                      1e-9 * (1 + want.norm()));
+        }
+    }
+}
+
+// a run that drops its workspace before every step (so P2G computes tau from Fe, as after a
+// checkpoint load or a rollback) stays bit for bit with one that uses G2P's stress each step
+TEST(G2pStressCache, RecomputingFromFeChangesNoBit) {
+    const SimModel model = mixed_yield_model();
+    SimState cached = mixed_yield_state(model, 20), fresh = mixed_yield_state(model, 20);
+    for (int k = 0; k < 20; ++k) {
+        step(model, cached, 1e-4);
+        fresh.workspace.reset();
+        step(model, fresh, 1e-4);
+    }
+    cached.for_each_array([&](const char* name, const auto& a, ArrayPresence) {
+        fresh.for_each_array([&](const char* other, const auto& b, ArrayPresence) {
+            if constexpr (std::is_same_v<decltype(a), decltype(b)>)
+                if (std::string(name) == other)
+                    EXPECT_EQ(0, std::memcmp(a.data(), b.data(), a.size() * sizeof(a[0]))) << name;
+        });
+    });
 }
 
 }  // namespace
