@@ -235,6 +235,7 @@ SurfacePolygons measure_surface_polygons(const CoreTopology& topo, const std::ve
     const SizeSummary summary = summarize_sizes(areas);
     polygons.weighted_mean_area = summary.weighted_mean;
     polygons.largest_fraction = summary.largest_fraction;
+    if (summary.weighted_mean > 0) polygons.effective_count = summary.total / summary.weighted_mean;
     return polygons;
 }
 

@@ -90,6 +90,9 @@ struct SurfacePolygons {
     Real weighted_mean_area = 0;   // sum A^2 / sum A over polygons [m^2]; a polygon's area A is its
                                    // share of the top particles times the footprint (columns x width^2)
     Real largest_fraction = 0;     // the largest polygon's share of the counted top particles
+    Real effective_count = 0;      // (sum A)^2 / sum A^2: N for N equal polygons, while chips cut off
+                                   // along a torn band add almost nothing (a top that is one plate
+                                   // and 16 chips of 0.5 % each: 1.2); the plates a viewer sees
 };
 
 /// `is_broken` per edge of `topo` (1 = broken at the frame measured). Polygons with fewer than

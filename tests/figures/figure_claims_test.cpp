@@ -109,12 +109,13 @@ protected:
         }
         const json last = json::parse(slurp(table)).at("frames").back();
         std::printf("%-14s frame %d: curl %.2f mm, median rise %.2f mm, split %.2f %% (%.2f cells up), lifted %.2f %%, "
-                    "%lld broken edges, %d surface polygons, weighted mean polygon %.4f m^2, axis-aligned %.1f %%\n",
+                    "%lld broken edges, %d surface polygons (effective %.2f), weighted mean polygon %.4f m^2, "
+                    "axis-aligned %.1f %%\n",
                     shot.stem().c_str(), last.at("frame").get<int>(), 1e3 * last.at("curl").get<double>(),
                     1e3 * last.at("top_rise_median").get<double>(), 100 * last.at("split_fraction").get<double>(),
                     last.at("split_height_median_cells").get<double>(), 100 * last.at("lifted_fraction").get<double>(),
                     last.at("broken_edges").get<long long>(), last.at("surface_polygons").get<int>(),
-                    last.at("weighted_mean_polygon_area").get<double>(),
+                    last.at("effective_surface_polygons").get<double>(), last.at("weighted_mean_polygon_area").get<double>(),
                     100 * last.at("axis_aligned_fraction").get<double>());
         return last;
     }

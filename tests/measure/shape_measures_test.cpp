@@ -225,6 +225,7 @@ TEST_F(SurfacePolygonsTest, AnIntactTopIsOnePolygonOfTheWholeFootprint) {
     EXPECT_EQ(s.count, 1);
     EXPECT_NEAR(s.largest_fraction, 1, tol::kRoundoff);
     EXPECT_NEAR(s.weighted_mean_area, footprint(), tol::kRoundoff);
+    EXPECT_NEAR(s.effective_count, 1, tol::kRoundoff);
 }
 
 TEST_F(SurfacePolygonsTest, AThroughCrackCutsTheTopIntoTwoPolygonsOfTheirColumnShares) {
@@ -233,6 +234,21 @@ TEST_F(SurfacePolygonsTest, AThroughCrackCutsTheTopIntoTwoPolygonsOfTheirColumnS
     // 4 and 5 of the 9 particle columns on either side
     EXPECT_NEAR(s.largest_fraction, 5.0 / 9.0, tol::kRoundoff);
     EXPECT_NEAR(s.weighted_mean_area, footprint() * (16.0 + 25.0) / 81.0, tol::kRoundoff);
+    EXPECT_NEAR(s.effective_count, 81.0 / 41.0, tol::kRoundoff);  // (4 + 5)^2 / (4^2 + 5^2)
+}
+
+// a chip of two columns cut off a corner counts as a polygon, but barely as a plate: the
+// effective count is (61 + 2)^2 / (61^2 + 2^2) of the 63 columns
+TEST_F(SurfacePolygonsTest, AChipCountsAsAPolygonButHardlyAsAPlate) {
+    std::vector<uint8_t> broken(m_topo.n_edges(), 0);
+    const double x = 0.5 * kH + 0.5 * kH, z = 0.5 * kH + 1.5 * kH;  // around columns (0, 0) and (0, 1)
+    const auto in_chip = [&](const Vec3& p) { return p.x() < x && p.z() < z; };
+    for (int32_t e = 0; e < m_topo.n_edges(); ++e)
+        if (in_chip(m_topo.X[m_topo.edges[e][0]]) != in_chip(m_topo.X[m_topo.edges[e][1]])) broken[e] = 1;
+    const SurfacePolygons s = measure_surface_polygons(m_topo, broken, m_columns, 1);
+    EXPECT_EQ(s.count, 2);
+    EXPECT_NEAR(s.largest_fraction, 61.0 / 63.0, tol::kRoundoff);
+    EXPECT_NEAR(s.effective_count, 63.0 * 63.0 / (61.0 * 61.0 + 4.0), tol::kRoundoff);
 }
 
 TEST_F(SurfacePolygonsTest, ACrackThatStopsBelowTheTopLayerDoesNotCutTheSurface) {

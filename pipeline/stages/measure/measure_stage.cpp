@@ -47,6 +47,7 @@ json fragment_fields(const FragmentSizes& sizes, const SurfacePolygons& polygons
             {"surface_polygons", polygons.count},
             {"weighted_mean_polygon_area", polygons.weighted_mean_area},
             {"largest_polygon_fraction", polygons.largest_fraction},
+            {"effective_surface_polygons", polygons.effective_count},
             {"crack_points", network.crack_points},
             {"oriented_crack_points", network.oriented_points},
             {"axis_aligned_fraction", network.axis_aligned_fraction},
@@ -118,9 +119,9 @@ int run_measure_stage(const StageOptions& options, const std::string& json_file)
     if (!options.quiet) {
         std::printf("%s: %s, %zu particles in %d columns of %.4g m\n", kProgram, shot.name.c_str(), mesh.X.size(),
                     columns.n_columns(), spacing);
-        std::printf("%6s %8s %11s %9s %9s %8s %10s %8s %10s %9s %13s %8s %6s %6s %8s %8s\n", "frame", "time[s]",
+        std::printf("%6s %8s %11s %9s %9s %8s %10s %8s %10s %9s %7s %13s %8s %6s %6s %8s %8s\n", "frame", "time[s]",
                     "rise50[mm]", "curl[mm]", "split[%]", "splitH", "lifted[%]", "broken", "fragments", "polygons",
-                    "polygon[m^2]", "axis[%]", "T[%]", "Y[%]", "str[%]", "comp[%]");
+                    "plates", "polygon[m^2]", "axis[%]", "T[%]", "Y[%]", "str[%]", "comp[%]");
     }
     json table = json::array();
     for (int n = first; n <= last; ++n) {
@@ -167,11 +168,11 @@ int run_measure_stage(const StageOptions& options, const std::string& json_file)
                         1e3 * shape.curl, 100 * shape.split_fraction, shape.split_height_median,
                         100 * shape.lifted_fraction);
             if (topo)
-                std::printf(" %8lld %10d %9d %13.4g %8.1f %6.1f %6.1f", static_cast<long long>(broken), sizes.count,
-                            polygons.count, polygons.weighted_mean_area, 100 * network.axis_aligned_fraction,
-                            100 * network.t_fraction, 100 * network.y_fraction);
+                std::printf(" %8lld %10d %9d %7.2f %13.4g %8.1f %6.1f %6.1f", static_cast<long long>(broken),
+                            sizes.count, polygons.count, polygons.effective_count, polygons.weighted_mean_area,
+                            100 * network.axis_aligned_fraction, 100 * network.t_fraction, 100 * network.y_fraction);
             else
-                std::printf(" %8s %10s %9s %13s %8s %6s %6s", "-", "-", "-", "-", "-", "-", "-");
+                std::printf(" %8s %10s %9s %7s %13s %8s %6s %6s", "-", "-", "-", "-", "-", "-", "-", "-");
             if (halves)
                 std::printf(" %8.1f %8.1f\n", 100 * halves->stretched_fraction, 100 * halves->compressed_fraction);
             else
