@@ -34,9 +34,7 @@ inline bool clearly_inside_yield_surface(const NeoHookeanTerms& fe, Real alpha, 
     const Real p0 = strength * nacc_p0_lower_bound(alpha, nacc.xi, lame.kappa);
     const Real p = -lame.kappa / 2 * (J * J - 1);
     if (!(p < p0 && p > -beta * p0)) return false;
-    const SymMat3& b = fe.b;
-    const Real b_norm2 = b.xx * b.xx + b.yy * b.yy + b.zz * b.zz + 2 * (b.xy * b.xy + b.xz * b.xz + b.yz * b.yz);
-    const Real dev_b2 = b_norm2 - 3 * fe.mean_b * fe.mean_b;  // ||b - mean_b I||^2
+    const Real dev_b2 = fe.b.squared_norm() - 3 * fe.mean_b * fe.mean_b;  // ||b - mean_b I||^2
     const Real s2 = fe.shear * fe.shear * std::max(dev_b2, Real(0));
     const Real a = Real(1.5) * (1 + 2 * beta);
     const Real y_s = a * s2;

@@ -6,6 +6,7 @@
 
 #include <Eigen/Core>
 
+#include "sim/core/parallel.h"
 #include "sim/material/neo_hookean.h"
 #include "sim/mpm/bspline.h"
 #include "sim/mpm/transfer.h"
@@ -21,17 +22,15 @@ constexpr int kMoistureStride = kWindowNodes + 8;
 using Lanes = Eigen::Array<Real, 4, 1>;
 
 template <bool kMoisture>
-void p2g_impl(const SimModel& model, const SimState& state, const SymMat3* tau_cache, SparseGrid& grid,
+void p2g_impl(const SimState& state, const SymMat3* kirchhoff, SparseGrid& grid,
               MoistureGrid* mg, Real dt, std::vector<std::vector<Real>>& windows) {
     constexpr int kStride = kNodeFields;
     const GridGeometry& geo = grid.geo;
-    const LameParams lame = lame_params(model.elastic);
     const Real h = geo.h;
     const Real stress_scale = dt * kInertiaInvScale * geo.inv_h * geo.inv_h;
     const Vec3* x = state.x.data();
     const Vec3* v = state.v.data();
     const Mat3* C = state.C.data();
-    const Mat3* Fe = state.Fe.data();
     const Real* mass = state.mass.data();
     const Real* V0 = state.V0.data();
     const Real* J = state.J.data();
@@ -50,7 +49,7 @@ void p2g_impl(const SimModel& model, const SimState& state, const SymMat3* tau_c
 
             // affine momentum with the stress folded in: A_p = m C - dt V0 (4/h^2) tau
             const Real m = mass[p];
-            const Mat3 tau = (tau_cache ? tau_cache[p] : neo_hookean_kirchhoff(neo_hookean_terms(Fe[p], lame), lame)).matrix();
+            const Mat3 tau = kirchhoff[p].matrix();
             const Mat3 Ah = h * (m * C[p] - (stress_scale * V0[p]) * tau);
             // (mass, momentum) at node (a,b,c): w (m, m v + A h ((a,b,c) - fx)), as 4-vectors
             // (mass first, with a zero affine part) so each node update is one SIMD add
@@ -125,12 +124,19 @@ void p2g_impl(const SimModel& model, const SimState& state, const SymMat3* tau_c
 
 }  // namespace
 
-void particle_to_grid(const SimModel& model, const SimState& state, const SymMat3* tau, SparseGrid& grid,
+void kirchhoff_stresses(const SimModel& model, const SimState& state, std::vector<SymMat3>& tau) {
+    const LameParams lame = lame_params(model.elastic);
+    tau.resize(state.size());
+    parallel_for(static_cast<int64_t>(state.size()),
+                 [&](int64_t p) { tau[p] = neo_hookean_kirchhoff(neo_hookean_terms(state.Fe[p], lame), lame); });
+}
+
+void particle_to_grid(const SimState& state, const SymMat3* tau, SparseGrid& grid,
                       MoistureGrid* moisture, Real dt, std::vector<std::vector<Real>>& windows) {
     if (moisture)
-        p2g_impl<true>(model, state, tau, grid, moisture, dt, windows);
+        p2g_impl<true>(state, tau, grid, moisture, dt, windows);
     else
-        p2g_impl<false>(model, state, tau, grid, nullptr, dt, windows);
+        p2g_impl<false>(state, tau, grid, nullptr, dt, windows);
 }
 
 }  // namespace mudcrack::mpm

@@ -283,7 +283,8 @@ StepStats step(const SimModel& model, SimState& state, Real dt) {
         mg = &ws.moisture;
         begin_moisture_p2g(*mg, ws.grid);
     }
-    mpm::particle_to_grid(model, state, tau_is_current ? ws.tau.data() : nullptr, ws.grid, mg, dt, ws.windows);
+    if (!tau_is_current) mpm::kirchhoff_stresses(model, state, ws.tau);
+    mpm::particle_to_grid(state, ws.tau.data(), ws.grid, mg, dt, ws.windows);
 
     // 2. grid velocity update, colliders and walls
     mpm::update_grid_velocity(model, ws.grid, dt);
@@ -309,7 +310,6 @@ StepStats step(const SimModel& model, SimState& state, Real dt) {
         if (model.moisture->evaporation == MoistureParams::Evaporation::Surface && model.moisture->lambda > 0)
             moisture_update.evaporating = mg->particle_is_boundary.data();
     }
-    ws.tau.resize(state.size());
     const mpm::G2PResult g2p =
         mpm::grid_to_particle(model, state, ws.grid, moisture_update, has_pores, dt, ws.windows, ws.tau.data());
     state.time += dt;

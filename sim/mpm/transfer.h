@@ -18,11 +18,15 @@ namespace mudcrack::mpm {
 /// bin_particles zeroed. With `moisture` non-null also W_i, (V theta)_i and
 /// sum_p V_p |grad w_ip|^2 (docs/physics.md §7 step 1); those fields must be zeroed
 /// (begin_moisture_p2g).
-/// tau_p is read from `tau` (per slot, the Kirchhoff stress of Fe) when non-null, else computed
-/// from Fe.
+/// tau_p is read from `tau` (per slot, the Kirchhoff stress of Fe: what the last G2P left, or
+/// kirchhoff_stresses).
 /// @param dt time step [s]  @param windows per-thread scratch of 8 * 216 values
-void particle_to_grid(const SimModel& model, const SimState& state, const SymMat3* tau, SparseGrid& grid,
-                      MoistureGrid* moisture, Real dt, std::vector<std::vector<Real>>& windows);
+void particle_to_grid(const SimState& state, const SymMat3* tau, SparseGrid& grid, MoistureGrid* moisture,
+                      Real dt, std::vector<std::vector<Real>>& windows);
+
+/// Each slot's Kirchhoff stress of its Fe, into `tau` (resized to n): P2G's input when the last
+/// G2P's is not at hand (the first step, after a checkpoint load, a rollback or a failed step).
+void kirchhoff_stresses(const SimModel& model, const SimState& state, std::vector<SymMat3>& tau);
 
 /// Grid update v_i = (m v)_i / m_i + dt g, then the ground collider and the domain walls
 /// (docs/physics.md §1.3). Nodes without mass get v = 0.

@@ -9,7 +9,6 @@
 #include "sim/core/stats.h"
 #include "sim/moisture/moisture_solver.h"
 #include "sim/mpm/sparse_grid.h"
-#include "sim/mpm/transfer.h"
 
 namespace mudcrack {
 
@@ -22,7 +21,8 @@ struct SimWorkspace {
     // (docs/physics.md §7): G2P has J, b and J^(-2/3) in hand for the inside test, so P2G need
     // not read Fe and recompute them. Current only while tau_step == SimState::step_count; a
     // step sets tau_step = -1 before it touches the state and to its own count once it has
-    // succeeded, so a failed step, a rollback or a fresh copy recomputes from Fe (same bits).
+    // succeeded, so after a failed step, a rollback or in a fresh copy the step recomputes it
+    // from Fe first (mpm::kirchhoff_stresses, same bits).
     // Code that edits SimState::Fe between steps must reset the workspace.
     std::vector<SymMat3> tau;
     int64_t tau_step = -1;
