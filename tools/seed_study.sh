@@ -24,6 +24,9 @@ shift
 SEEDS=("$@")
 [[ ${#SEEDS[@]} -gt 0 ]] || SEEDS=(1 2)
 [[ -f $SHOT ]] || { echo "seed_study.sh: $SHOT: no such shot file" >&2; exit 1; }
+for seed in "${SEEDS[@]}"; do
+    [[ $seed =~ ^[0-9]+$ ]] || { echo "seed_study.sh: seed '$seed' is not a non-negative integer (/init/seed)" >&2; exit 1; }
+done
 for tool in mc-shot mc-init mc-sim mc-surface mc-measure; do
     [[ -x $BUILD/bin/$tool ]] || { echo "seed_study.sh: $BUILD/bin/$tool is not built: run make build" >&2; exit 1; }
 done
@@ -64,8 +67,7 @@ printf '%s\n' "${rows[@]}" | awk -F'\t' '
     NR == 1 { pmin = pmax = $1; amin = amax = $4 }
     { if ($1 < pmin) pmin = $1; if ($1 > pmax) pmax = $1; if ($4 < amin) amin = $4; if ($4 > amax) amax = $4 }
     END {
-        ratio = pmin > 0 ? pmax / pmin : "inf"
         printf "spread: polygon counts %d-%d (ratio %s; same statistics: at most 1.5), axis-aligned %.1f-%.1f %% (%.1f points; at most 10)\n",
-               pmin, pmax, (pmin > 0 ? sprintf("%.2f", ratio) : "inf"), 100 * amin, 100 * amax, 100 * (amax - amin)
+               pmin, pmax, (pmin > 0 ? sprintf("%.2f", pmax / pmin) : "inf"), 100 * amin, 100 * amax, 100 * (amax - amin)
     }'
 [[ ${KEEP:-0} != 1 ]] || echo "outputs kept in $WORK"
