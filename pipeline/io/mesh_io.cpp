@@ -20,7 +20,11 @@
 #include <system_error>
 
 #include "pipeline/io/atomic_output.h"
+#include "pipeline/io/fragment_split.h"
+#include "pipeline/io/glb_writer.h"
 #include "pipeline/io/ply_lists.h"
+#include "pipeline/io/tri_mesh_check.h"
+#include "pipeline/io/vertex_color.h"
 #include "sim/core/error.h"
 
 namespace fs = std::filesystem;
@@ -109,11 +113,16 @@ void append_node(const aiScene& scene, const aiNode& node, const aiMatrix4x4& pa
     }
 }
 
+std::string lowercase_extension(const fs::path& path) {
+    std::string ext = path.extension().string();
+    std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return char(std::tolower(c)); });
+    return ext;
+}
+
 // OBJ and OFF are text. assimp 5.2.5 stops reading at a NUL byte and then aborts on its own
 // assertion (a face count that no longer matches; found by tests/fuzz), so one is refused here.
 void check_text_mesh(const fs::path& path) {
-    std::string ext = path.extension().string();
-    std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return char(std::tolower(c)); });
+    const std::string ext = lowercase_extension(path);
     if (ext != ".obj" && ext != ".off") return;
     std::ifstream is(path, std::ios::binary);
     char buffer[65536];
@@ -132,8 +141,7 @@ void check_text_mesh(const fs::path& path) {
 // of 10^28 asked for 14 GB): counts are checked against the file's size first, every vertex and
 // face taking at least one byte.
 void check_off_header(const fs::path& path) {
-    std::string ext = path.extension().string();
-    std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return char(std::tolower(c)); });
+    const std::string ext = lowercase_extension(path);
     if (ext != ".off") return;
     std::ifstream is(path, std::ios::binary);
     std::string word;
@@ -315,10 +323,10 @@ namespace {
 
 struct MeshFormat {
     const char* name;       // what the shot and the CLI say
-    const char* assimp_id;  // Assimp::Exporter format id
+    const char* assimp_id;  // Assimp::Exporter format id; nullptr: glb_writer
 };
 constexpr MeshFormat kMeshFormats[] = {
-    {"glb", "glb2"}, {"obj", "obj"}, {"ply", "plyb"}, {"dae", "collada"}};
+    {"glb", nullptr}, {"obj", "obj"}, {"ply", "plyb"}, {"dae", "collada"}};
 
 const MeshFormat* find_format(const std::string& format) {
     for (const MeshFormat& f : kMeshFormats)
@@ -326,114 +334,55 @@ const MeshFormat* find_format(const std::string& format) {
     return nullptr;
 }
 
-// vertex color g channel: the NACC hardening state alpha (unbounded, either sign) through the
-// logistic function, so g in (0,1), g = 0.5 at alpha = 0, and alpha = log(g / (1 - g)) inverts it
-float alpha_to_color(float alpha) { return float(1.0 / (1.0 + std::exp(-double(alpha)))); }
-float color_to_alpha(float g) {
-    const double clamped = std::clamp(double(g), 1e-7, 1.0 - 1e-7);
-    return float(std::log(clamped / (1.0 - clamped)));
-}
-
-/// A TriMesh whose vertices are never shared by faces of different fragments, so the per-face
-/// fragment id can travel as a per-vertex attribute (UV channel 1).
-TriMesh split_vertices_by_fragment(const TriMesh& mesh) {
-    if (mesh.face_fragment.empty()) return mesh;
-    TriMesh out = mesh;
-    std::vector<int32_t> fragment_of_vertex(mesh.positions.size(), INT32_MIN);
-    std::map<std::pair<int32_t, int32_t>, int32_t> copy_of;  // (vertex, fragment) -> new vertex
-    auto append_copy = [&](int32_t v) {
-        out.positions.push_back(mesh.positions[v]);
-        if (!mesh.normals.empty()) out.normals.push_back(mesh.normals[v]);
-        if (!mesh.uvs.empty()) out.uvs.push_back(mesh.uvs[v]);
-        if (!mesh.saturation.empty()) out.saturation.push_back(mesh.saturation[v]);
-        if (!mesh.alpha.empty()) out.alpha.push_back(mesh.alpha[v]);
-        return int32_t(out.positions.size() - 1);
-    };
-    for (size_t f = 0; f < mesh.faces.size(); ++f) {
-        const int32_t fragment = mesh.face_fragment[f];
-        for (int32_t& v : out.faces[f]) {
-            if (fragment_of_vertex[v] == INT32_MIN) fragment_of_vertex[v] = fragment;
-            if (fragment_of_vertex[v] == fragment) continue;
-            auto [it, inserted] = copy_of.emplace(std::make_pair(v, fragment), 0);
-            if (inserted) it->second = append_copy(v);
-            v = it->second;
-        }
-    }
-    return out;
-}
-
 aiVector3D to_ai(const Vec3f& v) { return aiVector3D(v.x(), v.y(), v.z()); }
 
-aiMesh* make_ai_mesh(const fs::path& path, const TriMesh& in, unsigned material) {
-    const TriMesh mesh = split_vertices_by_fragment(in);
-    const size_t n = mesh.positions.size();
-    auto check = [&](size_t size, const char* what) {
-        if (size != 0 && size != n) {
-            throw RuntimeError(path.string() + ": mesh '" + in.name + "' has " + std::to_string(size) + " " +
-                               what + " for " + std::to_string(n) + " vertices");
-        }
-    };
-    check(mesh.normals.size(), "normals");
-    check(mesh.uvs.size(), "uvs");
-    check(mesh.saturation.size(), "saturation values");
-    check(mesh.alpha.size(), "alpha values");
-    if (!in.face_fragment.empty() && in.face_fragment.size() != in.faces.size()) {
-        throw RuntimeError(path.string() + ": mesh '" + in.name + "' has " + std::to_string(in.face_fragment.size()) +
-                           " fragment ids for " + std::to_string(in.faces.size()) + " faces");
-    }
+aiMesh* make_ai_mesh(const fs::path& path, const TriMesh& mesh, unsigned material) {
+    check_tri_mesh(path, mesh);
+    const FragmentSplit split(mesh);
+    const size_t n = size_t(split.vertex_count());
     auto* m = new aiMesh;
-    m->mName = in.name;
+    m->mName = mesh.name;
     m->mMaterialIndex = material;
     m->mPrimitiveTypes = aiPrimitiveType_TRIANGLE;
     m->mNumVertices = unsigned(n);
     m->mVertices = new aiVector3D[n];
-    for (size_t i = 0; i < n; ++i) m->mVertices[i] = to_ai(mesh.positions[i]);
+    for (size_t i = 0; i < n; ++i) m->mVertices[i] = to_ai(mesh.positions[split.source(i)]);
     if (!mesh.normals.empty()) {
         m->mNormals = new aiVector3D[n];
-        for (size_t i = 0; i < n; ++i) m->mNormals[i] = to_ai(mesh.normals[i]);
+        for (size_t i = 0; i < n; ++i) m->mNormals[i] = to_ai(mesh.normals[split.source(i)]);
     }
-    if (!mesh.uvs.empty()) {
+    // assimp's exporters stop at the first empty UV channel: a fragment channel gets a channel 0
+    // of zeros when there are no UVs
+    if (!mesh.uvs.empty() || split.has_fragments()) {
         m->mNumUVComponents[0] = 2;
         m->mTextureCoords[0] = new aiVector3D[n];
-        for (size_t i = 0; i < n; ++i) m->mTextureCoords[0][i] = aiVector3D(mesh.uvs[i].x(), mesh.uvs[i].y(), 0);
+        for (size_t i = 0; i < n; ++i) {
+            const Vec2f uv = mesh.uvs.empty() ? Vec2f::Zero() : mesh.uvs[split.source(i)];
+            m->mTextureCoords[0][i] = aiVector3D(uv.x(), uv.y(), 0);
+        }
     }
     if (!mesh.saturation.empty() || !mesh.alpha.empty()) {
         m->mColors[0] = new aiColor4D[n];
         for (size_t i = 0; i < n; ++i) {
-            const float s = mesh.saturation.empty() ? 0.f : mesh.saturation[i];
-            const float g = mesh.alpha.empty() ? alpha_to_color(0.f) : alpha_to_color(mesh.alpha[i]);
+            const int32_t v = split.source(i);
+            const float s = mesh.saturation.empty() ? 0.f : mesh.saturation[v];
+            const float g = alpha_to_color(mesh.alpha.empty() ? 0.f : mesh.alpha[v]);
             m->mColors[0][i] = aiColor4D(s, g, 0.f, 1.f);
         }
     }
-    if (!mesh.face_fragment.empty()) {
-        // assimp's exporters stop at the first empty UV channel: give channel 0 zeros
-        if (m->mTextureCoords[0] == nullptr) {
-            m->mNumUVComponents[0] = 2;
-            m->mTextureCoords[0] = new aiVector3D[n];
-            for (size_t i = 0; i < n; ++i) m->mTextureCoords[0][i] = aiVector3D(0, 0, 0);
-        }
+    if (split.has_fragments()) {
         // UV channel 1 = (fragment id, 0): exact in float for ids below 2^24
         m->mNumUVComponents[1] = 2;
         m->mTextureCoords[1] = new aiVector3D[n];
-        for (size_t i = 0; i < n; ++i) m->mTextureCoords[1][i] = aiVector3D(0, 0, 0);
-        for (size_t f = 0; f < mesh.faces.size(); ++f)
-            for (int32_t v : mesh.faces[f]) m->mTextureCoords[1][v].x = float(mesh.face_fragment[f]);
+        for (size_t i = 0; i < n; ++i) m->mTextureCoords[1][i] = aiVector3D(float(split.fragment(i)), 0, 0);
     }
     m->mNumFaces = unsigned(mesh.faces.size());
     m->mFaces = new aiFace[mesh.faces.size()];
     for (size_t f = 0; f < mesh.faces.size(); ++f) {
+        const Tri t = split.face(mesh, f);
         aiFace& face = m->mFaces[f];
         face.mNumIndices = 3;
-        face.mIndices = new unsigned[3];
-        for (int c = 0; c < 3; ++c) {
-            const int32_t v = mesh.faces[f][c];
-            if (v < 0 || size_t(v) >= n) {
-                delete m;
-                throw RuntimeError(path.string() + ": mesh '" + in.name + "' face " + std::to_string(f) +
-                                   " references vertex " + std::to_string(v) + " of " + std::to_string(n));
-            }
-            face.mIndices[c] = unsigned(v);
-        }
+        face.mIndices = new unsigned[3]{unsigned(t[0]), unsigned(t[1]), unsigned(t[2])};
     }
     return m;
 }
@@ -509,6 +458,7 @@ std::string mesh_format_refusal(const std::string& format) {
 void export_meshes(const fs::path& path, const std::vector<TriMesh>& meshes, const std::string& format) {
     const MeshFormat* f = find_format(format);
     if (f == nullptr) throw InputError(path.string() + ": " + mesh_format_refusal(format));
+    if (f->assimp_id == nullptr) return write_glb(path, meshes);
     // assimp 5.2.5's PLY exporter declares vertex colours as uchar but writes four floats, which
     // corrupts every face after them (no reader, assimp included, gets the faces back): PLY files
     // carry no colours
@@ -555,7 +505,10 @@ std::vector<TriMesh> import_meshes(const fs::path& path) {
     if (!fs::is_regular_file(path, ec)) throw InputError(path.string() + ": mesh file not found");
     // assimp's OBJ, PLY and COLLADA readers make one vertex per face corner; corners are joined
     // back below by exact equality of every attribute (assimp 5.2.5's own join compares only
-    // position, normal and UV 0, which would merge vertices told apart by colour or fragment)
+    // position, normal and UV 0, which would merge vertices told apart by colour or fragment).
+    // glTF stores indexed vertices, which assimp keeps: a glb comes back vertex for vertex.
+    const std::string ext = lowercase_extension(path);
+    const bool join_corners = ext != ".glb" && ext != ".gltf";
     Assimp::Importer importer;
     const aiScene* scene = importer.ReadFile(path.string(), aiProcess_Triangulate);
     if (scene == nullptr || scene->mRootNode == nullptr) {
@@ -601,9 +554,12 @@ std::vector<TriMesh> import_meshes(const fs::path& path) {
             TriMesh out;
             out.name = corners.name;
             for (unsigned v = 0; v < m.mNumVertices; ++v) {
-                auto [it, inserted] = joined.emplace(keys[v], int32_t(out.positions.size()));
-                index_of[v] = it->second;
-                if (!inserted) continue;
+                index_of[v] = int32_t(out.positions.size());
+                if (join_corners) {
+                    auto [it, inserted] = joined.emplace(keys[v], index_of[v]);
+                    index_of[v] = it->second;
+                    if (!inserted) continue;
+                }
                 out.positions.push_back(corners.positions[v]);
                 if (!corners.normals.empty()) out.normals.push_back(corners.normals[v]);
                 if (!corners.uvs.empty()) out.uvs.push_back(corners.uvs[v]);

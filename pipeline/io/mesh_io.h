@@ -32,13 +32,14 @@ std::string mesh_format_refusal(const std::string& format);
 /// Writes the meshes as one scene (one node/object per mesh, named by TriMesh::name), with
 /// normals, UV channel 0, and saturation/alpha as vertex colors (r = saturation, g = alpha
 /// remapped, b = 0) when present. Atomic. Throws InputError for an unsupported format.
-/// @note g = 1 / (1 + exp(-alpha)) (alpha = log(g / (1 - g)) inverts it). Fragment ids travel in
-/// UV channel 1 as (fragment id, 0); vertices shared by faces of different fragments are
-/// duplicated first. ply holds one merged mesh without colours (assimp 5.2.5's PLY exporter
-/// corrupts files with colours); obj carries no fragment ids; glb: assimp's glTF exporter joins
-/// vertices equal in position, normal and UV 0, so such vertices lose per-vertex colour and
-/// fragment differences. obj gets `o <name>` lines for Blender 3.4; dae timestamps are fixed to
-/// 1970-01-01 so identical meshes give identical bytes.
+/// @note g = 1 / (1 + exp(-alpha)) (vertex_color.h). Fragment ids travel in UV channel 1 as
+/// (fragment id, 0); vertices shared by faces of different fragments are split first
+/// (fragment_split.h). glb is written by glb_writer.h, streamed, in memory bounded by a small
+/// buffer; obj, ply and dae go through assimp's exporters, which hold the whole file and a
+/// copy of the scene in memory. ply holds one merged mesh without colours (assimp 5.2.5's PLY
+/// exporter corrupts files with colours); obj carries no fragment ids. obj gets `o <name>`
+/// lines for Blender 3.4; dae timestamps are fixed to 1970-01-01 so identical meshes give
+/// identical bytes.
 void export_meshes(const std::filesystem::path& path, const std::vector<TriMesh>& meshes,
                    const std::string& format);
 

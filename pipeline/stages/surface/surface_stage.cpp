@@ -135,6 +135,14 @@ json bounds_json(const std::vector<const TriMesh*>& meshes) {
     return {{"min", {b.min.x(), b.min.y(), b.min.z()}}, {"max", {b.max.x(), b.max.y(), b.max.z()}}};
 }
 
+/// The mesh as a one-mesh export list, leaving `mesh` empty (its memory goes with the list).
+std::vector<TriMesh> take_mesh(TriMesh& mesh) {
+    std::vector<TriMesh> list;
+    list.push_back(std::move(mesh));
+    mesh = TriMesh();
+    return list;
+}
+
 struct FrameResult {
     json entry;
     double surfacing_seconds = 0;  // surface_frame only (no file I/O)
@@ -228,11 +236,10 @@ int run_surface_stage(const StageOptions& options, const SurfaceStageOptions& su
         const int n = first + i;
         const ParticleFrame frame = load_frame(sim_dir, n, topo);
         WallTimer t;
-        const SurfacedFrame s = surface_frame(topo, frame, history->first_break, params);
+        SurfacedFrame s = surface_frame(topo, frame, history->first_break, params);
         results[i].surfacing_seconds = t.seconds();
         results[i].triangles = int64_t(s.boundary.faces.size() + s.crack.faces.size());
         const fs::path boundary_file = frame_path(dir, "boundary", n, params.format);
-        export_meshes(boundary_file, {s.boundary}, params.format);
         json entry = {{"frame", n},
                       {"boundary", {{"file", boundary_file.filename().string()},
                                     {"vertices", s.boundary.positions.size()},
@@ -242,16 +249,20 @@ int run_surface_stage(const StageOptions& options, const SurfaceStageOptions& su
                       {"culled_fragments", s.culled_fragments},
                       {"surfacing_seconds", results[i].surfacing_seconds}};
         entry["bounds"] = params.cracks ? bounds_json({&s.boundary, &s.crack}) : bounds_json({&s.boundary});
+        // each mesh moves into its export and is freed after it: a frame's peak memory holds
+        // one copy of its meshes
+        export_meshes(boundary_file, take_mesh(s.boundary), params.format);
         if (params.cracks) {
-            // a frame without cracks gets no crack file: assimp writes an empty mesh that no
-            // reader (assimp included) accepts; the manifest records "file": null
+            // a frame without cracks gets no crack file: a glTF mesh cannot be empty, and
+            // assimp writes an empty mesh that no reader (assimp included) accepts; the manifest
+            // records "file": null
             const fs::path crack_file = frame_path(dir, "crack", n, params.format);
             std::error_code ec;
             fs::remove(crack_file, ec);  // a stale file of an earlier run
-            if (!s.crack.faces.empty()) export_meshes(crack_file, {s.crack}, params.format);
             entry["crack"] = {{"file", s.crack.faces.empty() ? json(nullptr) : json(crack_file.filename().string())},
                               {"vertices", s.crack.positions.size()},
                               {"faces", s.crack.faces.size()}};
+            if (!s.crack.faces.empty()) export_meshes(crack_file, take_mesh(s.crack), params.format);
         }
         results[i].entry = std::move(entry);
     });

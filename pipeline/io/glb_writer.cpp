@@ -1,0 +1,194 @@
+#include "pipeline/io/glb_writer.h"
+
+#include <array>
+#include <cerrno>
+#include <cstdint>
+#include <cstring>
+#include <fstream>
+#include <functional>
+#include <limits>
+#include <string>
+
+#include <nlohmann/json.hpp>
+
+#include "pipeline/io/atomic_output.h"
+#include "pipeline/io/fragment_split.h"
+#include "pipeline/io/tri_mesh_check.h"
+#include "pipeline/io/vertex_color.h"
+#include "sim/core/error.h"
+
+namespace fs = std::filesystem;
+using nlohmann::json;
+
+namespace mudcrack {
+namespace {
+
+constexpr uint32_t kGlbMagic = 0x46546C67;   // "glTF"
+constexpr uint32_t kChunkJson = 0x4E4F534A;  // "JSON"
+constexpr uint32_t kChunkBin = 0x004E4942;   // "BIN\0"
+constexpr int kFloat = 5126, kUnsignedInt = 5125;
+constexpr int kArrayBuffer = 34962, kElementArrayBuffer = 34963;
+
+/// One typed array of the binary chunk: `count` elements of `width` 4-byte components, each
+/// element produced by fill(i, out) when the chunk is streamed.
+struct Stream {
+    int64_t count = 0;
+    int width = 0;
+    std::function<void(int64_t i, float* out)> fill;  // float arrays
+    std::function<void(int64_t i, uint32_t* out)> fill_index;  // the index array (one element per face)
+    int64_t bytes() const { return count * width * 4; }
+};
+
+void put_u32(std::ostream& os, uint32_t v) {
+    const unsigned char b[4] = {uint8_t(v), uint8_t(v >> 8), uint8_t(v >> 16), uint8_t(v >> 24)};
+    os.write(reinterpret_cast<const char*>(b), 4);
+}
+
+/// Writes the stream's elements as little-endian 4-byte values through a fixed buffer.
+void write_stream(std::ostream& os, const Stream& s) {
+    constexpr int64_t kBufferWords = 1 << 14;
+    std::array<uint32_t, kBufferWords> buffer;
+    const int64_t per_chunk = kBufferWords / s.width;
+    for (int64_t begin = 0; begin < s.count; begin += per_chunk) {
+        const int64_t end = std::min(s.count, begin + per_chunk);
+        uint32_t* out = buffer.data();
+        for (int64_t i = begin; i < end; ++i, out += s.width) {
+            if (s.fill_index)
+                s.fill_index(i, out);
+            else
+                s.fill(i, reinterpret_cast<float*>(out));  // x86/ARM are little-endian, as glb is
+        }
+        os.write(reinterpret_cast<const char*>(buffer.data()), std::streamsize((end - begin) * s.width * 4));
+    }
+}
+
+}  // namespace
+
+void write_glb(const fs::path& path, const std::vector<TriMesh>& meshes) {
+    static_assert(sizeof(float) == 4 && std::numeric_limits<float>::is_iec559, "glb floats are IEEE 754 binary32");
+    for (const TriMesh& m : meshes) check_tri_mesh(path, m);
+
+    std::vector<FragmentSplit> splits;
+    splits.reserve(meshes.size());
+    for (const TriMesh& m : meshes) splits.emplace_back(m);
+
+    json accessors = json::array(), views = json::array(), gltf_meshes = json::array(), materials = json::array();
+    json nodes = json::array({{{"name", "root"}, {"children", json::array()}}});
+    std::vector<Stream> streams;
+    int64_t offset = 0;
+    // one accessor over one tightly packed buffer view per array
+    auto add_array = [&](Stream s, const char* type, int component, int target, json extra = json::object()) {
+        json view = {{"buffer", 0}, {"byteOffset", offset}, {"byteLength", s.bytes()}, {"target", target}};
+        // a stream element may hold several accessor elements (a face is three SCALAR indices)
+        const int per_accessor_element = std::string(type) == "SCALAR" ? 1 : type[3] - '0';
+        json accessor = {{"bufferView", views.size()},
+                         {"componentType", component},
+                         {"count", s.count * s.width / per_accessor_element},
+                         {"type", type}};
+        accessor.update(extra);
+        offset += s.bytes();
+        views.push_back(view);
+        accessors.push_back(accessor);
+        streams.push_back(std::move(s));
+        return accessors.size() - 1;
+    };
+
+    for (size_t k = 0; k < meshes.size(); ++k) {
+        const TriMesh& m = meshes[k];
+        const FragmentSplit& split = splits[k];
+        json node = {{"name", m.name}};
+        nodes[0]["children"].push_back(nodes.size());
+        if (m.faces.empty()) {  // glTF has no empty mesh: the node alone keeps the name
+            nodes.push_back(node);
+            continue;
+        }
+        const int64_t n = split.vertex_count();
+        json attributes;
+        Vec3f lo = Vec3f::Constant(std::numeric_limits<float>::max()), hi = -lo;
+        for (const Vec3f& p : m.positions) lo = lo.cwiseMin(p), hi = hi.cwiseMax(p);
+        attributes["POSITION"] = add_array(
+            {n, 3, [&m, &split](int64_t v, float* o) { std::memcpy(o, m.positions[split.source(v)].data(), 12); }, {}},
+            "VEC3", kFloat, kArrayBuffer, {{"min", {lo.x(), lo.y(), lo.z()}}, {"max", {hi.x(), hi.y(), hi.z()}}});
+        if (!m.normals.empty())
+            attributes["NORMAL"] = add_array(
+                {n, 3, [&m, &split](int64_t v, float* o) { std::memcpy(o, m.normals[split.source(v)].data(), 12); }, {}},
+                "VEC3", kFloat, kArrayBuffer);
+        // glTF's v points down the image; readers flip it back. A fragment channel needs a
+        // channel 0 before it (importers number channels by position), zeros when there are no UVs.
+        if (!m.uvs.empty() || split.has_fragments())
+            attributes["TEXCOORD_0"] = add_array({n, 2,
+                                                  [&m, &split](int64_t v, float* o) {
+                                                      const Vec2f uv = m.uvs.empty() ? Vec2f::Zero() : m.uvs[split.source(v)];
+                                                      o[0] = uv.x(), o[1] = 1.f - uv.y();
+                                                  },
+                                                  {}},
+                                                 "VEC2", kFloat, kArrayBuffer);
+        if (split.has_fragments())  // (fragment id, 0): exact in float for ids below 2^24
+            attributes["TEXCOORD_1"] = add_array(
+                {n, 2, [&split](int64_t v, float* o) { o[0] = float(split.fragment(v)), o[1] = 1.f; }, {}}, "VEC2",
+                kFloat, kArrayBuffer);
+        if (!m.saturation.empty() || !m.alpha.empty())
+            attributes["COLOR_0"] = add_array({n, 4,
+                                               [&m, &split](int64_t v, float* o) {
+                                                   const int32_t s = split.source(v);
+                                                   o[0] = m.saturation.empty() ? 0.f : m.saturation[s];
+                                                   o[1] = alpha_to_color(m.alpha.empty() ? 0.f : m.alpha[s]);
+                                                   o[2] = 0.f, o[3] = 1.f;
+                                               },
+                                               {}},
+                                              "VEC4", kFloat, kArrayBuffer);
+        const size_t indices = add_array(
+            {int64_t(m.faces.size()), 3, {},
+             [&m, &split](int64_t f, uint32_t* o) {
+                 const Tri t = split.face(m, size_t(f));
+                 for (int c = 0; c < 3; ++c) o[c] = uint32_t(t[c]);
+             }},
+            "SCALAR", kUnsignedInt, kElementArrayBuffer);
+        gltf_meshes.push_back(
+            {{"name", m.name},
+             {"primitives", json::array({{{"attributes", attributes}, {"indices", indices}, {"material", materials.size()}, {"mode", 4}}})}});
+        materials.push_back({{"name", m.name + "_material"},
+                             {"pbrMetallicRoughness", {{"baseColorFactor", {0.55, 0.42, 0.30, 1.0}}, {"metallicFactor", 0.0}}}});
+        node["mesh"] = gltf_meshes.size() - 1;
+        nodes.push_back(node);
+    }
+
+    json gltf = {{"asset", {{"version", "2.0"}, {"generator", "mudcrack"}}},
+                 {"scene", 0},
+                 {"scenes", json::array({{{"nodes", {0}}}})},
+                 {"nodes", nodes}};
+    if (!gltf_meshes.empty()) {
+        gltf["meshes"] = gltf_meshes;
+        gltf["materials"] = materials;
+        gltf["accessors"] = accessors;
+        gltf["bufferViews"] = views;
+        gltf["buffers"] = json::array({{{"byteLength", offset}}});
+    }
+    std::string text = gltf.dump();
+    text.append((4 - text.size() % 4) % 4, ' ');  // chunks are 4-byte aligned: JSON pads with spaces
+    const uint64_t total = 12 + 8 + text.size() + (offset > 0 ? 8 + uint64_t(offset) : 0);
+    if (total > std::numeric_limits<uint32_t>::max())
+        throw RuntimeError(path.string() + ": " + std::to_string(total) +
+                           " bytes: a glb holds at most 4 GiB (write obj, or surface fewer frames' cracks)");
+
+    write_atomically(path, [&](const fs::path& tmp) {
+        errno = 0;
+        std::ofstream os(tmp, std::ios::binary);
+        if (!os) throw RuntimeError(tmp.string() + ": cannot open for writing: " + write_error_reason());
+        put_u32(os, kGlbMagic);
+        put_u32(os, 2);
+        put_u32(os, uint32_t(total));
+        put_u32(os, uint32_t(text.size()));
+        put_u32(os, kChunkJson);
+        os.write(text.data(), std::streamsize(text.size()));
+        if (offset > 0) {
+            put_u32(os, uint32_t(offset));  // every array is 4-byte components: no padding
+            put_u32(os, kChunkBin);
+            for (const Stream& s : streams) write_stream(os, s);
+        }
+        os.close();  // the last buffer reaches the disk here: a full disk shows up at close
+        if (!os) throw RuntimeError(tmp.string() + ": cannot write: " + write_error_reason());
+    });
+}
+
+}  // namespace mudcrack
