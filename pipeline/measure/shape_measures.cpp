@@ -166,14 +166,19 @@ struct TopLayer {
     std::vector<int32_t> size;  // (n_particles): component size at its root
 };
 
-TopLayer top_layer_components(const CoreTopology& topo, const std::vector<uint8_t>& is_broken,
-                              const RestColumns& columns, const char* what) {
+void check_edges_and_columns(const CoreTopology& topo, const std::vector<uint8_t>& is_broken,
+                             const RestColumns& columns, const char* what) {
     if (static_cast<int32_t>(is_broken.size()) != topo.n_edges())
         throw InputError(std::string(what) + ": " + std::to_string(is_broken.size()) + " edge flags for " +
                          std::to_string(topo.n_edges()) + " edges");
     if (static_cast<int32_t>(columns.particle.size()) != topo.n_particles)
         throw InputError(std::string(what) + ": columns hold " + std::to_string(columns.particle.size()) +
                          " particles, the mesh " + std::to_string(topo.n_particles));
+}
+
+TopLayer top_layer_components(const CoreTopology& topo, const std::vector<uint8_t>& is_broken,
+                              const RestColumns& columns, const char* what) {
+    check_edges_and_columns(topo, is_broken, columns, what);
     TopLayer layer;
     std::vector<uint8_t> on_top(topo.n_particles, 0);
     for (int32_t c = 0; c < columns.n_columns(); ++c) {
@@ -237,6 +242,36 @@ SurfacePolygons measure_surface_polygons(const CoreTopology& topo, const std::ve
     polygons.largest_fraction = summary.largest_fraction;
     if (summary.weighted_mean > 0) polygons.effective_count = summary.total / summary.weighted_mean;
     return polygons;
+}
+
+CrackDepth measure_crack_depth(const CoreTopology& topo, const std::vector<uint8_t>& is_broken,
+                               const RestColumns& columns) {
+    check_edges_and_columns(topo, is_broken, columns, "crack depth");
+    std::vector<uint8_t> cracked(topo.n_particles, 0);
+    for (int32_t e = 0; e < topo.n_edges(); ++e)
+        if (is_broken[e]) cracked[topo.edges[e][0]] = cracked[topo.edges[e][1]] = 1;
+    CrackDepth depth;
+    std::vector<Real> depths, thickness;
+    int32_t through = 0;
+    for (int32_t c = 0; c < columns.n_columns(); ++c) {
+        const int32_t bottom = columns.begin[c], top = columns.begin[c + 1] - 1;
+        if (!cracked[columns.particle[top]]) continue;
+        int32_t lowest = top;
+        while (lowest > bottom && cracked[columns.particle[lowest - 1]]) --lowest;
+        const Real top_y = topo.X[columns.particle[top]].y();
+        depths.push_back(top_y - topo.X[columns.particle[lowest]].y());
+        thickness.push_back(top_y - topo.X[columns.particle[bottom]].y());
+        if (lowest == bottom) ++through;
+    }
+    depth.cracked_columns = static_cast<int32_t>(depths.size());
+    if (depths.empty()) return depth;
+    depth.cracked_fraction = Real(depth.cracked_columns) / columns.n_columns();
+    depth.depth_max = *std::max_element(depths.begin(), depths.end());
+    depth.depth_p90 = quantile(depths, 0.9);
+    depth.depth_median = quantile(depths, 0.5);
+    depth.thickness_median = quantile(thickness, 0.5);
+    depth.through_fraction = Real(through) / depth.cracked_columns;
+    return depth;
 }
 
 namespace {

@@ -133,6 +133,26 @@ struct CrackNetwork {
 CrackNetwork measure_crack_network(const CoreTopology& topo, const std::vector<uint8_t>& is_broken,
                                    const RestColumns& columns, int min_particles);
 
+/// How deep cracks that open the top surface reach down (in rest positions). A column is cracked
+/// at the top when its top particle has a broken edge; its crack depth is the rest height of the
+/// top particle minus that of the lowest particle of the unbroken run of cracked particles (each
+/// with a broken edge) that starts at the top. So a scratch on the top particle alone is 0 deep,
+/// a crack down to the base is the column's thickness, and a peeling crust's horizontal crack
+/// counts as deep as the vertical crack that reaches it.
+struct CrackDepth {
+    int32_t cracked_columns = 0;   // columns cracked at the top
+    Real cracked_fraction = 0;     // their share of the columns
+    Real depth_median = 0;         // median crack depth of the cracked columns [m]
+    Real depth_p90 = 0;            // its 90th percentile [m]
+    Real depth_max = 0;            // [m]
+    Real thickness_median = 0;     // median rest thickness (top - bottom particle) of the cracked columns [m]
+    Real through_fraction = 0;     // cracked columns whose crack reaches their bottom particle
+};
+
+/// The crack depth of the layer at the frame `is_broken` describes.
+CrackDepth measure_crack_depth(const CoreTopology& topo, const std::vector<uint8_t>& is_broken,
+                               const RestColumns& columns);
+
 /// The surface particles in each half of the hardening colormap (render/colormap.h: blue below
 /// alpha0, red above): hardened ("compressed", alpha < alpha0) and softened ("stretched",
 /// alpha > alpha0), as fractions of the surface particles.

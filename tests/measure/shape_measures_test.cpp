@@ -259,6 +259,35 @@ TEST_F(SurfacePolygonsTest, ACrackThatStopsBelowTheTopLayerDoesNotCutTheSurface)
 
 TEST_F(SurfacePolygonsTest, RejectsMismatchedSizes) {
     EXPECT_THROW(measure_surface_polygons(m_topo, std::vector<uint8_t>(3, 0), m_columns, 1), InputError);
+    EXPECT_THROW(measure_crack_depth(m_topo, std::vector<uint8_t>(3, 0), m_columns), InputError);
+}
+
+TEST_F(SurfacePolygonsTest, CrackDepthIsHowFarTheCutReachesBelowTheTop) {
+    const CrackDepth none = measure_crack_depth(m_topo, std::vector<uint8_t>(m_topo.n_edges(), 0), m_columns);
+    EXPECT_EQ(none.cracked_columns, 0);
+    EXPECT_EQ(none.depth_max, 0);
+    // a cut through the whole layer (0.4 m thick): the columns beside it are cracked top to bottom
+    const CrackDepth through = measure_crack_depth(m_topo, cut(1e9), m_columns);
+    EXPECT_EQ(through.cracked_columns, 2 * 7);  // particle columns 3 and 4, 7 rows in z
+    EXPECT_NEAR(through.cracked_fraction, 14.0 / 63.0, tol::kRoundoff);
+    EXPECT_NEAR(through.depth_median, 4 * kH, tol::kRoundoff);
+    EXPECT_NEAR(through.thickness_median, 4 * kH, tol::kRoundoff);
+    EXPECT_NEAR(through.through_fraction, 1, tol::kRoundoff);
+    // a cut from the top down to y = 0.15 (edges with both ends above it): particles at y = 0.4,
+    // 0.3, 0.2 are cracked, so it reaches 0.2 m below the top
+    std::vector<uint8_t> top_cut = cut(1e9), below = cut(0.15);
+    for (size_t e = 0; e < top_cut.size(); ++e) {
+        const Vec3& p = m_topo.X[m_topo.edges[e][0]];
+        const Vec3& q = m_topo.X[m_topo.edges[e][1]];
+        top_cut[e] = top_cut[e] && p.y() > 0.15 && q.y() > 0.15;
+    }
+    const CrackDepth partial = measure_crack_depth(m_topo, top_cut, m_columns);
+    EXPECT_EQ(partial.cracked_columns, 14);
+    EXPECT_NEAR(partial.depth_max, 2 * kH, tol::kRoundoff);
+    EXPECT_NEAR(partial.depth_p90, 2 * kH, tol::kRoundoff);
+    EXPECT_EQ(partial.through_fraction, 0);
+    // a crack below the top that does not open it has no depth from the top
+    EXPECT_EQ(measure_crack_depth(m_topo, below, m_columns).cracked_columns, 0);
 }
 
 // The crack network of a 30 x 2 x 30 cell tet lattice cut by vertical planes through chosen

@@ -162,6 +162,13 @@ int run_measure_stage(const StageOptions& options, const std::string& json_file)
             network = measure_crack_network(*topo, is_broken, columns, min_particles);
             row["broken_edges"] = broken;
             row.update(fragment_fields(sizes, polygons, network));
+            const CrackDepth depth = measure_crack_depth(*topo, is_broken, columns);
+            row["cracked_top_fraction"] = depth.cracked_fraction;
+            row["crack_depth_median"] = depth.depth_median;
+            row["crack_depth_p90"] = depth.depth_p90;
+            row["crack_depth_max"] = depth.depth_max;
+            row["cracked_column_thickness_median"] = depth.thickness_median;
+            row["crack_through_fraction"] = depth.through_fraction;
         }
         if (!options.quiet) {
             std::printf("%6d %8.4f %11.2f %9.2f %9.2f %8.2f %10.2f", n, time, 1e3 * shape.top_rise_median,
