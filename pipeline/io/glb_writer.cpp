@@ -1,6 +1,6 @@
 #include "pipeline/io/glb_writer.h"
 
-#include <array>
+#include <algorithm>
 #include <cerrno>
 #include <cstdint>
 #include <cstring>
@@ -44,21 +44,27 @@ void put_u32(std::ostream& os, uint32_t v) {
     os.write(reinterpret_cast<const char*>(b), 4);
 }
 
-/// Writes the stream's elements as little-endian 4-byte values through a fixed buffer.
+/// Writes the stream's elements as 4-byte little-endian values (glb's order, and the machine's:
+/// checked in write_glb) through a fixed buffer.
 void write_stream(std::ostream& os, const Stream& s) {
-    constexpr int64_t kBufferWords = 1 << 14;
-    std::array<uint32_t, kBufferWords> buffer;
-    const int64_t per_chunk = kBufferWords / s.width;
+    constexpr int64_t kBufferBytes = 1 << 16;
+    std::vector<unsigned char> buffer(kBufferBytes);
+    const int64_t element_bytes = 4 * s.width, per_chunk = kBufferBytes / element_bytes;
+    float floats[4];
+    uint32_t indices[3];
     for (int64_t begin = 0; begin < s.count; begin += per_chunk) {
         const int64_t end = std::min(s.count, begin + per_chunk);
-        uint32_t* out = buffer.data();
-        for (int64_t i = begin; i < end; ++i, out += s.width) {
-            if (s.fill_index)
-                s.fill_index(i, out);
-            else
-                s.fill(i, reinterpret_cast<float*>(out));  // x86/ARM are little-endian, as glb is
+        unsigned char* out = buffer.data();
+        for (int64_t i = begin; i < end; ++i, out += element_bytes) {
+            if (s.fill_index) {
+                s.fill_index(i, indices);
+                std::memcpy(out, indices, size_t(element_bytes));
+            } else {
+                s.fill(i, floats);
+                std::memcpy(out, floats, size_t(element_bytes));
+            }
         }
-        os.write(reinterpret_cast<const char*>(buffer.data()), std::streamsize((end - begin) * s.width * 4));
+        os.write(reinterpret_cast<const char*>(buffer.data()), std::streamsize((end - begin) * element_bytes));
     }
 }
 
@@ -66,6 +72,7 @@ void write_stream(std::ostream& os, const Stream& s) {
 
 void write_glb(const fs::path& path, const std::vector<TriMesh>& meshes) {
     static_assert(sizeof(float) == 4 && std::numeric_limits<float>::is_iec559, "glb floats are IEEE 754 binary32");
+    static_assert(__BYTE_ORDER__ == __ORDER_LITTLE_ENDIAN__, "glb arrays are little-endian, written as in memory");
     for (const TriMesh& m : meshes) check_tri_mesh(path, m);
 
     std::vector<FragmentSplit> splits;
