@@ -1,6 +1,7 @@
 #include "pipeline/io/glb_writer.h"
 
 #include <algorithm>
+#include <array>
 #include <cerrno>
 #include <cstdint>
 #include <cstring>
@@ -29,15 +30,21 @@ constexpr uint32_t kChunkBin = 0x004E4942;   // "BIN\0"
 constexpr int kFloat = 5126, kUnsignedInt = 5125;
 constexpr int kArrayBuffer = 34962, kElementArrayBuffer = 34963;
 
-/// One typed array of the binary chunk: `count` elements of `width` 4-byte components, each
-/// element produced by fill(i, out) when the chunk is streamed.
+/// One typed array of the binary chunk: `count` elements of `width` 4-byte components (float or
+/// uint32), element i written by fill(i, out) when the chunk is streamed.
 struct Stream {
     int64_t count = 0;
     int width = 0;
-    std::function<void(int64_t i, float* out)> fill;  // float arrays
-    std::function<void(int64_t i, uint32_t* out)> fill_index;  // the index array (one element per face)
+    std::function<void(int64_t i, unsigned char* out)> fill;
     int64_t bytes() const { return count * width * 4; }
 };
+
+/// Stores 4-byte values at `out` (memcpy: the buffer is bytes, the values floats or uint32).
+template <class T, size_t N>
+void store(unsigned char* out, const std::array<T, N>& values) {
+    static_assert(sizeof(T) == 4, "glb components are 4 bytes");
+    std::memcpy(out, values.data(), sizeof(T) * N);
+}
 
 void put_u32(std::ostream& os, uint32_t v) {
     const unsigned char b[4] = {uint8_t(v), uint8_t(v >> 8), uint8_t(v >> 16), uint8_t(v >> 24)};
@@ -50,20 +57,10 @@ void write_stream(std::ostream& os, const Stream& s) {
     constexpr int64_t kBufferBytes = 1 << 16;
     std::vector<unsigned char> buffer(kBufferBytes);
     const int64_t element_bytes = 4 * s.width, per_chunk = kBufferBytes / element_bytes;
-    float floats[4];
-    uint32_t indices[3];
     for (int64_t begin = 0; begin < s.count; begin += per_chunk) {
         const int64_t end = std::min(s.count, begin + per_chunk);
         unsigned char* out = buffer.data();
-        for (int64_t i = begin; i < end; ++i, out += element_bytes) {
-            if (s.fill_index) {
-                s.fill_index(i, indices);
-                std::memcpy(out, indices, size_t(element_bytes));
-            } else {
-                s.fill(i, floats);
-                std::memcpy(out, floats, size_t(element_bytes));
-            }
-        }
+        for (int64_t i = begin; i < end; ++i, out += element_bytes) s.fill(i, out);
         os.write(reinterpret_cast<const char*>(buffer.data()), std::streamsize((end - begin) * element_bytes));
     }
 }
@@ -84,14 +81,10 @@ void write_glb(const fs::path& path, const std::vector<TriMesh>& meshes) {
     std::vector<Stream> streams;
     int64_t offset = 0;
     // one accessor over one tightly packed buffer view per array
-    auto add_array = [&](Stream s, const char* type, int component, int target, json extra = json::object()) {
+    auto add_array = [&](Stream s, int component, int target, json extra = json::object()) {
+        static const char* const kType[] = {"", "SCALAR", "VEC2", "VEC3", "VEC4"};
         json view = {{"buffer", 0}, {"byteOffset", offset}, {"byteLength", s.bytes()}, {"target", target}};
-        // a stream element may hold several accessor elements (a face is three SCALAR indices)
-        const int per_accessor_element = std::string(type) == "SCALAR" ? 1 : type[3] - '0';
-        json accessor = {{"bufferView", views.size()},
-                         {"componentType", component},
-                         {"count", s.count * s.width / per_accessor_element},
-                         {"type", type}};
+        json accessor = {{"bufferView", views.size()}, {"componentType", component}, {"count", s.count}, {"type", kType[s.width]}};
         accessor.update(extra);
         offset += s.bytes();
         views.push_back(view);
@@ -114,43 +107,43 @@ void write_glb(const fs::path& path, const std::vector<TriMesh>& meshes) {
         Vec3f lo = Vec3f::Constant(std::numeric_limits<float>::max()), hi = -lo;
         for (const Vec3f& p : m.positions) lo = lo.cwiseMin(p), hi = hi.cwiseMax(p);
         attributes["POSITION"] = add_array(
-            {n, 3, [&m, &split](int64_t v, float* o) { std::memcpy(o, m.positions[split.source(v)].data(), 12); }, {}},
-            "VEC3", kFloat, kArrayBuffer, {{"min", {lo.x(), lo.y(), lo.z()}}, {"max", {hi.x(), hi.y(), hi.z()}}});
+            {n, 3, [&m, &split](int64_t v, unsigned char* o) { std::memcpy(o, m.positions[split.source(v)].data(), 12); }},
+            kFloat, kArrayBuffer, {{"min", {lo.x(), lo.y(), lo.z()}}, {"max", {hi.x(), hi.y(), hi.z()}}});
         if (!m.normals.empty())
             attributes["NORMAL"] = add_array(
-                {n, 3, [&m, &split](int64_t v, float* o) { std::memcpy(o, m.normals[split.source(v)].data(), 12); }, {}},
-                "VEC3", kFloat, kArrayBuffer);
+                {n, 3, [&m, &split](int64_t v, unsigned char* o) { std::memcpy(o, m.normals[split.source(v)].data(), 12); }},
+                kFloat, kArrayBuffer);
         // glTF's v points down the image; readers flip it back. A fragment channel needs a
         // channel 0 before it (importers number channels by position), zeros when there are no UVs.
         if (!m.uvs.empty() || split.has_fragments())
             attributes["TEXCOORD_0"] = add_array({n, 2,
-                                                  [&m, &split](int64_t v, float* o) {
+                                                  [&m, &split](int64_t v, unsigned char* o) {
                                                       const Vec2f uv = m.uvs.empty() ? Vec2f::Zero() : m.uvs[split.source(v)];
-                                                      o[0] = uv.x(), o[1] = 1.f - uv.y();
-                                                  },
-                                                  {}},
-                                                 "VEC2", kFloat, kArrayBuffer);
+                                                      store(o, std::array<float, 2>{uv.x(), 1.f - uv.y()});
+                                                  }},
+                                                 kFloat, kArrayBuffer);
         if (split.has_fragments())  // (fragment id, 0): exact in float for ids below 2^24
             attributes["TEXCOORD_1"] = add_array(
-                {n, 2, [&split](int64_t v, float* o) { o[0] = float(split.fragment(v)), o[1] = 1.f; }, {}}, "VEC2",
+                {n, 2,
+                 [&split](int64_t v, unsigned char* o) { store(o, std::array<float, 2>{float(split.fragment(v)), 1.f}); }},
                 kFloat, kArrayBuffer);
         if (!m.saturation.empty() || !m.alpha.empty())
             attributes["COLOR_0"] = add_array({n, 4,
-                                               [&m, &split](int64_t v, float* o) {
+                                               [&m, &split](int64_t v, unsigned char* o) {
                                                    const int32_t s = split.source(v);
-                                                   o[0] = m.saturation.empty() ? 0.f : m.saturation[s];
-                                                   o[1] = alpha_to_color(m.alpha.empty() ? 0.f : m.alpha[s]);
-                                                   o[2] = 0.f, o[3] = 1.f;
-                                               },
-                                               {}},
-                                              "VEC4", kFloat, kArrayBuffer);
-        const size_t indices = add_array(
-            {int64_t(m.faces.size()), 3, {},
-             [&m, &split](int64_t f, uint32_t* o) {
-                 const Tri t = split.face(m, size_t(f));
-                 for (int c = 0; c < 3; ++c) o[c] = uint32_t(t[c]);
-             }},
-            "SCALAR", kUnsignedInt, kElementArrayBuffer);
+                                                   const float saturation = m.saturation.empty() ? 0.f : m.saturation[s];
+                                                   const float g = alpha_to_color(m.alpha.empty() ? 0.f : m.alpha[s]);
+                                                   store(o, std::array<float, 4>{saturation, g, 0.f, 1.f});
+                                               }},
+                                              kFloat, kArrayBuffer);
+        // one face per stream element would make the accessor's count differ from the stream's:
+        // indices stream corner by corner
+        const size_t indices = add_array({3 * int64_t(m.faces.size()), 1,
+                                          [&m, &split](int64_t corner, unsigned char* o) {
+                                              const Tri t = split.face(m, size_t(corner / 3));
+                                              store(o, std::array<uint32_t, 1>{uint32_t(t[corner % 3])});
+                                          }},
+                                         kUnsignedInt, kElementArrayBuffer);
         gltf_meshes.push_back(
             {{"name", m.name},
              {"primitives", json::array({{{"attributes", attributes}, {"indices", indices}, {"material", materials.size()}, {"mode", 4}}})}});

@@ -15,6 +15,7 @@
 #include <functional>
 #include <map>
 #include <memory>
+#include <numeric>
 #include <regex>
 #include <sstream>
 #include <system_error>
@@ -523,12 +524,12 @@ std::vector<TriMesh> import_meshes(const fs::path& path) {
             const aiMesh& m = *scene->mMeshes[node.mMeshes[k]];
             TriMesh corners;  // one vertex per assimp vertex
             corners.name = node.mName.length > 0 ? node.mName.C_Str() : m.mName.C_Str();
-            std::vector<std::array<float, 13>> keys(m.mNumVertices);  // every attribute, for joining
+            // every attribute of each vertex, for joining (only where corners are joined)
+            std::vector<std::array<float, 13>> keys(join_corners ? m.mNumVertices : 0);
             for (unsigned v = 0; v < m.mNumVertices; ++v) {
                 const aiVector3D p = world_from_node * m.mVertices[v];
                 corners.positions.emplace_back(p.x, p.y, p.z);
-                auto& key = keys[v];
-                key.fill(0.f);
+                std::array<float, 13> key{};
                 key[0] = p.x, key[1] = p.y, key[2] = p.z;
                 if (m.HasNormals()) {
                     aiVector3D nrm = normal_matrix * m.mNormals[v];
@@ -547,24 +548,27 @@ std::vector<TriMesh> import_meshes(const fs::path& path) {
                     key[8] = c.r, key[9] = c.g, key[10] = c.b, key[11] = c.a;
                 }
                 if (m.HasTextureCoords(1)) key[12] = m.mTextureCoords[1][v].x;
+                if (join_corners) keys[v] = key;
             }
-            // join corners with identical attributes, in first-seen order
-            std::map<std::array<float, 13>, int32_t> joined;
-            std::vector<int32_t> index_of(m.mNumVertices, -1);
+            std::vector<int32_t> index_of(m.mNumVertices);
             TriMesh out;
-            out.name = corners.name;
-            for (unsigned v = 0; v < m.mNumVertices; ++v) {
-                index_of[v] = int32_t(out.positions.size());
-                if (join_corners) {
-                    auto [it, inserted] = joined.emplace(keys[v], index_of[v]);
+            if (!join_corners) {
+                std::iota(index_of.begin(), index_of.end(), 0);
+                out = std::move(corners);
+            } else {
+                // join corners with identical attributes, in first-seen order
+                std::map<std::array<float, 13>, int32_t> joined;
+                out.name = corners.name;
+                for (unsigned v = 0; v < m.mNumVertices; ++v) {
+                    auto [it, inserted] = joined.emplace(keys[v], int32_t(out.positions.size()));
                     index_of[v] = it->second;
                     if (!inserted) continue;
+                    out.positions.push_back(corners.positions[v]);
+                    if (!corners.normals.empty()) out.normals.push_back(corners.normals[v]);
+                    if (!corners.uvs.empty()) out.uvs.push_back(corners.uvs[v]);
+                    if (!corners.saturation.empty()) out.saturation.push_back(corners.saturation[v]);
+                    if (!corners.alpha.empty()) out.alpha.push_back(corners.alpha[v]);
                 }
-                out.positions.push_back(corners.positions[v]);
-                if (!corners.normals.empty()) out.normals.push_back(corners.normals[v]);
-                if (!corners.uvs.empty()) out.uvs.push_back(corners.uvs[v]);
-                if (!corners.saturation.empty()) out.saturation.push_back(corners.saturation[v]);
-                if (!corners.alpha.empty()) out.alpha.push_back(corners.alpha[v]);
             }
             for (unsigned f = 0; f < m.mNumFaces; ++f) {
                 const aiFace& face = m.mFaces[f];
