@@ -15,7 +15,7 @@ APT_PACKAGES := cmake make g++ pkg-config \
   libeigen3-dev libcgal-dev libgmp-dev libmpfr-dev libassimp-dev libopenvdb-dev libboost-iostreams-dev \
   libosmesa6-dev libtbb-dev libpng-dev nlohmann-json3-dev libcli11-dev \
   libgtest-dev libgmock-dev libbenchmark-dev libcgal-demo tetgen ffmpeg \
-  slurm-wlm munge jq
+  slurm-wlm munge jq time
 
 # The demo asset: CGAL's Stanford bunny, extracted from Debian's libcgal-demo (never committed).
 CGAL_DATA  := /usr/share/doc/libcgal-dev/data.tar.gz

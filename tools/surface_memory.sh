@@ -23,7 +23,7 @@ FORMATS=("$@")
 [[ -f $OUT/sim/manifest.json ]] || { echo "surface_memory.sh: $OUT/sim/manifest.json: not found: simulate the shot first" >&2; exit 1; }
 [[ $FRAME =~ ^[0-9]+$ ]] || { echo "surface_memory.sh: frame '$FRAME' is not a frame number" >&2; exit 1; }
 [[ -x $BUILD/bin/mc-surface ]] || { echo "surface_memory.sh: $BUILD/bin/mc-surface is not built: run make build" >&2; exit 1; }
-[[ -x /usr/bin/time ]] || { echo "surface_memory.sh: /usr/bin/time not found (apt-get install time)" >&2; exit 1; }
+[[ -x /usr/bin/time ]] || { echo "surface_memory.sh: /usr/bin/time not found (make deps installs it)" >&2; exit 1; }
 command -v jq >/dev/null || { echo "surface_memory.sh: jq not found (make deps installs it)" >&2; exit 1; }
 [[ ${#FORMATS[@]} -gt 0 ]] || FORMATS=("")
 
