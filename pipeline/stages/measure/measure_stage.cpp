@@ -39,8 +39,10 @@ std::vector<uint8_t> broken_at(const BreakHistory& history, int n) {
     return is_broken;
 }
 
-/// A frame's fragment, surface polygon and crack network figures, as the table's JSON fields.
-json fragment_fields(const FragmentSizes& sizes, const SurfacePolygons& polygons, const CrackNetwork& network) {
+/// A frame's fragment, surface polygon, crack network and crack depth figures, as the table's JSON
+/// fields.
+json crack_fields(const FragmentSizes& sizes, const SurfacePolygons& polygons, const CrackNetwork& network,
+                  const CrackDepth& depth) {
     return {{"fragments", sizes.count},
             {"largest_fragment_fraction", sizes.largest_fraction},
             {"weighted_mean_fragment_volume", sizes.weighted_mean_volume},
@@ -53,7 +55,13 @@ json fragment_fields(const FragmentSizes& sizes, const SurfacePolygons& polygons
             {"axis_aligned_fraction", network.axis_aligned_fraction},
             {"junctions", network.junctions},
             {"t_junction_fraction", network.t_fraction},
-            {"y_junction_fraction", network.y_fraction}};
+            {"y_junction_fraction", network.y_fraction},
+            {"cracked_top_fraction", depth.cracked_fraction},
+            {"crack_depth_median", depth.depth_median},
+            {"crack_depth_p90", depth.depth_p90},
+            {"crack_depth_max", depth.depth_max},
+            {"cracked_column_thickness_median", depth.thickness_median},
+            {"crack_through_fraction", depth.through_fraction}};
 }
 
 }  // namespace
@@ -161,14 +169,7 @@ int run_measure_stage(const StageOptions& options, const std::string& json_file)
             polygons = measure_surface_polygons(*topo, is_broken, columns, min_particles);
             network = measure_crack_network(*topo, is_broken, columns, min_particles);
             row["broken_edges"] = broken;
-            row.update(fragment_fields(sizes, polygons, network));
-            const CrackDepth depth = measure_crack_depth(*topo, is_broken, columns);
-            row["cracked_top_fraction"] = depth.cracked_fraction;
-            row["crack_depth_median"] = depth.depth_median;
-            row["crack_depth_p90"] = depth.depth_p90;
-            row["crack_depth_max"] = depth.depth_max;
-            row["cracked_column_thickness_median"] = depth.thickness_median;
-            row["crack_through_fraction"] = depth.through_fraction;
+            row.update(crack_fields(sizes, polygons, network, measure_crack_depth(*topo, is_broken, columns)));
         }
         if (!options.quiet) {
             std::printf("%6d %8.4f %11.2f %9.2f %9.2f %8.2f %10.2f", n, time, 1e3 * shape.top_rise_median,
