@@ -21,7 +21,7 @@ APT_PACKAGES := cmake make g++ pkg-config \
 CGAL_DATA  := /usr/share/doc/libcgal-dev/data.tar.gz
 BUNNY      := shots/assets/bunny00.off
 
-.PHONY: help deps test-deps configure build build-stages demo test bench clean assets shot shots clean-shot \
+.PHONY: help deps test-deps configure build build-stages demo test bench clean assets shot shots gallery clean-shot \
         blender-addon blender-still fuzz-deps fuzz-build fuzz sanitize
 
 # What only `make test` needs: Debian's Blender 3.4 (the add-on's playback test runs it headless).
@@ -40,6 +40,7 @@ help:
 	@echo "make test                  install missing packages, build, run the test suite (ctest)"
 	@echo "make shot SHOT=x           run shots/x.json's stages (only what changed); FARM=slurm submits to Slurm"
 	@echo "make shots                 every shot under shots/ (bench_* excluded)"
+	@echo "make gallery               SHOTS (default: every figure shot) run to the end, then the README gallery"
 	@echo "make farm-status SHOT=x    queued/running/done/failed tasks of a Slurm run"
 	@echo "make report                accuracy against run time and the stability matrix (out/report)"
 	@echo "make bench                 build and run the benchmarks"
@@ -150,6 +151,14 @@ shot: build-stages assets
 SHOTS ?= $(filter-out bench_%,$(basename $(notdir $(wildcard shots/*.json))))
 shots: build-stages assets
 	@for s in $(SHOTS); do $(MAKE) --no-print-directory shot SHOT=$$s || exit 1; done
+
+# the README's gallery: each of SHOTS run to the end (only what changed runs), then its still,
+# contact sheet, mc-measure numbers and stage costs (tools/gallery.sh); GALLERY_FRAMES names a
+# frame for a shot, e.g. GALLERY_FRAMES="fig4_bunny@32"
+GALLERY_FRAMES ?=
+gallery: shots
+	BUILD=$(BUILD) THREADS=$(JOBS) tools/gallery.sh $(OUT) \
+	    $(foreach s,$(SHOTS),$(or $(filter $(s)@%,$(GALLERY_FRAMES)),$(s)))
 
 clean-shot:
 	@test -n "$(SHOT)" || { echo "usage: make clean-shot SHOT=<name>"; exit 2; }

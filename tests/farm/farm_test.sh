@@ -75,8 +75,8 @@ trap cleanup EXIT
 if [ -z "${3:-}" ]; then
     # the demo's first 24 frames with a 6-view turntable: three surfacing and three render tasks of
     # 8 frames and a sim checkpoint before the last frame (every 10), so every step below runs, at
-    # half the cost of the whole demo (28,611 particles: 48 frames timed out at 900 s on a loaded
-    # 2-core machine)
+    # about half the cost of the whole demo (45,056 particles, 40 frames; the earlier demo's 48
+    # frames timed out at 900 s on a loaded 2-core machine)
     sed '/^[[:space:]]*\/\//d' "$shot" | jq '.frames.end = 24 | .render.turntable.views = 6' >"$tmp/$name.json" ||
         fail "$shot: cannot shorten it with jq"
     shot=$tmp/$name.json

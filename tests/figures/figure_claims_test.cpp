@@ -18,6 +18,7 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <cmath>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
@@ -50,12 +51,11 @@ constexpr double kPeel = 0.10;
 constexpr double kPeelAboveGroundCells = 2.0;
 constexpr double kMaxLiftOff = 0.02;
 // The demo: at least 6 crack polygons, at least 5 % of the columns peeled above the glued cells,
-// and a crack network that does not draw the grid: the share of its inland crack length within 15
-// degrees of the grid axes is 33 % for an isotropic network, 95 % on the uniform slab the demo
-// was before the strength field, 42 % now (2 threads). The target is 40 %; this bound guards the
-// gain.
+// and a crack network that does not draw the grid: at most 40 % of its inland crack length within
+// 15 degrees of the grid axes (33 % for an isotropic network, 95 % on a uniform slab; as shipped
+// 39.8 %, seed 2 34.6 %, with 32 and 33 polygons).
 constexpr int kDemoPolygons = 6;
-constexpr double kMaxAxisAligned = 0.50;
+constexpr double kMaxAxisAligned = 0.40;
 constexpr double kDemoPeel = 0.05;
 
 // Fig. 7, the mossy ground with its strength field: at least 20 crack polygons and 3.5 effective
@@ -64,8 +64,10 @@ constexpr double kDemoPeel = 0.05;
 constexpr int kFig7Polygons = 20;
 constexpr double kFig7EffectivePlates = 3.5;
 constexpr double kFig7Curl = 0.008;
-// "The same statistics" for two seeds (issue 13): polygon counts within a factor 1.5.
+// "The same statistics" for two seeds (issue 13): polygon counts within a factor 1.5, and shares
+// of the crack length along the grid axes within 10 points.
 constexpr double kSameStatisticsFactor = 1.5;
+constexpr double kSameAxisShare = 0.10;
 
 std::string slurp(const fs::path& p) {
     std::ifstream is(p);
@@ -171,7 +173,6 @@ TEST_F(FigureClaims, Fig8NaccAloneShrinksWithoutPeelingWhileTheFullModelPeelsAnd
 }
 
 TEST_F(FigureClaims, DemoCracksIntoAWanderingNetworkThatPeelsAndAnotherSeedDrawsAnother) {
-    // the statistics of the two seeds are printed; only what holds for any seed is asserted
     const auto [one, two] = run_two_seeds("demo");
     ASSERT_FALSE(one.is_null() || two.is_null());
     // the poster effect: plates between cracks that do not draw the grid, whose rims peel
@@ -179,9 +180,13 @@ TEST_F(FigureClaims, DemoCracksIntoAWanderingNetworkThatPeelsAndAnotherSeedDraws
     EXPECT_LE(one.at("axis_aligned_fraction").get<double>(), kMaxAxisAligned);
     EXPECT_GE(one.at("split_fraction").get<double>(), kDemoPeel);
     EXPECT_GE(one.at("split_height_median_cells").get<double>(), kPeelAboveGroundCells);
-    // another seed: another network (other edges break) that also cracks into plates and peels
+    // another seed: another network (other edges break) of the same statistics that also peels
     EXPECT_NE(one.at("broken_edges").get<long long>(), two.at("broken_edges").get<long long>());
-    EXPECT_GE(two.at("surface_polygons").get<int>(), kDemoPolygons / 2);
+    const int polygons_one = one.at("surface_polygons").get<int>();
+    const int polygons_two = two.at("surface_polygons").get<int>();
+    EXPECT_LE(std::max(polygons_one, polygons_two), kSameStatisticsFactor * std::min(polygons_one, polygons_two));
+    EXPECT_LE(std::abs(one.at("axis_aligned_fraction").get<double>() - two.at("axis_aligned_fraction").get<double>()),
+              kSameAxisShare);
     EXPECT_GE(two.at("split_fraction").get<double>(), kDemoPeel);
 }
 
