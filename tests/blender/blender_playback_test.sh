@@ -1,11 +1,11 @@
 #!/usr/bin/env bash
-# The Blender add-on (tools/blender/mudcrack_blender) in real Blender, headless, on the
-# demo shot's output:
+# The Blender add-on (tools/blender/mudcrack_blender) in real Blender, headless, on a
+# shot's output (fig8_c's by default):
 #
-#   blender_playback_test.sh SOURCE_DIR BIN_DIR ADDON_ZIP [SHOT_FILE]   (SHOT_FILE default: demo.json)
+#   blender_playback_test.sh SOURCE_DIR BIN_DIR ADDON_ZIP [SHOT_FILE]   (SHOT_FILE default: fig8_c.json)
 #
 # 1. mc-init, mc-sim and mc-surface run the shot's frames 1-BLENDER_TEST_FRAMES (default 12: the
-#    demo's cracks open at frame 5) into a temporary folder, one thread each; all of its frames
+#    cracks of fig8_c open at frame 3) into a temporary folder, one thread each; all of its frames
 #    when those have no frame without cracks and one with cracks before the last;
 # 2. mc-surface writes the same frames as .obj too; blender_test_mesh_info (pipeline/io's assimp
 #    reader, not the add-on's) reads every mesh file, glb and obj, of three frames: the first
@@ -25,7 +25,7 @@ fail() { echo "FAIL: $*" >&2; exit 1; }
 src=$(cd "$1" && pwd)
 bin=$(cd "$2" && pwd)
 zip=$3
-shot=${4:-$src/shots/demo.json}
+shot=${4:-$src/shots/fig8_c.json}
 here=$(cd "$(dirname "${BASH_SOURCE[0]}")" && pwd)
 frames=${BLENDER_TEST_FRAMES:-12}
 

@@ -430,7 +430,7 @@ TEST_F(ShotTest, ShippedShotsValidate) {
     const Real particles = (std::round(extent.x() / demo.init.box.spacing) + 1) *
                            (std::round(extent.y() / demo.init.box.spacing) + 1) *
                            (std::round(extent.z() / demo.init.box.spacing) + 1);
-    EXPECT_EQ(particles, 51 * 11 * 51);
+    EXPECT_EQ(particles, 64 * 11 * 64);
 
     for (const char* name : {"bench_nacc_cube.json", "bench_moisture_cube.json"}) {
         const Shot bench = load_shot(dir + name);

@@ -35,13 +35,15 @@ edit() {
     sed -i "$2" "$1"
     [ "$(cat "$1")" != "$before" ] || fail "$1: '$2' changed nothing ($3)"
 }
-# the tiny base: 0.06 m lattice (26 x 3 x 26 particles), 4 frames, 160x90 previews, 4 views
+# the tiny base: 0.06 m lattice on a 0.12 m grid (17 x 4 x 17 particles), 4 frames, 160x90
+# previews, 4 views
 cp "$shot_src" "$base"
 edit "$base" 's/"name": "demo"/"name": "base"/' "the name"
-edit "$base" 's/"spacing": 0.03,/"spacing": 0.06,/' "the box spacing"
-edit "$base" 's/"end": 48,/"end": 4,/' "the frame range"
+edit "$base" 's/"spacing": 0.015,/"spacing": 0.06,/' "the box spacing"
+edit "$base" 's/"h": 0.03,/"h": 0.12,/' "the grid spacing"
+edit "$base" 's/"end": 40,/"end": 4,/' "the frame range"
 edit "$base" 's/"resolution": \[640, 360\]/"resolution": [160, 90]/' "the resolution"
-edit "$base" 's/"views": 24/"views": 4/' "the turntable"
+edit "$base" 's/"views": 12/"views": 4/' "the turntable"
 # the look: the same shot in the hardening colors, reusing base (the key right after the name)
 cp "$base" "$look"
 edit "$look" 's|"name": "base",|"name": "look",\n  // shares the stages whose slices equal base'"'"'s\n  "reuse": "base",|' "the reuse key"
