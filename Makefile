@@ -157,6 +157,7 @@ shots: build-stages assets
 # frame for a shot, e.g. GALLERY_FRAMES="fig4_bunny@32"
 GALLERY_FRAMES ?=
 gallery: shots
+	cmake --build $(BUILD) -j $(JOBS) --target mc-measure
 	BUILD=$(BUILD) THREADS=$(JOBS) tools/gallery.sh $(OUT) \
 	    $(foreach s,$(SHOTS),$(or $(filter $(s)@%,$(GALLERY_FRAMES)),$(s)))
 

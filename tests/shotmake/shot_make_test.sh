@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# The shot Makefile's claims on the demo shot, through the make rules themselves (pipeline/shot.mk,
+# The shot Makefile's claims on a shot (ctest passes Fig. 8(c)'s slab), through the make rules themselves (pipeline/shot.mk,
 # run the way the root Makefile's `shot` target runs them, without its build and deps steps):
 #
 #   shot_make_test.sh SOURCE_DIR BIN_DIR [SHOT_FILE]     (SHOT_FILE default: SOURCE_DIR/shots/demo.json)
@@ -14,7 +14,7 @@
 # 5. a render chunk that fails (a truncated surface mesh) fails make, naming the chunk's frames and
 #    its log; once the mesh is back, the next run renders again and matches the serial run.
 # The shot is a copy in TMP (SHOT_FILE=...), so the test edits it without touching shots/; the
-# copy renders demo.json's first 24 frames at 320x180 (not 640x360), with 6 turntable views.
+# copy renders the shot's first 24 frames at 320x180 (not 640x360), with 6 turntable views.
 # FAILS rather than skips when jq (a dependency of the make pipeline) is missing.
 # SHOT_MAKE_TEST_KEEP=1 keeps the temporary folder.
 set -euo pipefail
@@ -25,8 +25,8 @@ make_test_setup shot_make_test "$@"
 name=$(basename "$shot_src" .json)
 shot=$tmp/$name.json
 # a quarter of the pixels (a render key: the stages before it are the shot's own) keeps the four
-# render runs short; so do the first 24 frames and a 6-view turntable (the demo's 28,611 particles
-# over 48 frames took 846 s of the test's 900 on a loaded 2-core machine)
+# render runs short; so do the first 24 frames and a 6-view turntable (an earlier demo's 28,611
+# particles over 48 frames took 846 s of the test's 900 on a loaded 2-core machine)
 sed 's/"resolution": \[640, 360\]/"resolution": [320, 180]/' "$shot_src" |
     sed '/^[[:space:]]*\/\//d' | jq '.frames.end = ([.frames.end, 24] | min) | .render.turntable.views = 6' >"$shot" ||
     fail "$shot_src: cannot shorten it with jq"
