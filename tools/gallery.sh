@@ -83,7 +83,9 @@ for arg in "$@"; do
     [[ -f $dir/render/manifest.json ]] ||
         die "$dir/render/manifest.json: the shot has not been rendered to the end: run make shot SHOT=$shot"
     read -r width height < <(jq -r '.resolution | "\(.[0]) \(.[1])"' "$dir/render/manifest.json")
-    [[ $width == 640 && $height == 360 ]] || die "$dir/render: rendered at ${width}x$height, the gallery wants 640x360 (/render/resolution)"
+    # 640x360, or a larger 16:9 render (the riverbed renders 960x540 for its terrain) scaled down
+    ((width >= 640 && width * 9 == height * 16)) ||
+        die "$dir/render: rendered at ${width}x$height, the gallery wants 640x360 or a larger 16:9 size (/render/resolution)"
 
     if [[ -n $frame ]]; then
         still=$(printf '%s/render/frame.%04d.png' "$dir" "$frame")
@@ -93,7 +95,12 @@ for arg in "$@"; do
         label="the last frame, turntable view 1"
     fi
     [[ -f $still ]] || die "$still: no such render (name a rendered frame, or give the shot a turntable)"
-    cp "$still" "$DEST/.$shot.png.tmp" && mv -f "$DEST/.$shot.png.tmp" "$DEST/$shot.png"
+    if ((width == 640)); then
+        cp "$still" "$DEST/.$shot.png.tmp"
+    else
+        ffmpeg -loglevel error -y -i "$still" -vf scale=640:360:flags=lanczos -f image2 -c:v png "$DEST/.$shot.png.tmp"
+    fi
+    mv -f "$DEST/.$shot.png.tmp" "$DEST/$shot.png"
     ffmpeg -loglevel error -y -i "$dir/render/contact_sheet.png" -vf scale=1280:-2 -q:v 4 "$DEST/.${shot}_contact.tmp.jpg"
     mv -f "$DEST/.${shot}_contact.tmp.jpg" "$DEST/${shot}_contact.jpg"
 
