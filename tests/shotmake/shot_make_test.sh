@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
-# The shot Makefile's claims on a shot (ctest passes Fig. 8(c)'s slab), through the make rules themselves (pipeline/shot.mk,
-# run the way the root Makefile's `shot` target runs them, without its build and deps steps):
+# The shot Makefile's claims on a shot (ctest passes Fig. 8(c)'s slab), through the make rules
+# themselves (pipeline/shot.mk, run the way the root Makefile's `shot` target runs them, without
+# its build and deps steps):
 #
 #   shot_make_test.sh SOURCE_DIR BIN_DIR [SHOT_FILE]     (SHOT_FILE default: SOURCE_DIR/shots/demo.json)
 #
