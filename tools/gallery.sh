@@ -28,7 +28,9 @@ die() { echo "gallery.sh: $*" >&2; exit 1; }
 OUT=$1
 shift
 for tool in jq ffmpeg; do command -v $tool >/dev/null || die "$tool not found (make deps installs it)"; done
-[[ -x $BUILD/bin/mc-measure ]] || die "$BUILD/bin/mc-measure is not built: run make build"
+for tool in mc-measure mc-shot; do
+    [[ -x $BUILD/bin/$tool ]] || die "$BUILD/bin/$tool is not built: run make build"
+done
 grep -q '^<!-- gallery begin -->$' "$README" && grep -q '^<!-- gallery end -->$' "$README" ||
     die "$README has no <!-- gallery begin --> / <!-- gallery end --> lines to fill"
 
@@ -60,14 +62,14 @@ measure_is_stale() {
     return 1
 }
 
-# One line of a stage: "sim 111 s, 118 MiB" from its manifest, or nothing when it did not run;
-# a stage taken from another shot (/reuse) names that shot, which ran it.
-stage_cost() {
-    local manifest=$1 stage=$2 shot=$3
-    [[ -f $manifest ]] || return 0
-    jq -r --arg s "$stage" --arg shot "$shot" '
-        "\($s) \(.wall_seconds * 10 | round / 10) s, \((.peak_memory_bytes // .peak_rss_bytes) / 1048576 | round) MiB"
-        + (.shot | ltrimstr("shots/") | rtrimstr(".json") | if . == $shot then "" else " (\(.)'"'"'s, reused)" end)' "$manifest"
+# The stages' costs, "init 0.3 s, 84 MiB; sim 111 s, 118 MiB; ...", from `mc-shot summary --json`
+# (the stages' manifests); a stage taken from another shot (/reuse) names that shot, which ran it.
+stage_costs() {
+    local dir=$1 shot=$2
+    "$BUILD/bin/mc-shot" summary --json "$dir" | jq -r --arg shot "$shot" '[.stages[]
+        | "\(.stage) \(.wall_seconds * 10 | round / 10) s, \(.peak_memory_bytes / 1048576 | round) MiB"
+          + ((.shot // $shot) | ltrimstr("shots/") | rtrimstr(".json") | if . == $shot then "" else " (\(.)'"'"'s, reused)" end)]
+        | join("; ")'
 }
 
 mkdir -p "$DEST"
@@ -136,7 +138,7 @@ for arg in "$@"; do
         | if ($fs | map(.fragments) | max) > 1 and $n >= 5
           then [range(0; 5) | $fs[(. * ($n - 1) / 4 | floor)] | "\(.fragments) (frame \(.frame))"] | "fragments over time: " + join(", ")
           else empty end' "$dir/measure.json")
-    costs=$(for stage in init sim surface render; do stage_cost "$dir/$stage/manifest.json" $stage "$shot"; done | paste -sd ';' - | sed 's/;/; /g')
+    costs=$(stage_costs "$dir" "$shot") || die "$dir: mc-shot summary cannot read its stages' manifests"
     read -r threads date < <(jq -r '"\(.threads) \(.created_utc[:10])"' "$dir/render/manifest.json")
 
     {

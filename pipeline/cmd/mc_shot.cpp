@@ -54,6 +54,8 @@ int main(int argc, char** argv) {
     CLI::App* summary_cmd =
         app.add_subcommand("summary", "print what each stage wrote under OUT (from its manifest)");
     summary_cmd->add_option("OUT", out_dir, "a shot's output folder, e.g. out/demo")->required();
+    bool summary_json = false;
+    summary_cmd->add_flag("--json", summary_json, "print one JSON object instead of the table (for scripts)");
 
     try {
         app.parse(argc, argv);
@@ -76,7 +78,7 @@ int main(int argc, char** argv) {
             if (!shot.reuse.empty()) std::cout << shot.reuse << "\n";
             return 0;
         }
-        if (summary_cmd->parsed()) return run_summary(out_dir);
+        if (summary_cmd->parsed()) return run_summary(out_dir, summary_json);
         if (validate->parsed()) {
             const Shot shot = load_shot(file);
             std::cout << "ok: " << file << "\n" << shot_summary(shot) << "\n";

@@ -214,6 +214,9 @@ TEST_F(McRenderCli, ChunksPlusAssembleAreByteIdenticalToAFullRun) {
     EXPECT_EQ(m.at("contact_sheet"), full_manifest.at("contact_sheet"));
     EXPECT_EQ(m.at("movies"), full_manifest.at("movies"));
     EXPECT_GT(m.at("seconds_per_frame").get<double>(), 0.0);
+    // the peak memory under the key every stage's manifest uses (mc-shot summary reads it)
+    EXPECT_GT(m.at("peak_memory_bytes").get<double>(), 0.0);
+    EXPECT_GT(full_manifest.at("peak_memory_bytes").get<double>(), 0.0);
 }
 
 // The camera frames the bounds of every frame. mc-surface writes each frame's bounds into its

@@ -12,6 +12,8 @@
 #include <string>
 #include <thread>
 
+#include <nlohmann/json.hpp>
+
 namespace {
 
 namespace fs = std::filesystem;
@@ -121,6 +123,36 @@ TEST_F(McShotCli, SummaryReadsTheManifests) {
     EXPECT_NE(r.out.find("12.50"), std::string::npos) << r.out;
     EXPECT_NE(r.out.find("2.5e+06 particle-steps/s"), std::string::npos) << r.out;
     EXPECT_EQ(mc_shot("summary " + (m_dir / "empty").string()).code, 1);
+    EXPECT_EQ(mc_shot("summary --json " + (m_dir / "empty").string()).code, 1);
+}
+
+TEST_F(McShotCli, SummaryAsJsonHasTheTablesNumbers) {
+    fs::create_directories(m_dir / "out" / "sim");
+    std::ofstream(m_dir / "out" / "sim" / "manifest.json")
+        << R"({"stage": "sim", "shot": "shots/fig8_c.json", "wall_seconds": 12.5, "peak_memory_bytes": 20971520,
+               "frames": {"first": 1, "last": 48}, "particle_steps_per_second": 2500000})";
+    fs::create_directories(m_dir / "out" / "render");  // a manifest written before the key was renamed
+    std::ofstream(m_dir / "out" / "render" / "manifest.json")
+        << R"({"stage": "render", "wall_seconds": 3, "peak_rss_bytes": 1048576})";
+    const Result r = mc_shot("summary --json " + (m_dir / "out").string());
+    ASSERT_EQ(r.code, 0) << r.err;
+    const nlohmann::json doc = nlohmann::json::parse(r.out);
+    ASSERT_EQ(doc.at("stages").size(), 2u) << r.out;  // the stages that ran, in run order
+    const nlohmann::json& sim = doc["stages"][0];
+    EXPECT_EQ(sim.at("stage"), "sim");
+    EXPECT_EQ(sim.at("shot"), "shots/fig8_c.json");
+    EXPECT_EQ(sim.at("frames"), (nlohmann::json{{"first", 1}, {"last", 48}}));
+    EXPECT_DOUBLE_EQ(sim.at("wall_seconds").get<double>(), 12.5);
+    EXPECT_DOUBLE_EQ(sim.at("peak_memory_bytes").get<double>(), 20971520);
+    EXPECT_DOUBLE_EQ(sim.at("throughput").at("value").get<double>(), 2.5e6);
+    EXPECT_EQ(sim.at("throughput").at("unit"), "particle-steps/s");
+    EXPECT_EQ(sim.at("files"), 1);
+    const nlohmann::json& render = doc["stages"][1];
+    EXPECT_EQ(render.at("stage"), "render");
+    EXPECT_TRUE(render.at("shot").is_null());
+    EXPECT_TRUE(render.at("frames").is_null());
+    EXPECT_TRUE(render.at("throughput").at("value").is_null());
+    EXPECT_DOUBLE_EQ(render.at("peak_memory_bytes").get<double>(), 1048576);
 }
 
 TEST_F(McShotCli, SliceIsRewrittenOnlyWhenItChanges) {

@@ -272,7 +272,7 @@ int run_full(const StageOptions& opt, const RenderJob& job) {
 
     json m = render_manifest(job, *renderer, stats, turntable, movies, assembly.sheet_summary());
     m["wall_seconds"] = total.seconds();
-    m["peak_rss_bytes"] = peak_rss_bytes();
+    m["peak_memory_bytes"] = peak_rss_bytes();
     write_manifest(dir, m);
     staging.commit();
     print_table(job, renderer.get(), "full", job.first, job.last, turntable,
@@ -405,7 +405,7 @@ int run_assemble(const StageOptions& opt, const RenderJob& job) {
     json m = render_manifest(job, *renderer, stats, turntable, movies, assembly.sheet_summary());
     m["assembled"] = true;
     m["wall_seconds"] = total.seconds();
-    m["peak_rss_bytes"] = peak_rss_bytes();
+    m["peak_memory_bytes"] = peak_rss_bytes();
     write_manifest(dir, m);
     for (const fs::directory_entry& e : fs::directory_iterator(dir))
         if (is_chunk_stats(e.path())) fs::remove(e.path());

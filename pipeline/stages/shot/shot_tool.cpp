@@ -118,50 +118,97 @@ double first_number(const nlohmann::json& m, std::initializer_list<const char*> 
     }
     return std::nan("");
 }
-}  // namespace
 
-int run_summary(const std::string& out) {
+/// What one stage's manifest and output folder say, for `mc-shot summary`.
+struct StageSummary {
+    std::string stage, dir, shot;  // shot: the shot file that ran the stage ("" if unrecorded)
+    int first = 0, last = 0;        // frames; both 0 when the stage has none (init)
+    double wall_seconds = std::nan(""), peak_memory_bytes = std::nan("");
+    double rate = std::nan("");     // the stage's throughput, in rate_unit
+    std::string rate_unit;
+    int files = 0;
+    std::uintmax_t bytes = 0;
+};
+
+std::vector<StageSummary> read_stage_summaries(const std::string& out) {
     namespace fs = std::filesystem;
     struct Throughput { const char* pointer; const char* unit; };
-    const std::map<std::string, std::vector<Throughput>> throughput = {
-        {"init", {{"/rates/particles_per_s", "particles/s"}}},
-        {"sim", {{"/particle_steps_per_second", "particle-steps/s"}}},
-        {"surface", {{"/tets_per_second", "tets/s"}}},
-        {"render", {{"/seconds_per_frame", "s/frame"}}},
+    const std::map<std::string, Throughput> throughput = {
+        {"init", {"/rates/particles_per_s", "particles/s"}},
+        {"sim", {"/particle_steps_per_second", "particle-steps/s"}},
+        {"surface", {"/tets_per_second", "tets/s"}},
+        {"render", {"/seconds_per_frame", "s/frame"}},
     };
-    std::printf("%-8s %-10s %9s %26s %10s  %s\n", "stage", "frames", "wall [s]", "throughput", "peak MiB",
-                "outputs");
-    int stages_found = 0;
+    std::vector<StageSummary> rows;
     for (const char* stage : {"init", "sim", "surface", "render"}) {
         const fs::path dir = fs::path(out) / stage;
         std::error_code ec;
         if (!fs::is_regular_file(dir / "manifest.json", ec)) continue;
         const nlohmann::json m = read_manifest(dir);
-        int files = 0;
-        std::uintmax_t bytes = 0;
+        StageSummary r;
+        r.stage = stage;
+        r.dir = dir.string();
+        if (m.contains("shot") && m["shot"].is_string()) r.shot = m["shot"].get<std::string>();
         for (const fs::directory_entry& e : fs::directory_iterator(dir)) {
             if (!e.is_regular_file()) continue;
-            ++files;
-            bytes += e.file_size();
+            ++r.files;
+            r.bytes += e.file_size();
         }
-        std::string frames = "-";
         const double first = first_number(m, {"/frames/first"}), last = first_number(m, {"/frames/last"});
-        if (!std::isnan(first) && !std::isnan(last))
-            frames = std::to_string(int(first)) + "-" + std::to_string(int(last));
-        const double wall = first_number(m, {"/wall_seconds", "/wall_time_seconds"});
-        const double peak = first_number(m, {"/peak_memory_bytes", "/peak_rss_bytes"});
-        std::string rate = "-";
-        for (const Throughput& t : throughput.at(stage)) {
-            const double v = first_number(m, {t.pointer});
-            if (!std::isnan(v)) rate = number(v) + " " + t.unit;
+        if (!std::isnan(first) && !std::isnan(last)) {
+            r.first = int(first);
+            r.last = int(last);
         }
-        char outputs[64];
-        std::snprintf(outputs, sizeof outputs, "%d files, %.1f MiB", files, static_cast<double>(bytes) / 1048576.0);
-        std::printf("%-8s %-10s %9.2f %26s %10.1f  %s in %s\n", stage, frames.c_str(), wall, rate.c_str(),
-                    peak / 1048576.0, outputs, dir.string().c_str());
-        ++stages_found;
+        r.wall_seconds = first_number(m, {"/wall_seconds"});
+        // render manifests written before 2026-11-25 name the peak peak_rss_bytes
+        r.peak_memory_bytes = first_number(m, {"/peak_memory_bytes", "/peak_rss_bytes"});
+        const Throughput& t = throughput.at(stage);
+        r.rate = first_number(m, {t.pointer});
+        r.rate_unit = t.unit;
+        rows.push_back(std::move(r));
     }
-    if (stages_found == 0) throw InputError(out + ": no stage outputs (no <stage>/manifest.json)");
+    if (rows.empty()) throw InputError(out + ": no stage outputs (no <stage>/manifest.json)");
+    return rows;
+}
+
+/// A number, or null when the manifest did not have it.
+nlohmann::json number_or_null(double v) { return std::isnan(v) ? nlohmann::json(nullptr) : nlohmann::json(v); }
+/// A byte count, or null when the manifest did not have it.
+nlohmann::json bytes_or_null(double v) {
+    return std::isnan(v) ? nlohmann::json(nullptr) : nlohmann::json(static_cast<std::int64_t>(v));
+}
+}  // namespace
+
+int run_summary(const std::string& out, bool as_json) {
+    const std::vector<StageSummary> rows = read_stage_summaries(out);
+    if (as_json) {
+        nlohmann::json doc = {{"out", out}, {"stages", nlohmann::json::array()}};
+        for (const StageSummary& r : rows) {
+            nlohmann::json j = {{"stage", r.stage},
+                                {"dir", r.dir},
+                                {"shot", r.shot.empty() ? nlohmann::json(nullptr) : nlohmann::json(r.shot)},
+                                {"frames", r.last > 0 ? nlohmann::json{{"first", r.first}, {"last", r.last}}
+                                                      : nlohmann::json(nullptr)},
+                                {"wall_seconds", number_or_null(r.wall_seconds)},
+                                {"peak_memory_bytes", bytes_or_null(r.peak_memory_bytes)},
+                                {"throughput", {{"value", number_or_null(r.rate)}, {"unit", r.rate_unit}}},
+                                {"files", r.files},
+                                {"bytes", r.bytes}};
+            doc["stages"].push_back(std::move(j));
+        }
+        std::cout << doc.dump(2) << "\n";
+        return 0;
+    }
+    std::printf("%-8s %-10s %9s %26s %10s  %s\n", "stage", "frames", "wall [s]", "throughput", "peak MiB",
+                "outputs");
+    for (const StageSummary& r : rows) {
+        const std::string frames = r.last > 0 ? std::to_string(r.first) + "-" + std::to_string(r.last) : "-";
+        const std::string rate = std::isnan(r.rate) ? "-" : number(r.rate) + " " + r.rate_unit;
+        char outputs[64];
+        std::snprintf(outputs, sizeof outputs, "%d files, %.1f MiB", r.files, static_cast<double>(r.bytes) / 1048576.0);
+        std::printf("%-8s %-10s %9.2f %26s %10.1f  %s in %s\n", r.stage.c_str(), frames.c_str(), r.wall_seconds,
+                    rate.c_str(), r.peak_memory_bytes / 1048576.0, outputs, r.dir.c_str());
+    }
     return 0;
 }
 

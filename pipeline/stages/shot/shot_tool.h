@@ -19,8 +19,11 @@ std::string stage_list(const Shot& shot);
 int run_slice(const std::string& file, const std::string& stage_name, const std::string& out);
 
 /// Prints per stage output folder under `out` the frames, wall time, throughput, peak memory and
-/// outputs, as the stage's manifest recorded them. Returns the exit code (0).
+/// outputs, as the stage's manifest recorded them: a table, or with `as_json` one JSON object
+/// {"out", "stages": [{"stage", "dir", "shot", "frames": {"first", "last"} | null, "wall_seconds",
+/// "peak_memory_bytes", "throughput": {"value", "unit"}, "files", "bytes"}]} (a value the manifest
+/// lacks is null). Returns the exit code (0).
 /// @throws InputError when `out` holds no stage's manifest
-int run_summary(const std::string& out);
+int run_summary(const std::string& out, bool as_json);
 
 }  // namespace mudcrack
