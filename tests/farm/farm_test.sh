@@ -2,8 +2,8 @@
 # The farm's promise: a shot run through Slurm gives the same files as a local run, and a
 # killed surfacing task is all that a re-run resubmits.
 #
-#   farm_test.sh SOURCE_DIR BIN_DIR [SHOT_FILE]     (SHOT_FILE default: SOURCE_DIR/shots/demo.json;
-#                                                    at most its first 24 frames, 6 turntable views)
+#   farm_test.sh SOURCE_DIR BIN_DIR [SHOT_FILE]     (SHOT_FILE default: SOURCE_DIR/shots/fig8_c.json,
+#                                                    cut by tests/short_shot.sh: 24 frames, 6 views)
 #
 # 1. starts a one-node Slurm cluster (slurm-wlm + munge) in a temporary folder, stopped by a trap
 #    whatever happens;
@@ -34,7 +34,7 @@ set -euo pipefail
 [ $# -ge 2 ] || { echo "usage: farm_test.sh SOURCE_DIR BIN_DIR [SHOT_FILE]" >&2; exit 2; }
 src=$(cd "$1" && pwd)
 bin=$(cd "$2" && pwd)
-shot=${3:-$src/shots/demo.json}
+shot=${3:-$src/shots/fig8_c.json}
 shot=$(cd "$(dirname "$shot")" && pwd)/$(basename "$shot")
 farm=$src/pipeline/farm
 name=$(basename "$shot" .json)
@@ -72,12 +72,9 @@ cleanup() {
     fi
 }
 trap cleanup EXIT
-# the shot's first 24 frames with a 6-view turntable: three surfacing and three render tasks of 8
-# frames and a sim checkpoint before the last frame (every 10 by default), so every step below
-# runs; a longer shot or turntable adds cost and no coverage (the whole 40-frame demo took 654 s of
-# a 42-minute CI)
-sed '/^[[:space:]]*\/\//d' "$shot" | jq '.frames.end = ([.frames.end, 24] | min) | .render.turntable.views = 6' >"$tmp/$name.json" ||
-    fail "$shot: cannot shorten it with jq"
+# shellcheck source=../short_shot.sh
+. "$src/tests/short_shot.sh"
+short_shot "$shot" >"$tmp/$name.json" || fail "$shot: cannot shorten it with jq"
 shot=$tmp/$name.json
 
 now() { date +%s.%N; }

@@ -3,7 +3,7 @@
 # themselves (pipeline/shot.mk, run the way the root Makefile's `shot` target runs them, without
 # its build and deps steps):
 #
-#   shot_make_test.sh SOURCE_DIR BIN_DIR [SHOT_FILE]     (SHOT_FILE default: SOURCE_DIR/shots/demo.json)
+#   shot_make_test.sh SOURCE_DIR BIN_DIR [SHOT_FILE]     (SHOT_FILE default: SOURCE_DIR/shots/fig8_c.json)
 #
 # 1. a serial `make shot-run shot-summary` into TMP/serial runs every stage over all frames and
 #    prints the summary table;
@@ -22,15 +22,17 @@ set -euo pipefail
 
 # shellcheck source=make_test_lib.sh
 . "$(dirname "${BASH_SOURCE[0]}")/make_test_lib.sh"
-make_test_setup shot_make_test "$@"
+make_test_setup shot_make_test fig8_c "$@"
 name=$(basename "$shot_src" .json)
 shot=$tmp/$name.json
 # a quarter of the pixels (a render key: the stages before it are the shot's own) keeps the four
-# render runs short; so do the first 24 frames and a 6-view turntable (an earlier demo's 28,611
-# particles over 48 frames took 846 s of the test's 900 on a loaded 2-core machine)
-sed 's/"resolution": \[640, 360\]/"resolution": [320, 180]/' "$shot_src" |
-    sed '/^[[:space:]]*\/\//d' | jq '.frames.end = ([.frames.end, 24] | min) | .render.turntable.views = 6' >"$shot" ||
-    fail "$shot_src: cannot shorten it with jq"
+# render runs short; so does the cut every long pipeline test runs (tests/short_shot.sh: the first
+# 24 frames, a 6-view turntable; an earlier demo's 28,611 particles over 48 frames took 846 s of
+# the test's 900 on a loaded 2-core machine)
+# shellcheck source=../short_shot.sh
+. "$src/tests/short_shot.sh"
+sed 's/"resolution": \[640, 360\]/"resolution": [320, 180]/' "$shot_src" >"$tmp/reduced.json"
+short_shot "$tmp/reduced.json" >"$shot" || fail "$shot_src: cannot shorten it with jq"
 [ "$(jq -c .render.resolution "$shot")" = "[320,180]" ] || fail "$shot_src: no '\"resolution\": [640, 360]' to reduce"
 serial=$tmp/serial/$name
 parallel=$tmp/parallel/$name

@@ -24,7 +24,7 @@ set -euo pipefail
 
 # shellcheck source=make_test_lib.sh
 . "$(dirname "${BASH_SOURCE[0]}")/make_test_lib.sh"
-make_test_setup shot_reuse_test "$@"
+make_test_setup shot_reuse_test demo "$@"
 mkdir -p "$tmp/shots"
 base=$tmp/shots/base.json look=$tmp/shots/look.json out=$tmp/out
 
