@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <vector>
 
 #include <Eigen/Geometry>
 
@@ -55,11 +56,19 @@ Eigen::Matrix4f ortho_matrix(float l, float r, float b, float t, float n, float 
     return m;
 }
 
-Camera auto_frame(const Bounds& bounds, float fov_deg, float aspect, float fill) {
+namespace {
+Camera default_camera(float fov_deg) {
     Camera cam;
     cam.fov_deg = fov_deg;
-    if (bounds.is_empty()) return cam;
-    const Vec3f c = bounds.center();
+    return cam;
+}
+
+/// A camera looking at `target` from the default direction, at the smallest distance at which
+/// every point of `points` fits in the frame with `fill` of the half-extent.
+Camera frame_points(const std::vector<Vec3f>& points, const Vec3f& target, float fov_deg, float aspect,
+                    float fill) {
+    Camera cam;
+    cam.fov_deg = fov_deg;
     const float az = radians(kAutoAzimuthDeg), el = radians(kAutoElevationDeg);
     const Vec3f back(std::sin(az) * std::cos(el), std::sin(el), std::cos(az) * std::cos(el));
     // camera basis for the direction (independent of distance)
@@ -68,24 +77,52 @@ Camera auto_frame(const Bounds& bounds, float fov_deg, float aspect, float fill)
     const Vec3f u = s.cross(f);
     const float tan_v = std::tan(0.5f * radians(fov_deg)) * fill;
     const float tan_h = tan_v * aspect;
-    // each corner at depth (d - z) must satisfy |x| <= tan_h (d - z) and |y| <= tan_v (d - z)
+    // each point at depth (d - z) must satisfy |x| <= tan_h (d - z) and |y| <= tan_v (d - z)
     float d = 0;
-    for (int i = 0; i < 8; ++i) {
-        const Vec3f p((i & 1) ? bounds.max.x() : bounds.min.x(),
-                      (i & 2) ? bounds.max.y() : bounds.min.y(),
-                      (i & 4) ? bounds.max.z() : bounds.min.z());
-        const Vec3f q = p - c;
+    for (const Vec3f& p : points) {
+        const Vec3f q = p - target;
         const float x = q.dot(s), y = q.dot(u), z = -q.dot(f);  // z > 0: towards the camera
         d = std::max({d, z + std::abs(x) / tan_h, z + std::abs(y) / tan_v});
     }
     d = std::max(d, 1e-3f);
-    cam.target = c;
-    cam.position = c + back * d;
+    cam.target = target;
+    cam.position = target + back * d;
     return cam;
 }
+}  // namespace
 
-Camera resolve_camera(const CameraParams& params, const Bounds& bounds, float aspect) {
-    if (params.is_auto) return auto_frame(bounds, float(params.fov_deg), aspect);
+Camera auto_frame(const Bounds& bounds, float fov_deg, float aspect, float fill) {
+    if (bounds.is_empty()) return default_camera(fov_deg);
+    std::vector<Vec3f> corners;
+    for (int i = 0; i < 8; ++i)
+        corners.emplace_back((i & 1) ? bounds.max.x() : bounds.min.x(), (i & 2) ? bounds.max.y() : bounds.min.y(),
+                             (i & 4) ? bounds.max.z() : bounds.min.z());
+    return frame_points(corners, bounds.center(), fov_deg, aspect, fill);
+}
+
+Camera auto_frame_orbit(const Bounds& bounds, float fov_deg, float aspect, float fill) {
+    if (bounds.is_empty()) return default_camera(fov_deg);
+    // The box swept about the vertical axis through its center fills a cylinder of the radius of
+    // its horizontal half-diagonal. The orbit turns the camera about that same axis, so every
+    // view sees the cylinder alike: framing it in one view frames the box in all of them. A
+    // polygon of kSides sides drawn around the circle stands for it (it holds the circle).
+    constexpr int kSides = 96;
+    const Vec3f c = bounds.center();
+    const float r = 0.5f * std::hypot(bounds.max.x() - bounds.min.x(), bounds.max.z() - bounds.min.z()) /
+                    std::cos(kPi / kSides);
+    std::vector<Vec3f> rims;
+    for (int k = 0; k < kSides; ++k) {
+        const float a = 2 * kPi * k / kSides;
+        for (const float y : {bounds.min.y(), bounds.max.y()})
+            rims.emplace_back(c.x() + r * std::cos(a), y, c.z() + r * std::sin(a));
+    }
+    return frame_points(rims, c, fov_deg, aspect, fill);
+}
+
+Camera resolve_camera(const CameraParams& params, const Bounds& bounds, float aspect, bool orbit) {
+    if (params.is_auto)
+        return orbit ? auto_frame_orbit(bounds, float(params.fov_deg), aspect)
+                     : auto_frame(bounds, float(params.fov_deg), aspect);
     Camera cam;
     cam.position = params.position.cast<float>();
     cam.target = params.target.cast<float>();

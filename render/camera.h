@@ -22,8 +22,15 @@ constexpr float kAutoElevationDeg = 26;  // above the horizon
 /// (0.9 leaves a 10% margin). @param aspect width / height
 Camera auto_frame(const Bounds& bounds, float fov_deg, float aspect, float fill = 0.88f);
 
-/// The shot's camera: `params` as given, or auto-framed from `bounds` when params.is_auto.
-Camera resolve_camera(const CameraParams& params, const Bounds& bounds, float aspect);
+/// The first view of a turntable around `bounds` (turntable_camera orbits it): the default
+/// direction at the smallest distance at which the box stays in the frame, with `fill` of the
+/// half-extent, in every view of the orbit. It frames the cylinder the box sweeps about the
+/// vertical axis through its center.
+Camera auto_frame_orbit(const Bounds& bounds, float fov_deg, float aspect, float fill = 0.88f);
+
+/// The shot's camera: `params` as given, or auto-framed from `bounds` when params.is_auto (for a
+/// turntable's orbit when `orbit`).
+Camera resolve_camera(const CameraParams& params, const Bounds& bounds, float aspect, bool orbit = false);
 
 /// `camera` rotated by angle_rad about the vertical axis through its target (turntable view;
 /// right-hand rule about +y).

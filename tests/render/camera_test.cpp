@@ -37,6 +37,39 @@ TEST(Camera, AutoFrameFitsEveryCornerWithAMargin) {
     }
 }
 
+TEST(Camera, OrbitFrameKeepsTheBoxInEveryViewOfTheTurntable) {
+    for (const float aspect : {16.0f / 9.0f, 1.0f}) {
+        Bounds b;
+        b.extend(Vec3f(-18, 0, -18));  // the riverbed: a wide flat patch, off the origin
+        b.extend(Vec3f(20, 0.5f, 16));
+        const Camera base = auto_frame_orbit(b, 35, aspect, 0.88f);
+        const int views = 72;
+        float widest = 0;
+        for (int v = 0; v < views; ++v) {
+            const Camera cam = turntable_camera(base, v, views);
+            for (int i = 0; i < 8; ++i) {
+                const Vec3f p((i & 1) ? b.max.x() : b.min.x(), (i & 2) ? b.max.y() : b.min.y(),
+                              (i & 4) ? b.max.z() : b.min.z());
+                const Eigen::Vector3f q = ndc(cam, aspect, p);
+                EXPECT_LE(std::abs(q.x()), 0.88f + 1e-4f) << "aspect " << aspect << " view " << v << " corner " << i;
+                EXPECT_LE(std::abs(q.y()), 0.88f + 1e-4f) << "aspect " << aspect << " view " << v << " corner " << i;
+                widest = std::max({widest, std::abs(q.x()), std::abs(q.y())});
+            }
+        }
+        // tight: in some view a corner comes to the margin
+        EXPECT_NEAR(widest, 0.88f, 0.02f) << "aspect " << aspect;
+        // and closer than framing the square the box sweeps (what the turntable framed before)
+        const Vec3f c = b.center();
+        const float r = 0.5f * std::hypot(b.max.x() - b.min.x(), b.max.z() - b.min.z());
+        Bounds square;
+        square.extend(Vec3f(c.x() - r, b.min.y(), c.z() - r));
+        square.extend(Vec3f(c.x() + r, b.max.y(), c.z() + r));
+        const Camera loose = auto_frame(square, 35, aspect, 0.88f);
+        EXPECT_LT((base.position - base.target).norm(), 0.8f * (loose.position - loose.target).norm());
+        EXPECT_NEAR((base.target - c).norm(), 0, 1e-4);
+    }
+}
+
 TEST(Camera, ExplicitCameraIsKept) {
     CameraParams p;
     p.is_auto = false;
@@ -47,6 +80,7 @@ TEST(Camera, ExplicitCameraIsKept) {
     b.extend(Vec3f(-1, -1, -1));
     b.extend(Vec3f(1, 1, 1));
     const Camera cam = resolve_camera(p, b, 1.5f);
+    EXPECT_NEAR((cam.position - resolve_camera(p, b, 1.5f, /*orbit=*/true).position).norm(), 0, tol::kFloat);
     EXPECT_NEAR((cam.position - Vec3f(1, 2, 3)).norm(), 0, tol::kFloat);
     EXPECT_NEAR((cam.target - Vec3f(0, 1, 0)).norm(), 0, tol::kFloat);
     EXPECT_FLOAT_EQ(cam.fov_deg, 50);

@@ -44,18 +44,6 @@ enum class Mode {
     Assemble,  // --assemble: the turntable, contact sheet, movies and manifest from the frame PNGs
 };
 
-/// The bounds of a turntable orbit: the frame's bounds swept around the vertical axis through
-/// their center, so no view of the orbit leaves the frame.
-Bounds orbit_bounds(const Bounds& b) {
-    if (b.is_empty()) return b;
-    const Vec3f c = b.center();
-    const float r = 0.5f * std::hypot(b.max.x() - b.min.x(), b.max.z() - b.min.z());
-    Bounds out;
-    out.extend(Vec3f(c.x() - r, b.min.y(), c.z() - r));
-    out.extend(Vec3f(c.x() + r, b.max.y(), c.z() + r));
-    return out;
-}
-
 Image to_png_image(RenderedImage&& img) {
     Image out;
     out.width = img.width;
@@ -165,7 +153,7 @@ TurntableResult render_turntable(const RenderJob& job, Renderer& renderer, const
     const Scene scene = load_scene(job.src, job.turntable_frame);
     Bounds b = scene_bounds(scene);
     if (b.is_empty()) b = stage();
-    const Camera base = resolve_camera(job.params.camera, orbit_bounds(b), job.aspect());
+    const Camera base = resolve_camera(job.params.camera, b, job.aspect(), /*orbit=*/true);
     renderer.set_scene(scene, b);
     std::optional<MovieEncoder> movie;
     if (has_ffmpeg) movie.emplace(dir / "turntable.mp4", job.params.width, job.params.height, job.params.fps);
