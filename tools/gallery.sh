@@ -63,11 +63,13 @@ measure_is_stale() {
 }
 
 # The stages' costs, "init 0.3 s, 84 MiB; sim 111 s, 118 MiB; ...", from `mc-shot summary --json`
-# (the stages' manifests); a stage taken from another shot (/reuse) names that shot, which ran it.
+# (the stages' manifests); a stage taken from another shot (/reuse) names that shot, which ran it,
+# and a sim resumed from a checkpoint says so (its time covers only the frames after it).
 stage_costs() {
     local dir=$1 shot=$2
     "$BUILD/bin/mc-shot" summary --json "$dir" | jq -r --arg shot "$shot" '[.stages[]
         | "\(.stage) \(.wall_seconds * 10 | round / 10) s, \(.peak_memory_bytes / 1048576 | round) MiB"
+          + (if .resumed_from_frame then " (resumed from frame \(.resumed_from_frame): the frames after it only)" else "" end)
           + ((.shot // $shot) | ltrimstr("shots/") | rtrimstr(".json") | if . == $shot then "" else " (\(.)'"'"'s, reused)" end)]
         | join("; ")'
 }

@@ -147,12 +147,26 @@ TEST_F(McShotCli, SummaryAsJsonHasTheTablesNumbers) {
     EXPECT_DOUBLE_EQ(sim.at("throughput").at("value").get<double>(), 2.5e6);
     EXPECT_EQ(sim.at("throughput").at("unit"), "particle-steps/s");
     EXPECT_EQ(sim.at("files"), 1);
+    EXPECT_TRUE(sim.at("resumed_from_frame").is_null());
     const nlohmann::json& render = doc["stages"][1];
     EXPECT_EQ(render.at("stage"), "render");
     EXPECT_TRUE(render.at("shot").is_null());
     EXPECT_TRUE(render.at("frames").is_null());
     EXPECT_TRUE(render.at("throughput").at("value").is_null());
     EXPECT_DOUBLE_EQ(render.at("peak_memory_bytes").get<double>(), 1048576);
+}
+
+// A sim resumed from a checkpoint timed only the frames after it: both forms say so.
+TEST_F(McShotCli, SummaryNamesTheFrameASimResumedFrom) {
+    fs::create_directories(m_dir / "out" / "sim");
+    std::ofstream(m_dir / "out" / "sim" / "manifest.json")
+        << R"({"stage": "sim", "wall_seconds": 5.3, "frames": {"first": 1, "last": 96}, "resumed_from_frame": 90})";
+    const Result table = mc_shot("summary " + (m_dir / "out").string());
+    ASSERT_EQ(table.code, 0) << table.err;
+    EXPECT_NE(table.out.find("1-96 from 90"), std::string::npos) << table.out;
+    const Result json = mc_shot("summary --json " + (m_dir / "out").string());
+    ASSERT_EQ(json.code, 0) << json.err;
+    EXPECT_EQ(nlohmann::json::parse(json.out).at("stages")[0].at("resumed_from_frame"), 90) << json.out;
 }
 
 TEST_F(McShotCli, SliceIsRewrittenOnlyWhenItChanges) {

@@ -123,6 +123,7 @@ double first_number(const nlohmann::json& m, std::initializer_list<const char*> 
 struct StageSummary {
     std::string stage, dir, shot;  // shot: the shot file that ran the stage ("" if unrecorded)
     int first = 0, last = 0;        // frames; both 0 when the stage has none (init)
+    int resumed_from_frame = 0;     // a sim that resumed from its checkpoint at this frame; else 0
     double wall_seconds = std::nan(""), peak_memory_bytes = std::nan("");
     double rate = std::nan("");     // the stage's throughput, in rate_unit
     std::string rate_unit;
@@ -159,6 +160,8 @@ std::vector<StageSummary> read_stage_summaries(const std::string& out) {
             r.first = int(first);
             r.last = int(last);
         }
+        const double resumed = first_number(m, {"/resumed_from_frame"});
+        if (!std::isnan(resumed)) r.resumed_from_frame = int(resumed);
         r.wall_seconds = first_number(m, {"/wall_seconds"});
         // render manifests written before 2026-11-25 name the peak peak_rss_bytes
         r.peak_memory_bytes = first_number(m, {"/peak_memory_bytes", "/peak_rss_bytes"});
@@ -189,6 +192,9 @@ int run_summary(const std::string& out, bool as_json) {
                                 {"shot", r.shot.empty() ? nlohmann::json(nullptr) : nlohmann::json(r.shot)},
                                 {"frames", r.last > 0 ? nlohmann::json{{"first", r.first}, {"last", r.last}}
                                                       : nlohmann::json(nullptr)},
+                                {"resumed_from_frame", r.resumed_from_frame > 0
+                                                           ? nlohmann::json(r.resumed_from_frame)
+                                                           : nlohmann::json(nullptr)},
                                 {"wall_seconds", number_or_null(r.wall_seconds)},
                                 {"peak_memory_bytes", bytes_or_null(r.peak_memory_bytes)},
                                 {"throughput", {{"value", number_or_null(r.rate)}, {"unit", r.rate_unit}}},
@@ -199,14 +205,16 @@ int run_summary(const std::string& out, bool as_json) {
         std::cout << doc.dump(2) << "\n";
         return 0;
     }
-    std::printf("%-8s %-10s %9s %26s %10s  %s\n", "stage", "frames", "wall [s]", "throughput", "peak MiB",
+    std::printf("%-8s %-12s %9s %26s %10s  %s\n", "stage", "frames", "wall [s]", "throughput", "peak MiB",
                 "outputs");
     for (const StageSummary& r : rows) {
-        const std::string frames = r.last > 0 ? std::to_string(r.first) + "-" + std::to_string(r.last) : "-";
+        // a resumed sim's wall time and throughput cover only the frames after its checkpoint
+        std::string frames = r.last > 0 ? std::to_string(r.first) + "-" + std::to_string(r.last) : "-";
+        if (r.resumed_from_frame > 0) frames += " from " + std::to_string(r.resumed_from_frame);
         const std::string rate = std::isnan(r.rate) ? "-" : number(r.rate) + " " + r.rate_unit;
         char outputs[64];
         std::snprintf(outputs, sizeof outputs, "%d files, %.1f MiB", r.files, static_cast<double>(r.bytes) / 1048576.0);
-        std::printf("%-8s %-10s %9.2f %26s %10.1f  %s in %s\n", r.stage.c_str(), frames.c_str(), r.wall_seconds,
+        std::printf("%-8s %-12s %9.2f %26s %10.1f  %s in %s\n", r.stage.c_str(), frames.c_str(), r.wall_seconds,
                     rate.c_str(), r.peak_memory_bytes / 1048576.0, outputs, r.dir.c_str());
     }
     return 0;

@@ -20,9 +20,10 @@ int run_slice(const std::string& file, const std::string& stage_name, const std:
 
 /// Prints per stage output folder under `out` the frames, wall time, throughput, peak memory and
 /// outputs, as the stage's manifest recorded them: a table, or with `as_json` one JSON object
-/// {"out", "stages": [{"stage", "dir", "shot", "frames": {"first", "last"} | null, "wall_seconds",
-/// "peak_memory_bytes", "throughput": {"value", "unit"}, "files", "bytes"}]} (a value the manifest
-/// lacks is null). Returns the exit code (0).
+/// {"out", "stages": [{"stage", "dir", "shot", "frames": {"first", "last"} | null,
+/// "resumed_from_frame", "wall_seconds", "peak_memory_bytes", "throughput": {"value", "unit"},
+/// "files", "bytes"}]} (a value the manifest lacks is null). A sim resumed from a checkpoint
+/// (frames "1-96 from 90" in the table) timed only the frames after it. Returns the exit code (0).
 /// @throws InputError when `out` holds no stage's manifest
 int run_summary(const std::string& out, bool as_json);
 
