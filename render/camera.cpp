@@ -94,9 +94,7 @@ Camera frame_points(const std::vector<Vec3f>& points, const Vec3f& target, float
 Camera auto_frame(const Bounds& bounds, float fov_deg, float aspect, float fill) {
     if (bounds.is_empty()) return default_camera(fov_deg);
     std::vector<Vec3f> corners;
-    for (int i = 0; i < 8; ++i)
-        corners.emplace_back((i & 1) ? bounds.max.x() : bounds.min.x(), (i & 2) ? bounds.max.y() : bounds.min.y(),
-                             (i & 4) ? bounds.max.z() : bounds.min.z());
+    for (int i = 0; i < 8; ++i) corners.push_back(bounds.corner(i));
     return frame_points(corners, bounds.center(), fov_deg, aspect, fill);
 }
 

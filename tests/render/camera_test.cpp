@@ -25,8 +25,7 @@ TEST(Camera, AutoFrameFitsEveryCornerWithAMargin) {
         const Camera cam = auto_frame(b, 35, aspect, 0.88f);
         float widest = 0;
         for (int i = 0; i < 8; ++i) {
-            const Vec3f p((i & 1) ? b.max.x() : b.min.x(), (i & 2) ? b.max.y() : b.min.y(),
-                          (i & 4) ? b.max.z() : b.min.z());
+            const Vec3f p = b.corner(i);
             const Eigen::Vector3f q = ndc(cam, aspect, p);
             EXPECT_LE(std::abs(q.x()), 0.88f + 1e-4f) << "aspect " << aspect << " corner " << i;
             EXPECT_LE(std::abs(q.y()), 0.88f + 1e-4f) << "aspect " << aspect << " corner " << i;
@@ -48,8 +47,7 @@ TEST(Camera, OrbitFrameKeepsTheBoxInEveryViewOfTheTurntable) {
         for (int v = 0; v < views; ++v) {
             const Camera cam = turntable_camera(base, v, views);
             for (int i = 0; i < 8; ++i) {
-                const Vec3f p((i & 1) ? b.max.x() : b.min.x(), (i & 2) ? b.max.y() : b.min.y(),
-                              (i & 4) ? b.max.z() : b.min.z());
+                const Vec3f p = b.corner(i);
                 const Eigen::Vector3f q = ndc(cam, aspect, p);
                 EXPECT_LE(std::abs(q.x()), 0.88f + 1e-4f) << "aspect " << aspect << " view " << v << " corner " << i;
                 EXPECT_LE(std::abs(q.y()), 0.88f + 1e-4f) << "aspect " << aspect << " view " << v << " corner " << i;
