@@ -10,6 +10,8 @@
 #include "surfacing/core_rotation.h"
 #include "surfacing/edge_breaks.h"
 #include "surfacing/fragments.h"
+#include "surfacing/pieces.h"
+#include "surfacing/wall_smoothing.h"
 #include "surfacing/weld_classes.h"
 
 namespace mudcrack {
@@ -29,13 +31,27 @@ struct PointOwners {
     }
 };
 
+/// What the plates mode adds to a frame's cores (docs/physics.md §5.7).
+struct PlateCores {
+    const WallRestPositions* walls = nullptr;   // smoothed rest points of the crack walls
+    const std::vector<int32_t>* piece = nullptr; // piece of each particle (kDebris: none)
+    Real close_gap = 0;                          // [m] sides closer than this meet
+};
+
+/// smoothstep from 0 at a to 1 at b.
+Real smoothstep(Real a, Real b, Real x) {
+    const Real t = std::clamp((x - a) / (b - a), Real(0), Real(1));
+    return t * t * (3 - 2 * t);
+}
+
 /// Everything a frame's core vertices depend on: positions, the core transforms s_p R_p of
 /// Eq. 13, broken edges, and the shading attributes.
 class FrameCores {
 public:
     FrameCores(const CoreTopology& topo, const ParticleFrame& frame, const std::vector<uint8_t>& is_broken,
-               const SurfaceParams& params)
-        : m_topo(topo), m_frame(frame), m_broken(is_broken), m_x(topo.n_particles), m_A(topo.n_particles) {
+               const SurfaceParams& params, const PlateCores& plates = {})
+        : m_topo(topo), m_frame(frame), m_broken(is_broken), m_plates(plates), m_x(topo.n_particles),
+          m_A(topo.n_particles) {
         const bool has_jw = !frame.Jw.empty() && params.mode == SurfaceMode::Ours;
         const bool has_fe = !frame.Fe.empty();
         // per particle: x_p and J_w^(1/3) R_p (Eq. 13; Wang 2019 drops the J_w factor)
@@ -62,7 +78,7 @@ public:
         o.n = 2;
         o.owner = {m_topo.edges[e][0], m_topo.edges[e][1], 0, 0};
         o.rep = {0, int8_t(m_broken[e] ? 1 : 0), 2, 3};
-        o.y0 = (m_topo.X[o.owner[0]] + m_topo.X[o.owner[1]]) / 2;
+        o.y0 = rest(RestPointKind::EdgeMidpoint, e, (m_topo.X[o.owner[0]] + m_topo.X[o.owner[1]]) / 2);
         return o;
     }
     /// The centroid of the face of tet t opposite local corner l; owners sorted by id.
@@ -81,7 +97,8 @@ public:
         o.n = 3;
         o.owner = {tet[local[0]], tet[local[1]], tet[local[2]], 0};
         o.rep = face_weld_reps(mask);
-        o.y0 = (m_topo.X[o.owner[0]] + m_topo.X[o.owner[1]] + m_topo.X[o.owner[2]]) / 3;
+        o.y0 = rest(RestPointKind::FaceCentroid, m_topo.tet_faces[t][l],
+                    (m_topo.X[o.owner[0]] + m_topo.X[o.owner[1]] + m_topo.X[o.owner[2]]) / 3);
         return o;
     }
     PointOwners tet_point(int32_t t) const {
@@ -93,7 +110,8 @@ public:
         o.n = 4;
         o.owner = tet;
         o.rep = tet_weld_reps(mask);
-        o.y0 = (m_topo.X[tet[0]] + m_topo.X[tet[1]] + m_topo.X[tet[2]] + m_topo.X[tet[3]]) / 4;
+        o.y0 = rest(RestPointKind::TetCentroid, t,
+                    (m_topo.X[tet[0]] + m_topo.X[tet[1]] + m_topo.X[tet[2]] + m_topo.X[tet[3]]) / 4);
         return o;
     }
 
@@ -119,13 +137,45 @@ public:
         w.position /= members;
         w.saturation /= members;
         w.alpha /= members;
+        if (m_plates.piece && m_plates.close_gap > 0) close_gap(o, rep, w.position);
         return w;
     }
 
 private:
+    Vec3 rest(RestPointKind kind, int32_t id, const Vec3& y0) const {
+        return m_plates.walls ? m_plates.walls->of(kind, id, y0) : y0;
+    }
+    /// Close gaps (plates mode): the copies of this point's owners in other pieces are the far
+    /// side of a crack wall. Within close_gap of it, the side takes the mean of all the pieces'
+    /// copies, which the far side takes too; it blends back to its own by 2 close_gap.
+    void close_gap(const PointOwners& o, int rep, Vec3& side) const {
+        const std::vector<int32_t>& piece = *m_plates.piece;
+        int32_t mine = kDebris;
+        for (int j = 0; j < o.n && mine == kDebris; ++j)
+            if (o.rep[j] == rep) mine = piece[o.owner[j]];
+        Vec3 others = Vec3::Zero(), all = Vec3::Zero();
+        int n_others = 0, n_all = 0;
+        for (int j = 0; j < o.n; ++j) {
+            const int32_t p = o.owner[j];
+            if (piece[p] == kDebris) continue;
+            const Vec3 y = extrapolate(p, o.y0);
+            all += y;
+            ++n_all;
+            if (piece[p] != mine) {
+                others += y;
+                ++n_others;
+            }
+        }
+        if (mine == kDebris || n_others == 0) return;
+        const Real gap = (side - others / n_others).norm();
+        const Vec3 mean = all / n_all;
+        side = mean + smoothstep(m_plates.close_gap, 2 * m_plates.close_gap, gap) * (side - mean);
+    }
+
     const CoreTopology& m_topo;
     const ParticleFrame& m_frame;
     const std::vector<uint8_t>& m_broken;
+    PlateCores m_plates;
     std::vector<Vec3> m_x;  // current positions [m], (n_particles)
     std::vector<Mat3> m_A;  // core transforms s_p R_p, (n_particles)
 };
@@ -169,8 +219,30 @@ Numbered number_vertices(const std::vector<SlotTri>& tris, int64_t n_out_slots, 
     return num;
 }
 
-/// Area-weighted normals per weld slot, shared by all vertices of that slot (across UV seams).
-void compute_normals(const std::vector<Vec3>& position, const Numbered& num, int64_t n_weld_slots, TriMesh& mesh) {
+/// The skin's shading normals at its edge midpoints and face centroids: the mean of the unit
+/// normals at the corner particles of the skin triangles that use them (a midpoint: its edge's two
+/// particles; a centroid: its face's three), in place of their own area-weighted normals. A
+/// centroid's own normal is its face's, so each boundary face of the tet mesh shaded as a facet
+/// of its own: the quilted tops a close-up showed at the particle spacing. Interpolated from the
+/// particles, the shading is as smooth as the soil. Only classes welded to the corner count, so a
+/// crack's rim stays sharp.
+void interpolate_skin_normals(const std::vector<SlotTri>& skin, std::vector<Vec3>& weld_normal) {
+    std::vector<Vec3> from_corners(weld_normal.size(), Vec3::Zero());
+    for (const SlotTri& t : skin) {
+        if (t.owner < 0) continue;
+        const Vec3& corner = weld_normal[t.weld_slot[0]];
+        const Real len = corner.norm();
+        if (!(len > 0)) continue;
+        for (int c = 1; c < 3; ++c) from_corners[t.weld_slot[c]] += corner / len;
+    }
+    for (size_t w = 0; w < weld_normal.size(); ++w)
+        if (from_corners[w].norm() > 0) weld_normal[w] = from_corners[w];
+}
+
+/// Area-weighted normals per weld slot, shared by all vertices of that slot (across UV seams);
+/// with `skin`, the skin's midpoints and centroids interpolate their corners' normals instead.
+void compute_normals(const std::vector<Vec3>& position, const Numbered& num, int64_t n_weld_slots, TriMesh& mesh,
+                     const std::vector<SlotTri>* skin = nullptr) {
     const size_t nf = mesh.faces.size();
     std::vector<Vec3> face_normal(nf);
     parallel_for(static_cast<int64_t>(nf), [&](int64_t f) {
@@ -180,6 +252,7 @@ void compute_normals(const std::vector<Vec3>& position, const Numbered& num, int
     std::vector<Vec3> weld_normal(n_weld_slots, Vec3::Zero());
     for (size_t f = 0; f < nf; ++f)
         for (int k = 0; k < 3; ++k) weld_normal[num.vertex_weld[mesh.faces[f][k]]] += face_normal[f];
+    if (skin) interpolate_skin_normals(*skin, weld_normal);
     mesh.normals.resize(position.size());
     parallel_for(static_cast<int64_t>(position.size()), [&](int64_t v) {
         Vec3 n = weld_normal[num.vertex_weld[v]];
@@ -262,7 +335,7 @@ void build_boundary(const CoreTopology& topo, const FrameCores& cores, const Fra
         return cores.welded(skin_point(cores, sf, j), rep);
     };
     const std::vector<Vec3> position = fill_vertices(cores, num, eval, mesh, out.boundary_weld_key);
-    compute_normals(position, num, topo.n_skin_weld_slots, mesh);
+    compute_normals(position, num, topo.n_skin_weld_slots, mesh, &tris);
 }
 
 /// The smallest projection axis that gives rest point y0 the same UV as `axis`, so a vertex is
@@ -392,6 +465,47 @@ void build_crack(const CoreTopology& topo, const FrameCores& cores, const Fragme
     compute_normals(position, num, n_weld, mesh);
 }
 
+/// The plates mode's debris (DebrisOutput::Points): the particles that tore loose.
+DebrisPoints collect_debris(const CoreTopology& topo, const ParticleFrame& frame, const Pieces& pieces) {
+    DebrisPoints d;
+    const Real radius = mean_particle_spacing(topo) / 2;
+    for (int32_t p = 0; p < topo.n_particles; ++p) {
+        if (pieces.id[p] != kDebris) continue;
+        d.position.push_back(frame.P[p]);
+        d.velocity.push_back(frame.v.empty() ? Vec3f::Zero() : frame.v[p]);
+        d.radius.push_back(float(radius * (frame.Jw.empty() ? 1.0 : std::cbrt(double(frame.Jw[p])))));
+        d.id.push_back(p);
+        d.piece.push_back(pieces.root[p] >= 0 ? pieces.id[pieces.root[p]] : -1);
+    }
+    return d;
+}
+
+/// The plates mode: pieces, smoothed walls, close gaps, then the same meshing as the other modes.
+void surface_plates(const CoreTopology& topo, const ParticleFrame& frame, const std::vector<uint8_t>& is_broken,
+                    const SurfaceParams& params, SurfacedFrame& out) {
+    PieceParams piece_params;
+    piece_params.min_width = params.min_piece_size * params.cell_size;
+    piece_params.debris_gap = params.debris_gap;
+    const Pieces pieces = find_pieces(topo, frame, is_broken, piece_params);
+    Fragments frag;
+    frag.id = pieces.id;  // kDebris is a culled fragment's -1
+    frag.count = pieces.count;
+    out.fragments = pieces.count;
+    out.debris_particles = pieces.debris;
+    if (params.debris == DebrisOutput::Points) out.debris = collect_debris(topo, frame, pieces);
+
+    const WallRestPositions walls = smooth_walls(topo, pieces.is_cut, pieces.id, params.wall_smoothing);
+    out.wall_points_smoothed = static_cast<int64_t>(walls.size());
+    PlateCores plates;
+    plates.walls = &walls;
+    plates.piece = &pieces.id;
+    plates.close_gap = params.close_gaps * mean_particle_spacing(topo);
+    const FrameCores cores(topo, frame, pieces.is_cut, params, plates);
+    build_boundary(topo, cores, frag, out);
+    if (params.cracks) build_crack(topo, cores, frag, pieces.is_cut, out);
+    out.particle_piece = pieces.id;
+}
+
 }  // namespace
 
 SurfacedFrame surface_frame(const CoreTopology& topo, const ParticleFrame& frame,
@@ -409,6 +523,10 @@ SurfacedFrame surface_frame(const CoreTopology& topo, const ParticleFrame& frame
     std::vector<uint8_t> is_broken(topo.edges.size());
     parallel_for(topo.n_edges(), [&](int64_t e) { is_broken[e] = first_break[e] <= frame.frame ? 1 : 0; });
     out.broken_edges = count_broken_edges(first_break, frame.frame);
+    if (params.mode == SurfaceMode::Plates) {
+        surface_plates(topo, frame, is_broken, params, out);
+        return out;
+    }
 
     const Fragments frag = find_fragments(topo, is_broken, params.min_fragment_particles);
     out.fragments = frag.count;

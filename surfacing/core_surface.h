@@ -5,6 +5,7 @@
 #include <cstdint>
 #include <vector>
 
+#include "sim/core/debris_points.h"
 #include "sim/core/particle_frame.h"
 #include "sim/core/tri_mesh.h"
 #include "surfacing/core_topology.h"
@@ -27,6 +28,11 @@ struct SurfacedFrame {
     int64_t broken_edges = 0;               // edges with first_break <= frame
     int32_t fragments = 0;                  // fragments kept
     int32_t culled_fragments = 0;           // fragments below min_fragment_particles
+    // plates mode (docs/physics.md §5.7): fragments are its pieces, face_fragment their ids
+    int32_t debris_particles = 0;           // particles that tore loose (not meshed)
+    int64_t wall_points_smoothed = 0;       // crack-wall rest points moved by the smoothing
+    DebrisPoints debris;                    // filled when params.debris == DebrisOutput::Points
+    std::vector<int32_t> particle_piece;    // piece of each particle (kDebris: none), (n_particles)
 };
 
 /// Surfaces one frame. Deterministic: the result depends only on the arguments, never on the
@@ -37,6 +43,12 @@ struct SurfacedFrame {
 /// triplanar_uv of the rest position by the dominant axis of the crack triangle's rest normal,
 /// at the boundary's texture density (CoreTopology::uv_per_meter). Normals are area-weighted per
 /// welded vertex. Saturation and alpha are averaged over the owners of each welded vertex.
+/// In SurfaceMode::Plates the broken edges become pieces (pieces.h): face_fragment holds each
+/// face's piece id, crack walls are smoothed in rest space (wall_smoothing.h), cores follow their
+/// particles' rotation without the Jw scaling (a crack is as wide as the particles moved apart),
+/// and a wall vertex whose two sides are closer than close_gaps spacings takes the mean of both,
+/// blending to each side's own position by 2 close_gaps, so a closed crack shows no gap and an
+/// opening one does not pop.
 /// @note At a crack tip inside a tet, the two sides of an interface share welded vertices and
 ///       their normals cancel; such a vertex takes the normal of its first face.
 /// @param first_break first frame at which each edge broke (edge_breaks.h), (n_edges)

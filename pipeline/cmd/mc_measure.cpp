@@ -7,10 +7,17 @@
 
 int main(int argc, char** argv) {
     using namespace mudcrack;
-    std::string json_file;
+    MeasureStageOptions measure_options;
     return run_stage(
         "mc-measure",
-        "Measures a shot's curl, horizontal splits and fragments from its caches (writes nothing into --out)",
-        argc, argv, [&](CLI::App& app) { app.add_option("--json", json_file, "also write the table to this JSON file"); },
-        [&](const StageOptions& options) { return run_measure_stage(options, json_file); });
+        "Measures a shot's curl, horizontal splits, fragments and surfacing meshes from its caches (writes nothing "
+        "into --out)",
+        argc, argv,
+        [&](CLI::App& app) {
+            app.add_option("--json", measure_options.json_file, "also write the table to this JSON file");
+            app.add_flag("--motion", measure_options.motion,
+                         "re-surface every frame: vertex jumps between frames beyond the particles' moves, and "
+                         "particles that change piece");
+        },
+        [&](const StageOptions& options) { return run_measure_stage(options, measure_options); });
 }

@@ -3,6 +3,7 @@
 
 #include "pipeline/cmd/stage_cli.h"
 #include "pipeline/stages/surface/surface_stage.h"
+#include "surfacing/surface_params.h"
 
 int main(int argc, char** argv) {
     using namespace mudcrack;
@@ -13,8 +14,9 @@ int main(int argc, char** argv) {
         argc, argv,
         [&](CLI::App& app) {
             app.add_option("--mode", surface_options.mode,
-                           "ours (moisture-aware Eq. 13/14) or wang2019 (the baseline); default: the shot's")
-                ->check(CLI::IsMember({"ours", "wang2019"}));
+                           "ours (moisture-aware Eq. 13/14), wang2019 (the baseline) or plates (clean plates for "
+                           "close-ups); default: the shot's")
+                ->check(CLI::IsMember(surface_mode_names()));
             app.add_option("--format", surface_options.format,
                            "glb, obj, ply or dae (fbx is refused); default: the shot's");
         },

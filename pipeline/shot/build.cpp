@@ -351,14 +351,20 @@ SimModel build_sim(json& tree, Issues& issues) {
     return model;
 }
 
-std::optional<SurfaceParams> build_surface(const json& tree) {
+std::optional<SurfaceParams> build_surface(const json& tree, Issues& issues) {
     if (!has(tree, "/surfacing")) return std::nullopt;
     SurfaceParams s;
-    s.mode = text(tree, "/surfacing/mode") == "wang2019" ? SurfaceMode::Wang2019 : SurfaceMode::Ours;
+    s.mode = *parse_surface_mode(text(tree, "/surfacing/mode"));  // the spec admits only mode names
     using S = SurfaceParams;
     read_fields<S>(tree, "/surfacing", s,
                    {{"zeta", &S::zeta}, {"length_consistent", &S::length_consistent}, {"cracks", &S::cracks},
-                    {"format", &S::format}, {"min_fragment_particles", &S::min_fragment_particles}});
+                    {"format", &S::format}, {"min_fragment_particles", &S::min_fragment_particles},
+                    {"min_piece_size", &S::min_piece_size}, {"debris_gap", &S::debris_gap},
+                    {"close_gaps", &S::close_gaps}, {"wall_smoothing", &S::wall_smoothing}});
+    s.debris = text(tree, "/surfacing/debris") == "points" ? DebrisOutput::Points : DebrisOutput::None;
+    if (s.debris != DebrisOutput::None && s.mode != SurfaceMode::Plates)
+        issues.add("/surfacing/debris", issues.value_of(tree, "/surfacing/debris"),
+                   "needs /surfacing/mode = \"plates\" (only the plates mode tells debris from the pieces)");
     return s;
 }
 

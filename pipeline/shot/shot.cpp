@@ -110,7 +110,8 @@ Shot parse_shot(const std::string& text, const std::string& path) {
     shot.reuse = spec::build_reuse(tree, path, issues);
     shot.init = spec::build_init(tree, path, issues);
     shot.sim = spec::build_sim(tree, issues);
-    shot.surface = spec::build_surface(tree);
+    shot.surface = spec::build_surface(tree, issues);
+    if (shot.surface) shot.surface->cell_size = shot.sim.h;
     shot.render = spec::build_render(tree);
     shot.sim.cache = spec::derive_cache(tree, shot.sim, shot.surface, issues);
     spec::check_across(tree, shot.init, shot.sim, shot.render, issues);

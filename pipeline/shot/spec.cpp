@@ -9,6 +9,7 @@
 #include <string>
 
 #include "sim/core/particle_attributes.h"
+#include "surfacing/surface_params.h"
 
 namespace mudcrack::spec {
 namespace {
@@ -196,8 +197,8 @@ std::vector<KeySpec> build_fixed_table() {
 
     // --- surfacing (Tu et al. 2023 Section 6; docs/physics.md §5)
     Key("/surfacing", T::Section).optional().doc("particle-core surfacing (mc-surface); omit for none"),
-    Key("/surfacing/mode", T::Enum).def("ours").choices({"ours", "wang2019"}).units("")
-        .doc("ours: moisture-aware Eq. 13-14; wang2019: the baseline"),
+    Key("/surfacing/mode", T::Enum).def("ours").choices(surface_mode_names()).units("")
+        .doc("ours: moisture-aware Eq. 13-14; wang2019: the baseline; plates: clean plates for close-ups (docs/physics.md §5.7)"),
     Key("/surfacing/zeta", T::Number).def(2.0).gt(0).units("-")
         .doc("edge-stretch threshold of Eq. 14 (docs/physics.md §5.5: >= (1-eta)^(-2/3))"),
     Key("/surfacing/length_consistent", T::Bool).def(false).units("")
@@ -209,6 +210,16 @@ std::vector<KeySpec> build_fixed_table() {
         .doc("mesh file format (assimp exporter); not fbx (assimp/assimp#4686)"),
     Key("/surfacing/min_fragment_particles", T::Integer).def(1).ge(1).units("particles")
         .doc("fragments smaller than this are culled as debris"),
+    Key("/surfacing/min_piece_size", T::Number).def(2.0).gt(0).units("cells")
+        .doc("plates mode: a fragment at least this wide across (in /sim/h) is a plate; the rest joins a plate or is debris"),
+    Key("/surfacing/debris_gap", T::Number).def(0.5).gt(0).units("spacings")
+        .doc("plates mode: a torn particle whose every path to a plate opened more than this (in particle spacings) is debris"),
+    Key("/surfacing/close_gaps", T::Number).def(0.25).ge(0).le(1).units("spacings")
+        .doc("plates mode: crack walls whose sides are closer than this (in particle spacings) meet: no hairline gaps"),
+    Key("/surfacing/wall_smoothing", T::Integer).def(10).ge(0).le(100).units("iterations")
+        .doc("plates mode: Taubin iterations that smooth the crack walls in rest space (0: the dual-cell walls)"),
+    Key("/surfacing/debris", T::Enum).def("none").choices({"none", "points"}).units("")
+        .doc("plates mode: none, or debris.####.ply per frame (position, velocity, radius, id, piece) to instance on"),
 
     // --- render: the headless preview
     Key("/render", T::Section).optional().doc("preview renderer (mc-render); omit for none"),

@@ -300,6 +300,24 @@ TEST_F(ShotTest, FbxIsRefusedWithTheReason) {
         "surfacing": {"format": "fbx"}})"), {"/surfacing/format = \"fbx\":", "4686", "glb"});
 }
 
+TEST_F(ShotTest, PlatesKeysAreBoundedAndDebrisNeedsThePlatesMode) {
+    const Shot shot = parse_shot(R"({"mudcrack": 1, "source": {"type": "box"}, "material": {}, "sim": {"h": 0.03},
+        "surfacing": {"mode": "plates", "min_piece_size": 3, "debris": "points"}})", "t.json");
+    ASSERT_TRUE(shot.surface.has_value());
+    EXPECT_EQ(shot.surface->mode, SurfaceMode::Plates);
+    EXPECT_EQ(shot.surface->debris, DebrisOutput::Points);
+    EXPECT_EQ(shot.surface->min_piece_size, 3);
+    EXPECT_EQ(shot.surface->cell_size, 0.03);  // /sim/h: min_piece_size's unit
+    const std::string msg = error_of(R"({"mudcrack": 1, "source": {"type": "box"}, "material": {},
+        "surfacing": {"mode": "ours", "debris": "points", "min_piece_size": 0, "debris_gap": 0,
+                      "close_gaps": -1, "wall_smoothing": 1000}})");
+    expect_contains(msg, {"/surfacing/debris = \"points\": needs /surfacing/mode = \"plates\"",
+                          "/surfacing/min_piece_size = 0: must be > 0", "/surfacing/debris_gap = 0: must be > 0",
+                          "/surfacing/close_gaps = -1: must be in [0, 1]", "/surfacing/wall_smoothing = 1000: must be in [0, 100]"});
+    expect_contains(error_of(R"({"mudcrack": 1, "source": {"type": "box"}, "material": {},
+        "surfacing": {"mode": "plate"}})"), {"/surfacing/mode = \"plate\"", "(did you mean \"plates\"?)"});
+}
+
 TEST_F(ShotTest, FixedDtAboveTheElasticBoundIsRefused) {
     // c_p = sqrt(E (1-nu) / ((1+nu)(1-2nu) rho)) = 28.33 m/s; bound = 0.5 * 0.02 / c_p = 3.53e-4 s
     const char* shot = R"({"mudcrack": 1, "source": {"type": "box"},

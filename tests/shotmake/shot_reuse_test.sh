@@ -129,7 +129,7 @@ done
 
 echo "== make -j2 shot cut (another surfacing of base's sim): its surfacing and render only"
 # as fig10_wang2019 reuses fig10_ours: the surfacing chunks read the linked init and sim
-sed -e 's/"name": "look"/"name": "cut"/' -e 's/"mode": "ours"/"mode": "wang2019"/' "$look" >"$tmp/shots/cut.json"
+sed -e 's/"name": "look"/"name": "cut"/' -e 's/"mode": "\(ours\|plates\)"/"mode": "wang2019"/' "$look" >"$tmp/shots/cut.json"
 grep -q '"mode": "wang2019"' "$tmp/shots/cut.json" || fail "cut.json: the surfacing mode was not edited"
 before=$(base_files)
 shot_make cut -j2 || { cat "$tmp/make.txt"; fail "make -j2 shot cut failed"; }

@@ -12,11 +12,14 @@
 #include "pipeline/io/atomic_output.h"
 #include "pipeline/io/break_history_io.h"
 #include "pipeline/io/manifest.h"
+#include "pipeline/io/mesh_io.h"
 #include "pipeline/io/points_io.h"
 #include "pipeline/io/tet_mesh_io.h"
+#include "pipeline/measure/mesh_measures.h"
 #include "pipeline/measure/shape_measures.h"
 #include "pipeline/shot/shot.h"
 #include "sim/core/error.h"
+#include "surfacing/core_surface.h"
 #include "surfacing/core_topology.h"
 #include "surfacing/edge_breaks.h"
 #include "surfacing/fragments.h"
@@ -64,9 +67,85 @@ json crack_fields(const FragmentSizes& sizes, const SurfacePolygons& polygons, c
             {"crack_through_fraction", depth.through_fraction}};
 }
 
+/// The first mesh of a frame's surfacing file named by the surface manifest's entry `which`
+/// ("boundary" or "crack"), or an empty mesh when the frame has none.
+TriMesh read_frame_mesh(const fs::path& surface_dir, const json& entry, const char* which) {
+    if (!entry.contains(which) || entry[which].value("file", json()).is_null()) return TriMesh();
+    std::vector<TriMesh> meshes = import_meshes(surface_dir / entry[which]["file"].get<std::string>());
+    return meshes.empty() ? TriMesh() : std::move(meshes.front());
+}
+
+/// What a close-up sees in frame n's mesh files (mesh_measures.h), when the surface folder has them.
+std::optional<MeshPieces> measure_frame_meshes(const fs::path& surface_dir, const json& surface_manifest, int n,
+                                               Real cell) {
+    for (const json& entry : surface_manifest.value("per_frame", json::array()))
+        if (entry.value("frame", 0) == n)
+            return measure_mesh_pieces(read_frame_mesh(surface_dir, entry, "boundary"),
+                                       read_frame_mesh(surface_dir, entry, "crack"), cell);
+    return std::nullopt;
+}
+
+json mesh_fields(const MeshPieces& m) {
+    return {{"mesh_pieces", m.pieces},
+            {"mesh_chips", m.chips},
+            {"mesh_chip_triangle_fraction", m.chip_triangle_fraction},
+            {"mesh_open_pieces", m.open_pieces},
+            {"mesh_open_edges", m.open_edges},
+            {"crack_wall_roughness_deg", m.crack_roughness_deg},
+            {"crack_wall_area", m.crack_area},
+            {"top_crack_length", m.top_crack_length},
+            {"crack_area_per_metre", m.crack_area_per_metre}};
+}
+
+json motion_fields(const SurfaceMotion& m) {
+    return {{"vertices_compared", m.vertices_compared},
+            {"vertex_jump_max_cells", m.jump_max_cells},
+            {"vertex_jump_p99_cells", m.jump_p99_cells},
+            {"piece_changes", m.piece_changes}};
+}
+
+/// The surfacing of consecutive frames, kept one frame back, for the motion measures (--motion).
+class MotionTracker {
+public:
+    MotionTracker(const CoreTopology& topo, const BreakHistory& history, const SurfaceParams& params, Real cell)
+        : m_topo(topo), m_history(history), m_params(params), m_cell(cell) {}
+    /// Surfaces `frame`; the motion from the frame before, when there was one.
+    std::optional<SurfaceMotion> step(ParticleFrame frame) {
+        SurfacedFrame now = surface_frame(m_topo, frame, m_history.first_break, m_params);
+        std::optional<SurfaceMotion> motion;
+        if (m_previous) motion = measure_surface_motion(m_topo, *m_previous, m_previous_frame, now, frame, m_cell);
+        m_previous = std::move(now);
+        m_previous_frame = std::move(frame);
+        return motion;
+    }
+
+private:
+    const CoreTopology& m_topo;
+    const BreakHistory& m_history;
+    SurfaceParams m_params;
+    Real m_cell;
+    std::optional<SurfacedFrame> m_previous;
+    ParticleFrame m_previous_frame;
+};
+
+void print_mesh_row(int n, const std::optional<MeshPieces>& mesh, const std::optional<SurfaceMotion>& motion) {
+    std::printf("%6d", n);
+    if (mesh)
+        std::printf(" %7d %6d %6lld %10.2f %11.4f", mesh->pieces, mesh->chips, static_cast<long long>(mesh->open_edges),
+                    mesh->crack_roughness_deg, mesh->crack_area_per_metre);
+    else
+        std::printf(" %7s %6s %6s %10s %11s", "-", "-", "-", "-", "-");
+    if (motion)
+        std::printf(" %9.3f %9.3f %9lld\n", motion->jump_max_cells, motion->jump_p99_cells,
+                    static_cast<long long>(motion->piece_changes));
+    else
+        std::printf(" %9s %9s %9s\n", "-", "-", "-");
+}
+
 }  // namespace
 
-int run_measure_stage(const StageOptions& options, const std::string& json_file) {
+int run_measure_stage(const StageOptions& options, const MeasureStageOptions& measure_options) {
+    const std::string& json_file = measure_options.json_file;
     const Shot shot = load_shot(options.shot);
     const fs::path out(options.out);
     const fs::path init_dir = out / "init", sim_dir = out / "sim", surface_dir = out / "surface";
@@ -110,8 +189,9 @@ int run_measure_stage(const StageOptions& options, const std::string& json_file)
     std::optional<CoreTopology> topo;
     std::optional<BreakHistory> history;
     int min_particles = 1;
+    json surface_manifest;
     if (fs::exists(surface_dir / "manifest.json")) {
-        const json surface_manifest = read_current_manifest(surface_dir, shot.slice_hash(Stage::Surface));
+        surface_manifest = read_current_manifest(surface_dir, shot.slice_hash(Stage::Surface));
         min_particles = surface_manifest.value("min_fragment_particles", 1);
         topo = build_core_topology(mesh);
         history = read_break_history(surface_dir / kBreakHistoryFile, std::nullopt, topo->n_edges());
@@ -131,7 +211,15 @@ int run_measure_stage(const StageOptions& options, const std::string& json_file)
                     "rise50[mm]", "curl[mm]", "split[%]", "splitH", "lifted[%]", "broken", "fragments", "polygons",
                     "plates", "polygon[m^2]", "axis[%]", "T[%]", "Y[%]", "str[%]", "comp[%]");
     }
+    std::optional<MotionTracker> motion_tracker;
+    if (measure_options.motion) {
+        if (!topo || !shot.surface)
+            throw InputError("--motion: " + shot.path + " has no surfacing output in " + surface_dir.string() +
+                             ": run mc-surface first");
+        motion_tracker.emplace(*topo, *history, *shot.surface, shot.sim.h);
+    }
     json table = json::array();
+    std::vector<std::pair<std::optional<MeshPieces>, std::optional<SurfaceMotion>>> mesh_rows;
     for (int n = first; n <= last; ++n) {
         const fs::path path = frame_path(sim_dir, "particles", n, "vdb");
         const PointCloud cloud = read_points(path);
@@ -170,6 +258,12 @@ int run_measure_stage(const StageOptions& options, const std::string& json_file)
             network = measure_crack_network(*topo, is_broken, columns, min_particles);
             row["broken_edges"] = broken;
             row.update(crack_fields(sizes, polygons, network, measure_crack_depth(*topo, is_broken, columns)));
+            const std::optional<MeshPieces> meshes = measure_frame_meshes(surface_dir, surface_manifest, n, shot.sim.h);
+            if (meshes) row.update(mesh_fields(*meshes));
+            std::optional<SurfaceMotion> motion;
+            if (motion_tracker) motion = motion_tracker->step(frame);
+            if (motion) row.update(motion_fields(*motion));
+            mesh_rows.emplace_back(meshes, motion);
         }
         if (!options.quiet) {
             std::printf("%6d %8.4f %11.2f %9.2f %9.2f %8.2f %10.2f", n, time, 1e3 * shape.top_rise_median,
@@ -187,6 +281,15 @@ int run_measure_stage(const StageOptions& options, const std::string& json_file)
                 std::printf(" %8s %8s\n", "-", "-");
         }
         table.push_back(std::move(row));
+    }
+    if (!options.quiet && !mesh_rows.empty()) {
+        std::printf("\nsurfacing meshes (%s): pieces, chips under 2 h, edges not shared by two triangles, crack-wall "
+                    "roughness, crack area per metre of top crack line%s\n",
+                    surface_manifest.value("mode", "?").c_str(),
+                    motion_tracker ? "; vertex jumps beyond the particles' moves (cells) and particles changing piece" : "");
+        std::printf("%6s %7s %6s %6s %10s %11s %9s %9s %9s\n", "frame", "pieces", "chips", "open", "rough[deg]",
+                    "wall[m2/m]", "jump_max", "jump_p99", "changes");
+        for (size_t i = 0; i < mesh_rows.size(); ++i) print_mesh_row(first + int(i), mesh_rows[i].first, mesh_rows[i].second);
     }
     if (!json_file.empty()) {
         const json doc = {{"shot", shot.name},

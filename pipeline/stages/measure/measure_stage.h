@@ -11,10 +11,16 @@
 
 namespace mudcrack {
 
-/// Measures every cached frame (or --frames) and prints the table (unless --quiet).
+/// What mc-measure adds to the common stage flags.
+struct MeasureStageOptions {
+    std::string json_file;  // --json: also write the table there as JSON (atomically)
+    bool motion = false;    // --motion: re-surface each frame and measure vertex jumps and piece changes
+};
+
+/// Measures every cached frame (or --frames) and prints the table (unless --quiet). When the
+/// surface folder holds meshes, a second table measures them (pipeline/measure/mesh_measures.h).
 /// Returns the exit code (0).
-/// @param json_file when not empty, the table is also written there as JSON (atomically)
 /// @throws InputError when an input stage's outputs are missing, stale or malformed
-int run_measure_stage(const StageOptions& options, const std::string& json_file);
+int run_measure_stage(const StageOptions& options, const MeasureStageOptions& measure_options);
 
 }  // namespace mudcrack

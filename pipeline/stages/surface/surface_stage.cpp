@@ -16,6 +16,7 @@
 #include "pipeline/io/atomic_output.h"
 #include "pipeline/io/break_history_io.h"
 #include "pipeline/io/checksum.h"
+#include "pipeline/io/debris_io.h"
 #include "pipeline/io/manifest.h"
 #include "pipeline/io/mesh_io.h"
 #include "pipeline/io/points_io.h"
@@ -28,6 +29,7 @@
 #include "sim/core/stats.h"
 #include "surfacing/core_surface.h"
 #include "surfacing/edge_breaks.h"
+#include "surfacing/pieces.h"
 
 namespace fs = std::filesystem;
 using nlohmann::json;
@@ -143,6 +145,22 @@ std::vector<TriMesh> take_mesh(TriMesh& mesh) {
     return list;
 }
 
+/// A plate must fit in the soil: a min_piece_size wider than the whole rest soil leaves no plate.
+void check_piece_size(const Shot& shot, const SurfaceParams& params, const CoreTopology& topo) {
+    Vec3 sum = Vec3::Zero();
+    Mat3 sum_outer = Mat3::Zero();
+    for (const Vec3& x : topo.X) {
+        sum += x;
+        sum_outer += x * x.transpose();
+    }
+    const Real soil = piece_width(sum, sum_outer, topo.n_particles, mean_particle_spacing(topo));
+    const Real asked = params.min_piece_size * params.cell_size;
+    if (asked > soil)
+        throw InputError(shot.path + ": /surfacing/min_piece_size = " + std::to_string(params.min_piece_size) +
+                         ": " + std::to_string(asked) + " m (in cells of /sim/h) is wider than the soil itself (" +
+                         std::to_string(soil) + " m across): no piece could be a plate");
+}
+
 struct FrameResult {
     json entry;
     double surfacing_seconds = 0;  // surface_frame only (no file I/O)
@@ -159,7 +177,14 @@ int run_surface_stage(const StageOptions& options, const SurfaceStageOptions& su
     if (!shot.surface)
         throw InputError(shot.path + ": /surfacing: missing: this shot has no surfacing stage (add a \"surfacing\" section)");
     SurfaceParams params = *shot.surface;
-    if (!mode_flag.empty()) params.mode = mode_flag == "wang2019" ? SurfaceMode::Wang2019 : SurfaceMode::Ours;
+    if (!mode_flag.empty()) {
+        const std::optional<SurfaceMode> mode = parse_surface_mode(mode_flag);
+        if (!mode) throw InputError("--mode " + mode_flag + ": not a surfacing mode");
+        params.mode = *mode;
+        if (params.debris != DebrisOutput::None && params.mode != SurfaceMode::Plates)
+            throw InputError("--mode " + mode_flag + ": " + shot.path +
+                             " asks for /surfacing/debris, which only the plates mode writes");
+    }
     if (!format_flag.empty()) params.format = format_flag;
     if (!is_supported_mesh_format(params.format))
         throw InputError("--format " + params.format + ": " + mesh_format_refusal(params.format));
@@ -193,6 +218,7 @@ int run_surface_stage(const StageOptions& options, const SurfaceStageOptions& su
     } catch (const InputError& e) {
         throw InputError(tets_file.string() + ": " + e.what());
     }
+    if (params.mode == SurfaceMode::Plates) check_piece_size(shot, params, topo);
     const double preprocessing_seconds = timer.seconds();
     log::info("particle cores: " + std::to_string(topo.n_particles) + " particles, " + std::to_string(topo.n_tets()) +
               " tets, " + std::to_string(topo.n_edges()) + " edges, " + std::to_string(topo.skin_faces.size()) +
@@ -249,6 +275,16 @@ int run_surface_stage(const StageOptions& options, const SurfaceStageOptions& su
                       {"culled_fragments", s.culled_fragments},
                       {"surfacing_seconds", results[i].surfacing_seconds}};
         entry["bounds"] = params.cracks ? bounds_json({&s.boundary, &s.crack}) : bounds_json({&s.boundary});
+        if (params.mode == SurfaceMode::Plates) {
+            entry["pieces"] = s.fragments;
+            entry["debris_particles"] = s.debris_particles;
+            entry["wall_points_smoothed"] = s.wall_points_smoothed;
+        }
+        if (params.debris == DebrisOutput::Points) {
+            const fs::path debris_file = frame_path(dir, "debris", n, "ply");
+            write_debris_ply(debris_file, s.debris);
+            entry["debris"] = {{"file", debris_file.filename().string()}, {"points", s.debris.size()}};
+        }
         // each mesh moves into its export and is freed after it: a frame's peak memory holds
         // one copy of its meshes
         export_meshes(boundary_file, take_mesh(s.boundary), params.format);
@@ -289,6 +325,11 @@ int run_surface_stage(const StageOptions& options, const SurfaceStageOptions& su
     m["length_consistent"] = params.length_consistent;
     m["cracks"] = params.cracks;
     m["min_fragment_particles"] = params.min_fragment_particles;
+    if (params.mode == SurfaceMode::Plates)
+        m["plates"] = {{"min_piece_size", params.min_piece_size}, {"cell_size", params.cell_size},
+                       {"debris_gap", params.debris_gap}, {"close_gaps", params.close_gaps},
+                       {"wall_smoothing", params.wall_smoothing},
+                       {"debris", params.debris == DebrisOutput::Points ? "points" : "none"}};
     // fps: the shot's (/frames/fps), so a DCC importer sets its scene's rate from this manifest alone
     m["frames"] = {{"first", frames.begin()->first}, {"last", frames.rbegin()->first}, {"count", frames.size()},
                    {"fps", shot.sim.time.fps}, {"this_run", {{"first", first}, {"last", last}}}};

@@ -14,7 +14,7 @@ namespace mudcrack {
 
 /// What mc-surface adds to the common stage flags ("" = the shot's).
 struct SurfaceStageOptions {
-    std::string mode;    // --mode: "ours" or "wang2019"
+    std::string mode;    // --mode: "ours", "wang2019" or "plates"
     std::string format;  // --format: a mesh extension
 };
 

@@ -1,0 +1,51 @@
+#pragma once
+/// Smooth crack walls for the plates surfacing (docs/physics.md §5.7). The crack faces of the
+/// particle-core method are the barycentric dual of the cut edges: each wall vertex sits at a
+/// cut edge's midpoint, a face centroid or a tet centroid, so a wall that crosses the lattice
+/// at an angle is a staircase at the cell's scale, and its rim on the top a saw-tooth.
+///
+/// Here the wall is placed as a smoothed cut instead (the mass points of dual contouring): it
+/// crosses each cut edge where a smoothed side field changes sign, at a point that then slides
+/// along that edge (5-95 % of the way) under Taubin smoothing of the crossings in the rest
+/// configuration, and a face's or a tet's wall vertex is
+/// the mean of its cut edges' crossings. A cut along a lattice plane becomes that plane. Every
+/// wall vertex stays inside its own simplex, so each wall still lies between the particles it
+/// separates and every skin triangle keeps its orientation; crossings on the boundary follow
+/// only their rim neighbours, so the rim becomes a smooth curve and stays a sharp edge. Both
+/// sides of a wall and the skin read the same rest points, so walls still meet where a crack
+/// is closed.
+#include <cstdint>
+#include <unordered_map>
+#include <vector>
+
+#include "sim/core/types.h"
+#include "surfacing/core_topology.h"
+
+namespace mudcrack {
+
+/// The rest positions that smoothing moved, by rest point; every other rest point keeps its own.
+class WallRestPositions {
+public:
+    /// The rest position of (kind, id): the smoothed one when it is on a wall, else y0.
+    Vec3 of(RestPointKind kind, int32_t id, const Vec3& y0) const {
+        if (m_moved.empty()) return y0;
+        const auto it = m_moved.find(key(kind, id));
+        return it == m_moved.end() ? y0 : it->second;
+    }
+    size_t size() const { return m_moved.size(); }
+    void set(RestPointKind kind, int32_t id, const Vec3& y) { m_moved[key(kind, id)] = y; }
+
+private:
+    static uint64_t key(RestPointKind kind, int32_t id) { return (uint64_t(kind) << 32) | uint32_t(id); }
+    std::unordered_map<uint64_t, Vec3> m_moved;
+};
+
+/// Places the walls through the edges with is_cut[e] != 0, with `iterations` Taubin steps
+/// (lambda 0.5, mu -0.53: a low-pass filter that does not shrink the wall) on the crossings.
+/// 0 iterations moves nothing (the dual-cell walls of the other modes). Deterministic.
+/// @param label the side of each particle (its piece): a wall between two labels first crosses
+///        each edge where the smoothed share of the two labels changes sign
+WallRestPositions smooth_walls(const CoreTopology& topo, const std::vector<uint8_t>& is_cut,
+                               const std::vector<int32_t>& label, int iterations);
+
+}  // namespace mudcrack

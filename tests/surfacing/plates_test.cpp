@@ -1,0 +1,305 @@
+// The plates surfacing (docs/physics.md §5.7): pieces from a torn band, smoothed walls, closed
+// gaps, debris, and the analytic width of a piece.
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <map>
+#include <set>
+
+#include "surfacing/core_surface.h"
+#include "surfacing/edge_breaks.h"
+#include "surfacing/lattice_mesh.h"
+#include "surfacing/pieces.h"
+#include "surfacing/wall_smoothing.h"
+#include "tolerance.h"
+
+namespace mudcrack {
+namespace {
+
+using test::box_lattice;
+
+constexpr double kH = 0.1;          // lattice spacing [m]
+constexpr int kNx = 12, kNy = 3, kNz = 4;
+
+int column_of(const Vec3& X) { return int(std::lround(X.x() / kH)); }
+
+/// A slab torn along a band two particles wide (columns 5 and 6): every edge with a band particle
+/// broke, so Eq. 14 leaves each band particle a chip of its own. Plates: columns 0-4 and 7-12.
+struct TornSlab {
+    TetMesh mesh = box_lattice(kNx, kNy, kNz, kH);
+    CoreTopology topo = build_core_topology(mesh);
+    std::vector<int32_t> first_break = no_edge_breaks(topo);
+
+    TornSlab() {
+        for (int32_t e = 0; e < topo.n_edges(); ++e) {
+            const int a = column_of(topo.X[topo.edges[e][0]]), b = column_of(topo.X[topo.edges[e][1]]);
+            if (a == 5 || a == 6 || b == 5 || b == 6) first_break[e] = 1;
+        }
+    }
+    /// Frame 1: the right plate and column 6 moved +dx (column 5 goes with the left plate).
+    ParticleFrame opened(double dx) const {
+        ParticleFrame f;
+        f.frame = 1;
+        for (const Vec3& X : topo.X) {
+            const bool right = column_of(X) >= 6;
+            f.P.push_back((X + Vec3(right ? dx : 0, 0, 0)).cast<float>());
+            f.Fe.push_back(Mat3f::Identity());
+        }
+        return f;
+    }
+    std::vector<uint8_t> broken() const {
+        std::vector<uint8_t> b(first_break.size());
+        for (size_t e = 0; e < b.size(); ++e) b[e] = first_break[e] <= 1;
+        return b;
+    }
+};
+
+SurfaceParams plates_params() {
+    SurfaceParams p;
+    p.mode = SurfaceMode::Plates;
+    p.cell_size = 2 * kH;  // /sim/h: two particle spacings, as in the shipped shots
+    p.min_piece_size = 1;  // plates at least 0.2 m across
+    return p;
+}
+
+/// The connected groups of a mesh's faces through shared weld keys.
+int count_sheets(const TriMesh& mesh, const std::vector<uint64_t>& key, int32_t piece) {
+    // union-find over face indices, joined through shared keys
+    std::vector<int> up;
+    std::map<uint64_t, int> first_face;
+    auto root = [&](int f) {
+        while (up[f] != f) f = up[f] = up[up[f]];
+        return f;
+    };
+    for (size_t f = 0; f < mesh.faces.size(); ++f) {
+        up.push_back(int(f));
+        if (mesh.face_fragment[f] != piece) continue;
+        for (int32_t v : mesh.faces[f]) {
+            const auto [it, added] = first_face.try_emplace(key[v], int(f));
+            if (!added) up[root(int(f))] = root(it->second);
+        }
+    }
+    std::set<int> roots;
+    for (size_t f = 0; f < mesh.faces.size(); ++f)
+        if (mesh.face_fragment[f] == piece) roots.insert(root(int(f)));
+    return int(roots.size());
+}
+
+/// Every edge of a piece, by weld key over both meshes, is used once in each direction.
+bool is_closed(const SurfacedFrame& s, int32_t piece) {
+    std::map<std::pair<uint64_t, uint64_t>, int> directed;
+    auto add = [&](const TriMesh& m, const std::vector<uint64_t>& key) {
+        for (size_t f = 0; f < m.faces.size(); ++f)
+            if (m.face_fragment[f] == piece)
+                for (int k = 0; k < 3; ++k) ++directed[{key[m.faces[f][k]], key[m.faces[f][(k + 1) % 3]]}];
+    };
+    add(s.boundary, s.boundary_weld_key);
+    add(s.crack, s.crack_weld_key);
+    for (const auto& [e, n] : directed)
+        if (n != 1 || !directed.count({e.second, e.first})) return false;
+    return !directed.empty();
+}
+
+TEST(PieceWidth, IsTheSmallerInPlaneSideOfALatticeSlab) {
+    // n points spaced a along an axis have variance a^2 (n^2 - 1) / 12: the width is n a exactly
+    auto width = [](int nx, int ny, int nz, double a) {
+        Vec3 sum = Vec3::Zero();
+        Mat3 outer = Mat3::Zero();
+        for (int i = 0; i < nx; ++i)
+            for (int j = 0; j < ny; ++j)
+                for (int k = 0; k < nz; ++k) {
+                    const Vec3 x = a * Vec3(i, j, k);
+                    sum += x;
+                    outer += x * x.transpose();
+                }
+        return piece_width(sum, outer, int64_t(nx) * ny * nz, a);
+    };
+    EXPECT_NEAR(width(20, 3, 10, 0.01), 0.10, tol::kRoundoffLoose);  // a crust plate: its short side
+    EXPECT_NEAR(width(10, 1, 1, 0.01), 0.01, tol::kRoundoffLoose);   // a sliver: its thickness
+    EXPECT_NEAR(width(1, 1, 1, 0.01), 0.01, tol::kRoundoff);         // one particle: the spacing
+}
+
+TEST(Pieces, ATornBandOfKnownWidthBecomesTwoPiecesWithOneWallEach) {
+    const TornSlab slab;
+    const ParticleFrame frame = slab.opened(0.05);
+    PieceParams params;
+    params.min_width = 2 * kH;
+    const Pieces pieces = find_pieces(slab.topo, frame, slab.broken(), params);
+    EXPECT_EQ(pieces.count, 2);
+    EXPECT_EQ(pieces.debris, 0);
+    // each band particle goes with the side it moved with; ids are the plates' smallest particles
+    for (int32_t p = 0; p < slab.topo.n_particles; ++p)
+        EXPECT_EQ(pieces.id[p], column_of(slab.topo.X[p]) <= 5 ? 0 : 8) << "particle " << p;
+    // the only cut edges are those between columns 5 and 6: one wall
+    for (int32_t e = 0; e < slab.topo.n_edges(); ++e) {
+        const int a = column_of(slab.topo.X[slab.topo.edges[e][0]]), b = column_of(slab.topo.X[slab.topo.edges[e][1]]);
+        EXPECT_EQ(pieces.is_cut[e] != 0, std::min(a, b) == 5 && std::max(a, b) == 6) << "edge " << e;
+    }
+
+    const SurfacedFrame s = surface_frame(slab.topo, frame, slab.first_break, plates_params());
+    EXPECT_EQ(s.fragments, 2);
+    std::set<int32_t> ids(s.boundary.face_fragment.begin(), s.boundary.face_fragment.end());
+    EXPECT_EQ(ids, (std::set<int32_t>{0, 8}));  // particle 8: the first of column 8, the first untorn one
+    for (int32_t piece : {0, 8}) {
+        EXPECT_TRUE(is_closed(s, piece)) << "piece " << piece;
+        EXPECT_EQ(count_sheets(s.crack, s.crack_weld_key, piece), 1) << "piece " << piece << ": one wall";
+    }
+}
+
+TEST(Pieces, ACrackThatEndsInsideAPlateStaysCut) {
+    // edges across the plane x = 0.55 broken only in the back half (z >= 0.2): one fragment,
+    // no band particle, the crack still a cut inside the one piece
+    const TornSlab slab;
+    std::vector<uint8_t> broken(slab.topo.edges.size(), 0);
+    int64_t n_broken = 0;
+    for (int32_t e = 0; e < slab.topo.n_edges(); ++e) {
+        const auto [p, q] = slab.topo.edges[e];
+        const int a = column_of(slab.topo.X[p]), b = column_of(slab.topo.X[q]);
+        if (std::min(a, b) == 5 && std::max(a, b) == 6 && std::min(slab.topo.X[p].z(), slab.topo.X[q].z()) >= 0.2 - 1e-9)
+            n_broken += broken[e] = 1;
+    }
+    ASSERT_GT(n_broken, 0);
+    PieceParams params;
+    params.min_width = 2 * kH;
+    const Pieces pieces = find_pieces(slab.topo, slab.opened(0), broken, params);
+    EXPECT_EQ(pieces.count, 1);
+    EXPECT_EQ(pieces.is_cut, broken);
+}
+
+TEST(Pieces, AParticleTornFromBothSidesIsDebrisAndRemembersItsPiece) {
+    const TornSlab slab;
+    ParticleFrame frame = slab.opened(0.05);
+    int32_t grain = -1;
+    for (int32_t p = 0; p < slab.topo.n_particles && grain < 0; ++p)
+        if (column_of(slab.topo.X[p]) == 5 && slab.topo.X[p].y() > 2.5 * kH) grain = p;  // on the top
+    frame.P[grain] += Vec3f(0, 0.5f, 0);  // thrown up: every edge stretched far past 1.5
+    frame.v.assign(frame.P.size(), Vec3f::Zero());
+    frame.v[grain] = Vec3f(0, 2, 0);
+    SurfaceParams params = plates_params();
+    params.debris = DebrisOutput::Points;
+    const SurfacedFrame s = surface_frame(slab.topo, frame, slab.first_break, params);
+    EXPECT_EQ(s.debris_particles, 1);
+    ASSERT_EQ(s.debris.size(), 1u);
+    EXPECT_EQ(s.debris.id[0], grain);
+    EXPECT_EQ(s.debris.piece[0], 0);  // column 5: the left plate, nearest through the rest mesh
+    EXPECT_EQ(s.debris.velocity[0], Vec3f(0, 2, 0));
+    EXPECT_NEAR(s.debris.radius[0], mean_particle_spacing(slab.topo) / 2, tol::kFloat);  // no Jw: not dried
+    EXPECT_TRUE(is_closed(s, 0));  // the plate it left is still closed
+    EXPECT_EQ(s.particle_piece[grain], kDebris);
+}
+
+/// The positions of a piece's crack vertices, one per face corner.
+std::vector<Vec3f> wall_positions(const SurfacedFrame& s, int32_t piece) {
+    std::vector<Vec3f> out;
+    for (size_t f = 0; f < s.crack.faces.size(); ++f)
+        if (s.crack.face_fragment[f] == piece)
+            for (int32_t v : s.crack.faces[f]) out.push_back(s.crack.positions[v]);
+    return out;
+}
+
+Vec3 mean(const std::vector<Vec3f>& xs) {
+    Vec3 sum = Vec3::Zero();
+    for (const Vec3f& x : xs) sum += x.cast<double>();
+    return sum / double(xs.size());
+}
+
+TEST(Plates, ACrackOpensAsFarAsThePlatesMovedAndAClosedOneShowsNoGap) {
+    const TornSlab slab;
+    const SurfaceParams params = plates_params();  // close_gaps: 0.25 spacings = 0.025 m
+    // moved apart by 0.01 m: under close_gaps, the two walls coincide corner for corner
+    const SurfacedFrame closed = surface_frame(slab.topo, slab.opened(0.01), slab.first_break, params);
+    const auto left = wall_positions(closed, 0), right = wall_positions(closed, 8);
+    ASSERT_FALSE(left.empty());
+    ASSERT_EQ(left.size(), right.size());
+    std::multiset<std::array<float, 3>> l, r;
+    for (size_t i = 0; i < left.size(); ++i) {
+        l.insert({left[i].x(), left[i].y(), left[i].z()});
+        r.insert({right[i].x(), right[i].y(), right[i].z()});
+    }
+    EXPECT_EQ(l, r);
+    // moved apart by 0.2 m (past 2 close_gaps): each wall where its plate put it, 0.2 m apart
+    const SurfacedFrame open = surface_frame(slab.topo, slab.opened(0.2), slab.first_break, params);
+    const Vec3 gap = mean(wall_positions(open, 8)) - mean(wall_positions(open, 0));
+    EXPECT_NEAR(gap.x(), 0.2, tol::kFloat);
+    EXPECT_NEAR(gap.y(), 0.0, tol::kFloat);
+    EXPECT_NEAR(gap.z(), 0.0, tol::kFloat);
+}
+
+TEST(Plates, SmoothingFlattensTheDualCellStaircase) {
+    // the cut between columns 5 and 6 of a Kuhn lattice: midpoints at x = 0.55, face and tet
+    // centroids off it by up to h/4 - a staircase; smoothed, the wall lies near one plane
+    const TornSlab slab;
+    auto spread = [&](int iterations) {
+        SurfaceParams params = plates_params();
+        params.wall_smoothing = iterations;
+        const SurfacedFrame s = surface_frame(slab.topo, slab.opened(0), slab.first_break, params);
+        double lo = 1e30, hi = -1e30;
+        for (const Vec3f& x : wall_positions(s, 0)) {
+            lo = std::min(lo, double(x.x()));
+            hi = std::max(hi, double(x.x()));
+        }
+        return hi - lo;
+    };
+    const double staircase = spread(0), smoothed = spread(10);
+    EXPECT_GT(staircase, 0.4 * kH);
+    EXPECT_LT(smoothed, 0.25 * staircase);
+}
+
+TEST(WallSmoothing, ACutAtAnAngleLiesCloserToItsPlaneThanTheDualCells) {
+    // a plane at 24 degrees to the lattice: the dual cells' wall points scatter 0.3-0.4 spacings
+    // about it; the fitted crossings and their mass points stay within a third of that
+    const TetMesh mesh = box_lattice(12, 4, 12, kH);
+    const CoreTopology topo = build_core_topology(mesh);
+    const Vec3 n = Vec3(1, 0, 0.45).normalized();
+    const double offset = n.dot(Vec3(0.6, 0, 0.6));
+    auto side = [&](const Vec3& x) { return n.dot(x) - offset; };
+    std::vector<uint8_t> cut(topo.edges.size());
+    std::vector<int32_t> label(topo.n_particles);
+    for (int32_t p = 0; p < topo.n_particles; ++p) label[p] = side(topo.X[p]) > 0;
+    for (int32_t e = 0; e < topo.n_edges(); ++e) cut[e] = label[topo.edges[e][0]] != label[topo.edges[e][1]];
+    auto rms = [&](int iterations, RestPointKind kind) {
+        const WallRestPositions w = smooth_walls(topo, cut, label, iterations);
+        double sum = 0;
+        int n_points = 0;
+        for (int32_t t = 0; t < topo.n_tets(); ++t) {
+            const Tet& c = topo.tets[t];
+            bool crossed = false;
+            for (int32_t e : topo.tet_edges[t]) crossed |= cut[e] != 0;
+            if (!crossed) continue;
+            const Vec3 centroid = (topo.X[c[0]] + topo.X[c[1]] + topo.X[c[2]] + topo.X[c[3]]) / 4;
+            const Vec3 y = kind == RestPointKind::TetCentroid ? w.of(kind, t, centroid) : centroid;
+            sum += side(y) * side(y);
+            ++n_points;
+        }
+        return std::sqrt(sum / n_points);
+    };
+    const double dual = rms(0, RestPointKind::TetCentroid), smoothed = rms(10, RestPointKind::TetCentroid);
+    EXPECT_GT(dual, 0.3 * kH);
+    EXPECT_LT(smoothed, dual / 2.5);
+}
+
+TEST(Plates, AFrameIsTheSameWhateverWasSurfacedBefore) {
+    const TornSlab slab;
+    const SurfaceParams params = plates_params();
+    const SurfacedFrame a = surface_frame(slab.topo, slab.opened(0.05), slab.first_break, params);
+    surface_frame(slab.topo, slab.opened(0.3), slab.first_break, params);
+    const SurfacedFrame b = surface_frame(slab.topo, slab.opened(0.05), slab.first_break, params);
+    EXPECT_EQ(a.boundary.positions, b.boundary.positions);
+    EXPECT_EQ(a.crack.positions, b.crack.positions);
+    EXPECT_EQ(a.crack.faces, b.crack.faces);
+    EXPECT_EQ(a.crack.face_fragment, b.crack.face_fragment);
+}
+
+TEST(Plates, NoPlateWideEnoughLeavesOnlyDebris) {
+    const TornSlab slab;
+    SurfaceParams params = plates_params();
+    params.min_piece_size = 100;  // 20 m: wider than the slab
+    const SurfacedFrame s = surface_frame(slab.topo, slab.opened(0.05), slab.first_break, params);
+    EXPECT_EQ(s.fragments, 0);
+    EXPECT_EQ(s.debris_particles, slab.topo.n_particles);
+    EXPECT_TRUE(s.boundary.faces.empty());
+}
+
+}  // namespace
+}  // namespace mudcrack
