@@ -356,8 +356,73 @@ bool is_even_permutation(int i, int j, int k, int l) {
     return inversions % 2 == 0;
 }
 
+/// Taubin smoothing of the crack walls where they are (plates mode): each wall vertex moves toward
+/// the mean of its wall neighbours, the vertices where a wall meets the skin (its rim) held, so the
+/// rim stays on the skin and sharp. A wall smooth in the rest state still crumples where its
+/// particles moved unevenly; this takes out that crumpling at the scale of a few wall triangles.
+/// The two sides of a wall are mirror images with the same neighbours, so a closed crack's sides,
+/// equal before, stay equal.
+void smooth_walls_in_place(const Numbered& num, int64_t n_weld, const std::vector<uint64_t>& boundary_keys,
+                           const std::vector<uint64_t>& crack_keys, int steps, std::vector<Vec3>& position,
+                           TriMesh& mesh) {
+    // one position per weld slot (a slot's vertices differ only by UV), its neighbours and its rim flag
+    std::vector<int32_t> slot_vertex(n_weld, -1);
+    for (size_t v = 0; v < position.size(); ++v)
+        if (slot_vertex[num.vertex_weld[v]] < 0) slot_vertex[num.vertex_weld[v]] = int32_t(v);
+    std::vector<uint8_t> held(n_weld, 0);
+    {
+        std::vector<uint64_t> rim(boundary_keys);
+        std::sort(rim.begin(), rim.end());
+        for (size_t v = 0; v < position.size(); ++v)
+            if (std::binary_search(rim.begin(), rim.end(), crack_keys[v])) held[num.vertex_weld[v]] = 1;
+    }
+    // neighbours as CSR, each once: the other corners of the triangles around a slot
+    std::vector<int32_t> begin(n_weld + 1, 0), neighbour(6 * mesh.faces.size());
+    for (const Tri& t : mesh.faces)
+        for (int k = 0; k < 3; ++k) begin[num.vertex_weld[t[k]] + 1] += 2;
+    for (int64_t w = 0; w < n_weld; ++w) begin[w + 1] += begin[w];
+    {
+        std::vector<int32_t> fill(begin.begin(), begin.end() - 1);
+        for (const Tri& t : mesh.faces)
+            for (int k = 0; k < 3; ++k) {
+                const int32_t a = num.vertex_weld[t[k]];
+                neighbour[fill[a]++] = num.vertex_weld[t[(k + 1) % 3]];
+                neighbour[fill[a]++] = num.vertex_weld[t[(k + 2) % 3]];
+            }
+        // unique per slot, compacted in place
+        int32_t write = 0;
+        for (int64_t w = 0; w < n_weld; ++w) {
+            const int32_t from = begin[w], to = begin[w + 1];
+            std::sort(neighbour.begin() + from, neighbour.begin() + to);
+            begin[w] = write;
+            for (int32_t k = from; k < to; ++k)
+                if (k == from || neighbour[k] != neighbour[k - 1]) neighbour[write++] = neighbour[k];
+        }
+        begin[n_weld] = write;
+    }
+    std::vector<Vec3> y(n_weld, Vec3::Zero()), next(n_weld);
+    for (int64_t w = 0; w < n_weld; ++w)
+        if (slot_vertex[w] >= 0) y[w] = position[slot_vertex[w]];
+    constexpr Real kLambda = 0.5, kMu = -0.53;
+    for (int it = 0; it < 2 * steps; ++it) {
+        const Real step = it % 2 == 0 ? kLambda : kMu;
+        parallel_for(n_weld, [&](int64_t w) {
+            next[w] = y[w];
+            if (held[w] || begin[w] == begin[w + 1]) return;
+            Vec3 mean = Vec3::Zero();
+            for (int32_t k = begin[w]; k < begin[w + 1]; ++k) mean += y[neighbour[k]];
+            next[w] = y[w] + step * (mean / Real(begin[w + 1] - begin[w]) - y[w]);
+        });
+        std::swap(y, next);
+    }
+    for (size_t v = 0; v < position.size(); ++v) {
+        position[v] = y[num.vertex_weld[v]];
+        mesh.positions[v] = position[v].cast<float>();
+    }
+}
+
 void build_crack(const CoreTopology& topo, const FrameCores& cores, const Fragments& frag,
-                 const std::vector<uint8_t>& is_broken, SurfacedFrame& out) {
+                 const std::vector<uint8_t>& is_broken, int smoothing_steps, SurfacedFrame& out) {
     TriMesh& mesh = out.crack;
     std::vector<int32_t> broken;
     for (int32_t e = 0; e < topo.n_edges(); ++e)
@@ -461,7 +526,9 @@ void build_crack(const CoreTopology& topo, const FrameCores& cores, const Fragme
         uv = triplanar_uv(o.y0, axis, topo.uv_per_meter);
         return cores.welded(o, rep);
     };
-    const std::vector<Vec3> position = fill_vertices(cores, num, eval, mesh, out.crack_weld_key);
+    std::vector<Vec3> position = fill_vertices(cores, num, eval, mesh, out.crack_weld_key);
+    if (smoothing_steps > 0) smooth_walls_in_place(num, n_weld, out.boundary_weld_key, out.crack_weld_key,
+                                                   smoothing_steps, position, mesh);
     compute_normals(position, num, n_weld, mesh);
 }
 
@@ -502,7 +569,7 @@ void surface_plates(const CoreTopology& topo, const ParticleFrame& frame, const 
     plates.close_gap = params.close_gaps * mean_particle_spacing(topo);
     const FrameCores cores(topo, frame, pieces.is_cut, params, plates);
     build_boundary(topo, cores, frag, out);
-    if (params.cracks) build_crack(topo, cores, frag, pieces.is_cut, out);
+    if (params.cracks) build_crack(topo, cores, frag, pieces.is_cut, params.wall_smoothing, out);
     out.particle_piece = pieces.id;
 }
 
@@ -534,7 +601,7 @@ SurfacedFrame surface_frame(const CoreTopology& topo, const ParticleFrame& frame
 
     const FrameCores cores(topo, frame, is_broken, params);
     build_boundary(topo, cores, frag, out);
-    if (params.cracks) build_crack(topo, cores, frag, is_broken, out);
+    if (params.cracks) build_crack(topo, cores, frag, is_broken, 0, out);
     return out;
 }
 

@@ -44,7 +44,8 @@ struct SurfacedFrame {
 /// at the boundary's texture density (CoreTopology::uv_per_meter). Normals are area-weighted per
 /// welded vertex. Saturation and alpha are averaged over the owners of each welded vertex.
 /// In SurfaceMode::Plates the broken edges become pieces (pieces.h): face_fragment holds each
-/// face's piece id, crack walls are smoothed in rest space (wall_smoothing.h), cores follow their
+/// face's piece id, crack walls are placed smoothly in rest space (wall_smoothing.h) and then
+/// smoothed where they are, their rims held (params.wall_smoothing steps each), cores follow their
 /// particles' rotation without the Jw scaling (a crack is as wide as the particles moved apart),
 /// and a wall vertex whose two sides are closer than close_gaps spacings takes the mean of both,
 /// blending to each side's own position by 2 close_gaps, so a closed crack shows no gap and an

@@ -14,7 +14,7 @@ namespace {
 /// particle, so every skin triangle keeps its orientation.
 constexpr Real kMinCrossing = 0.05, kMaxCrossing = 0.95;
 constexpr Real kLambda = 0.5, kMu = -0.53;  // Taubin's pair: smooths without shrinking
-constexpr int kFitSteps = 4;     // the fit's neighbourhood: cut edges within 4 face-steps
+constexpr int kFitSteps = 3;     // the fit's neighbourhood: cut edges within 3 face-steps
 constexpr Real kFitSigma = 1.5;  // its Gaussian weight's sigma, in mean edge lengths
 
 /// The cut edges and which of them share a face (on the boundary: a boundary face).
@@ -80,7 +80,7 @@ CutEdgeGraph build_graph(const CoreTopology& topo, const std::vector<uint8_t>& i
 /// Where a wall crosses each cut edge before smoothing: where the edge meets the plane fitted
 /// (weighted least squares, Gaussian in distance) to the midpoints of the cut edges within
 /// kFitSteps face-steps of it. On a flat cut the midpoints scatter about its plane, so the
-/// crossings land near it whatever the lattice (on a Kuhn lattice cut at an angle, 0.11 spacings
+/// crossings land near it whatever the lattice (on a Kuhn lattice cut at an angle, 0.12 spacings
 /// RMS off it instead of 0.4 for the dual cells' centroids); on a curved one the plane is the
 /// wall's local tangent. A rim crossing fits the whole wall around it, not only the
 /// rim, so its plane is not degenerate.
@@ -95,35 +95,42 @@ std::vector<Real> fitted_crossings(const CoreTopology& topo, const CutEdgeGraph&
     }
     const Real sigma = kFitSigma * (n > 0 ? length / Real(n) : Real(1));
     std::vector<Real> t(n, Real(0.5));
-    parallel_for(n, [&](int64_t i) {
-        std::vector<int32_t> near = {int32_t(i)};
+    std::vector<int64_t> seen(n, -1);  // the node whose neighbourhood last listed each node
+    std::vector<int32_t> near;
+    for (int64_t i = 0; i < n; ++i) {
+        near.assign(1, int32_t(i));
+        seen[i] = i;
         for (int step = 0, begin = 0; step < kFitSteps; ++step) {
             const int end = int(near.size());
             for (int k = begin; k < end; ++k)
                 for (int32_t j : g.all_neighbours[near[k]])
-                    if (std::find(near.begin(), near.end(), j) == near.end()) near.push_back(j);
+                    if (seen[j] != i) {
+                        seen[j] = i;
+                        near.push_back(j);
+                    }
             begin = end;
         }
+        // weighted mean and covariance in one pass: sum w x x^T - W c c^T
         Real weight = 0;
-        Vec3 centre = Vec3::Zero();
+        Vec3 sum = Vec3::Zero();
+        Mat3 outer = Mat3::Zero();
         for (int32_t j : near) {
-            const Real w = std::exp(-(mid[j] - mid[i]).squaredNorm() / (2 * sigma * sigma));
+            const Vec3 d = mid[j] - mid[i];
+            const Real w = std::exp(-d.squaredNorm() / (2 * sigma * sigma));
             weight += w;
-            centre += w * mid[j];
+            sum += w * d;
+            outer += w * d * d.transpose();
         }
-        centre /= weight;
-        Mat3 cov = Mat3::Zero();
-        for (int32_t j : near) {
-            const Real w = std::exp(-(mid[j] - mid[i]).squaredNorm() / (2 * sigma * sigma));
-            cov += w * (mid[j] - centre) * (mid[j] - centre).transpose();
-        }
+        const Vec3 offset = sum / weight;
+        const Vec3 centre = mid[i] + offset;
+        const Mat3 cov = outer - weight * offset * offset.transpose();
         const Eigen::SelfAdjointEigenSolver<Mat3> eig(cov);
-        if (near.size() < 4 || !(eig.eigenvalues()[1] > 1e-6 * eig.eigenvalues()[2])) return;  // no plane
+        if (near.size() < 4 || !(eig.eigenvalues()[1] > 1e-6 * eig.eigenvalues()[2])) continue;  // no plane
         const Vec3 normal = eig.eigenvectors().col(0);
         const auto [p, q] = topo.edges[g.edge[i]];
         const Real along = normal.dot(topo.X[q] - topo.X[p]);
         if (std::abs(along) > 1e-9 * topo.rest_length[g.edge[i]]) t[i] = normal.dot(centre - topo.X[p]) / along;
-    });
+    }
     return t;
 }
 
@@ -145,8 +152,8 @@ Vec3 mass_point(const std::vector<Vec3>& crossing, const CutEdgeGraph& g, const 
 
 WallRestPositions smooth_walls(const CoreTopology& topo, const std::vector<uint8_t>& is_cut,
                                const std::vector<int32_t>& label, int iterations) {
-    WallRestPositions out;
-    if (iterations <= 0) return out;
+    if (iterations <= 0) return WallRestPositions();
+    WallRestPositions out(topo.n_edges(), topo.n_faces, topo.n_tets());
     const CutEdgeGraph g = build_graph(topo, is_cut);
     const int64_t n = static_cast<int64_t>(g.edge.size());
     auto point = [&](int64_t i, Real t) {

@@ -14,8 +14,8 @@
 /// only their rim neighbours, so the rim becomes a smooth curve and stays a sharp edge. Both
 /// sides of a wall and the skin read the same rest points, so walls still meet where a crack
 /// is closed.
+#include <array>
 #include <cstdint>
-#include <unordered_map>
 #include <vector>
 
 #include "sim/core/types.h"
@@ -24,20 +24,34 @@
 namespace mudcrack {
 
 /// The rest positions that smoothing moved, by rest point; every other rest point keeps its own.
+/// Dense slot tables (one int per edge, face and tet) point into the moved positions, so a lookup
+/// is two loads: the skin and the walls look up every rest point they use.
 class WallRestPositions {
 public:
+    WallRestPositions() = default;
+    WallRestPositions(int32_t n_edges, int32_t n_faces, int32_t n_tets)
+        : m_slot{std::vector<int32_t>(n_edges, -1), std::vector<int32_t>(n_faces, -1),
+                 std::vector<int32_t>(n_tets, -1)} {}
     /// The rest position of (kind, id): the smoothed one when it is on a wall, else y0.
     Vec3 of(RestPointKind kind, int32_t id, const Vec3& y0) const {
-        if (m_moved.empty()) return y0;
-        const auto it = m_moved.find(key(kind, id));
-        return it == m_moved.end() ? y0 : it->second;
+        if (m_moved.empty() || kind == RestPointKind::Particle) return y0;
+        const int32_t slot = m_slot[int(kind) - 1][id];
+        return slot < 0 ? y0 : m_moved[slot];
     }
     size_t size() const { return m_moved.size(); }
-    void set(RestPointKind kind, int32_t id, const Vec3& y) { m_moved[key(kind, id)] = y; }
+    void set(RestPointKind kind, int32_t id, const Vec3& y) {
+        int32_t& slot = m_slot[int(kind) - 1][id];
+        if (slot < 0) {
+            slot = static_cast<int32_t>(m_moved.size());
+            m_moved.push_back(y);
+        } else {
+            m_moved[slot] = y;
+        }
+    }
 
 private:
-    static uint64_t key(RestPointKind kind, int32_t id) { return (uint64_t(kind) << 32) | uint32_t(id); }
-    std::unordered_map<uint64_t, Vec3> m_moved;
+    std::array<std::vector<int32_t>, 3> m_slot;  // edge, face, tet -> index into m_moved, or -1
+    std::vector<Vec3> m_moved;
 };
 
 /// Places the walls through the edges with is_cut[e] != 0, with `iterations` Taubin steps

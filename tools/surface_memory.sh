@@ -6,7 +6,7 @@
 #   tools/surface_memory.sh SHOT OUT FRAME [FORMAT...]   (default format: the shot's)
 #
 # e.g. tools/surface_memory.sh shots/fig6_eps_0.2.json out/fig6_eps_0.2 24 glb obj
-# Environment: BUILD (default build), THREADS (default 2).
+# Environment: BUILD (default build), THREADS (default 2), MODE (a surfacing mode, default the shot's).
 # Columns: triangles = boundary + crack faces written; peak = the process's maximum resident set;
 # topology = the once-per-mesh surfacing topology (its manifest's topology_bytes); B/tri = (peak -
 # topology) / triangles, the figure the production-scale issue bounds (~250); file = bytes written.
@@ -15,6 +15,7 @@ set -euo pipefail
 ROOT=$(cd "$(dirname "$0")/.." && pwd)
 BUILD=${BUILD:-$ROOT/build}
 THREADS=${THREADS:-2}
+MODE=${MODE:-}
 [[ $# -ge 3 ]] || { echo "usage: tools/surface_memory.sh SHOT OUT FRAME [FORMAT...]" >&2; exit 2; }
 SHOT=$1 OUT=$2 FRAME=$3
 shift 3
@@ -37,7 +38,7 @@ for format in "${FORMATS[@]}"; do
     rm -rf "$WORK/surface"
     start=$(date +%s.%N)
     /usr/bin/time -f %M -o "$WORK/peak_kb" "$BUILD/bin/mc-surface" --shot "$SHOT" --out "$WORK" --threads "$THREADS" \
-        --frames "$FRAME" ${format:+--format "$format"} --quiet >"$WORK/log" 2>&1 ||
+        --frames "$FRAME" ${format:+--format "$format"} ${MODE:+--mode "$MODE"} --quiet >"$WORK/log" 2>&1 ||
         { echo "surface_memory.sh: mc-surface failed:" >&2; tail -5 "$WORK/log" >&2; exit 1; }
     wall=$(awk -v a="$start" -v b="$(date +%s.%N)" 'BEGIN { printf "%.1f", b - a }')
     m=$WORK/surface/manifest.json

@@ -137,11 +137,13 @@ surface_frames() {
     mkdir -p "$out/surface" || return 1
     local n
     for ((n = first; n <= last; n++)); do
-        local crack boundary
+        local crack boundary debris
         crack=$(farm_frame_file "$work/surface" crack "$n" "$format")
         boundary=$(farm_frame_file "$work/surface" boundary "$n" "$format")
-        rm -f "$(farm_frame_file "$out/surface" crack "$n" "$format")"
+        debris=$(farm_frame_file "$work/surface" debris "$n" ply)  # the plates mode's, on request
+        rm -f "$(farm_frame_file "$out/surface" crack "$n" "$format")" "$(farm_frame_file "$out/surface" debris "$n" ply)"
         if [ -f "$crack" ]; then mv -f "$crack" "$out/surface/" || return 1; fi
+        if [ -f "$debris" ]; then mv -f "$debris" "$out/surface/" || return 1; fi
         mv -f "$boundary" "$out/surface/" || return 1
     done
     rm -rf "$work"

@@ -292,5 +292,67 @@ TEST_F(McSurfaceCli, BadInputFailsNamingTheFileAndWritesNothing) {
     EXPECT_FALSE(fs::exists(out / "surface"));
 }
 
+/// kShot with its /surfacing section replaced.
+std::string shot_with_surfacing(const std::string& surfacing) {
+    std::string shot = kShot;
+    const size_t at = shot.find("\"surfacing\"");
+    return shot.substr(0, at) + "\"surfacing\": " + surfacing + "\n}";
+}
+
+TEST_F(McSurfaceCli, PlatesFramesInAnyOrderGiveByteIdenticalClosedPiecesAndDebris) {
+    std::ofstream(m_shot_path) << shot_with_surfacing(
+        R"({ "mode": "plates", "zeta": 1.5, "format": "glb", "min_piece_size": 1, "debris": "points" })");
+    const fs::path in_order = m_dir / "a", chunked = m_dir / "b";
+    write_inputs(in_order);
+    write_inputs(chunked);
+    const CliRun all = mc_surface(in_order);
+    ASSERT_EQ(all.code, 0) << all.err;
+    for (const char* chunk : {"3-4", "1-2"}) {
+        const CliRun one = mc_surface(chunked, std::string("--frames ") + chunk);
+        ASSERT_EQ(one.code, 0) << one.err;
+    }
+    const nlohmann::json m = read_manifest(in_order / "surface");
+    EXPECT_EQ(m["mode"], "plates");
+    for (int n = 1; n <= kFrames; ++n) {
+        const nlohmann::json& entry = m["per_frame"][n - 1];
+        EXPECT_GE(entry["pieces"].get<int>(), 1);
+        for (const char* stem : {"boundary", "crack"}) {
+            if (entry[stem]["file"].is_null()) continue;
+            const fs::path a = frame_path(in_order / "surface", stem, n, "glb");
+            EXPECT_EQ(read_bytes(a), read_bytes(frame_path(chunked / "surface", stem, n, "glb"))) << a;
+        }
+        const fs::path debris = frame_path(in_order / "surface", "debris", n, "ply");
+        ASSERT_TRUE(fs::exists(debris)) << debris;
+        EXPECT_EQ(read_bytes(debris), read_bytes(frame_path(chunked / "surface", "debris", n, "ply")));
+        EXPECT_EQ(entry["debris"]["points"], entry["debris_particles"]);
+    }
+    EXPECT_GT(m["per_frame"][kFrames - 1]["crack"]["faces"].get<int64_t>(), 0);
+}
+
+TEST_F(McSurfaceCli, PlatesBadInputNamesTheKeyAndWritesNothing) {
+    const fs::path out = m_dir / "out";
+    write_inputs(out);
+    // a piece size wider than the soil (0.4 x 0.1 x 0.15 m; 100 cells of 0.05 m = 5 m)
+    std::ofstream(m_shot_path) << shot_with_surfacing(R"({ "mode": "plates", "min_piece_size": 100 })");
+    CliRun r = mc_surface(out);
+    EXPECT_EQ(r.code, 1);
+    EXPECT_NE(r.err.find("/surfacing/min_piece_size = 100"), std::string::npos) << r.err;
+    EXPECT_NE(r.err.find("wider than the soil"), std::string::npos) << r.err;
+    EXPECT_FALSE(fs::exists(out / "surface"));
+    EXPECT_FALSE(fs::exists(out / ".surface.partial"));
+    // debris asked of a mode that has none: the shot, and --mode over a plates shot
+    std::ofstream(m_shot_path) << shot_with_surfacing(R"({ "mode": "ours", "debris": "points" })");
+    r = mc_surface(out);
+    EXPECT_EQ(r.code, 1);
+    EXPECT_NE(r.err.find("/surfacing/debris = \"points\": needs /surfacing/mode = \"plates\""), std::string::npos)
+        << r.err;
+    std::ofstream(m_shot_path) << shot_with_surfacing(R"({ "mode": "plates", "debris": "points" })");
+    r = mc_surface(out, "--mode wang2019");
+    EXPECT_EQ(r.code, 1);
+    EXPECT_NE(r.err.find("--mode wang2019"), std::string::npos) << r.err;
+    EXPECT_NE(r.err.find("/surfacing/debris"), std::string::npos) << r.err;
+    EXPECT_FALSE(fs::exists(out / "surface"));
+}
+
 }  // namespace
 }  // namespace mudcrack
