@@ -7,6 +7,7 @@
 #include <cstdio>
 #include <string>
 
+#include "pipeline/init/lattice.h"
 #include "pipeline/shot/build.h"
 
 namespace mudcrack::spec {
@@ -152,8 +153,9 @@ void check_particle_memory(const json& tree, const InitParams& init, Issues& iss
         count = (hf.size.x() / hf.spacing + 1) * (hf.size.z() / hf.spacing + 1) * (height / hf.spacing + 1);
         pointer = "/source/heightfield/spacing";
     }
+    // past kMaxInitParticles mc-init refuses the count itself, naming it whole
     const double memory = physical_memory_bytes();
-    if (count == 0 || memory == 0 || count * kBytesPerParticle <= memory) return;
+    if (count == 0 || count > kMaxInitParticles || memory == 0 || count * kBytesPerParticle <= memory) return;
     issues.add(pointer, issues.value_of(tree, pointer),
                "makes about " + g(count) + " particles, which need about " + g(count * kBytesPerParticle / 1073741824.0) +
                    " GiB (" + g(kBytesPerParticle) + " bytes each) on a machine with " + g(memory / 1073741824.0) +

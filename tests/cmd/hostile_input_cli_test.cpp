@@ -21,6 +21,7 @@
 
 #include <algorithm>
 #include <chrono>
+#include <cmath>
 #include <filesystem>
 #include <fstream>
 #include <functional>
@@ -274,7 +275,6 @@ const ShotCase kShotCases[] = {
     {"domain_too_large_for_h",
      [](json& s) { s["colliders"]["domain"] = {{"min", {-1e4, -1e4, -1e4}}, {"max", {1e4, 1e4, 1e4}}}; },
      "/sim/h"},
-    {"box_spacing_1e_5", [](json& s) { s["source"]["box"]["spacing"] = 1e-5; }, "/source/box/spacing"},
     {"resolution_16384", [](json& s) { s["render"]["resolution"] = {16384, 16384}; }, "/render/resolution"},
     {"resolution_16384x8192", [](json& s) { s["render"]["resolution"] = {16384, 8192}; }, "/render/resolution"},
     {"samples_64_at_4k", [](json& s) { s["render"]["resolution"] = {4096, 2160}; s["render"]["samples"] = 64; },
@@ -314,6 +314,24 @@ INSTANTIATE_TEST_SUITE_P(InitAndSim, ShotValues,
                          [](const auto& info) {
                              return std::get<0>(info.param) + "_" + kShotCases[std::get<1>(info.param)].name;
                          });
+
+// a lattice that fits mc-init's own limit (5e7 particles) but not this machine's memory, at the
+// loader's estimate of 1 KiB a particle
+TEST_F(HostileInput, LatticeBeyondMemoryNamesTheSpacing) {
+    const double memory = double(::sysconf(_SC_PHYS_PAGES)) * double(::sysconf(_SC_PAGE_SIZE));
+    const double particles = 1.5 * memory / 1024;
+    if (particles > 4.9e7) GTEST_SKIP() << "this machine's memory holds mc-init's largest lattice";
+    const double side = std::cbrt(particles) * 0.01;
+    json s = tiny_shot();
+    s["source"]["box"] = {{"min", {0, 0, 0}}, {"max", {side, side, side}}, {"spacing", 0.01}};
+    const fs::path path = write_shot(s);
+    for (const std::string stage : {"init", "sim"}) {
+        const Result r = run(stage, path);
+        EXPECT_EQ(r.code, 1) << r.err;
+        expect_error(r, stage, {path.string() + ": /source/box/spacing", "GiB"});
+        EXPECT_FALSE(fs::exists(out()));
+    }
+}
 
 class NumberOverflow : public HostileInput, public ::testing::WithParamInterface<int> {};
 
