@@ -119,6 +119,9 @@ int run_locked_body(const StageOptions& opt, const std::function<int(const Stage
     try {
         const std::optional<LockMode> mode = lock_mode ? lock_mode(opt) : LockMode::Exclusive;
         if (mode) lock = std::make_unique<StageLock>(fs::path(opt.out) / stage_of(opt.program), opt.program, *mode);
+        // writers sharing a folder: temporary names unique to this one
+        if (mode == LockMode::Shared)
+            set_temporary_suffix("." + lock_host_name() + "." + std::to_string(getpid()) + ".tmp");
         g_stage_lock = lock.get();
         code = body(opt);
     } catch (const UsageError& e) {

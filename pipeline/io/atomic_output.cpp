@@ -21,6 +21,12 @@ std::set<fs::path>& cleanup_paths() {
     return paths;
 }
 
+// what write_atomically appends to a file's name while writing it
+std::string& temporary_suffix() {
+    static std::string suffix = ".tmp";
+    return suffix;
+}
+
 }  // namespace
 
 void add_interrupt_cleanup(const fs::path& path) {
@@ -44,9 +50,11 @@ void run_interrupt_cleanup() {
     cleanup_paths().clear();
 }
 
+void set_temporary_suffix(const std::string& suffix) { temporary_suffix() = suffix; }
+
 void write_atomically(const fs::path& path, const std::function<void(const fs::path&)>& write) {
     fs::path tmp = path;
-    tmp += ".tmp";
+    tmp += temporary_suffix();
     add_interrupt_cleanup(tmp);
     try {
         write(tmp);

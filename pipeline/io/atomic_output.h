@@ -15,6 +15,12 @@ namespace mudcrack {
 void write_atomically(const std::filesystem::path& path,
                       const std::function<void(const std::filesystem::path& tmp)>& write);
 
+/// Sets what write_atomically appends to a name while it writes (".tmp" unless set). A writer
+/// that shares its folder with others (a farm chunk under a shared StageLock) makes it unique,
+/// e.g. ".<host>.<pid>.tmp", so two chunks given the same frame never write one temporary file.
+/// Call before any thread writes.
+void set_temporary_suffix(const std::string& suffix);
+
 /// Why the write that just failed failed: strerror(errno) ("No space left on device", "File too
 /// large", "Read-only file system"), or "write failed" when errno holds nothing. Callers zero errno
 /// before writing, so an old errno is not blamed.

@@ -20,12 +20,6 @@ namespace {
 
 constexpr int kLockAttempts = 8;  // a lock file removed under us by its last holder: try again
 
-std::string host_name() {
-    char name[256] = {};
-    if (gethostname(name, sizeof name - 1) != 0) return "?";
-    return name;
-}
-
 std::string utc_now() {
     const std::time_t now = std::time(nullptr);
     std::tm tm{};
@@ -59,6 +53,12 @@ std::string refusal(const fs::path& stage_dir, const fs::path& lock_path, const 
 }
 
 }  // namespace
+
+std::string lock_host_name() {
+    char name[256] = {};
+    if (gethostname(name, sizeof name - 1) != 0) return "unknown";
+    return name;
+}
 
 std::string lock_holder_text(const fs::path& lock_file) {
     std::ifstream is(lock_file);
@@ -108,7 +108,7 @@ StageLock::StageLock(const fs::path& stage_dir, const std::string& program, Lock
     if (m_fd < 0) throw RuntimeError(m_path.string() + ": cannot take the lock: the file keeps being replaced");
     if (mode == LockMode::Exclusive) {
         std::ostringstream record;
-        record << "host=" << host_name() << "\npid=" << getpid() << "\nprogram=" << program
+        record << "host=" << lock_host_name() << "\npid=" << getpid() << "\nprogram=" << program
                << "\nstart=" << utc_now() << "\n";
         const std::string text = record.str();
         // the record only helps a refused writer name the holder: a failed write is not fatal

@@ -45,6 +45,9 @@ private:
     std::vector<std::filesystem::path> m_made_dirs;  // made for the lock file, innermost first
 };
 
+/// This machine's name, as a lock records it.
+std::string lock_host_name();
+
 /// The holder a lock file records ("host h, pid 123, mc-sim, since 2026-11-25 17:30:02 UTC"), or
 /// "" when it records none.
 std::string lock_holder_text(const std::filesystem::path& lock_file);
