@@ -3,6 +3,7 @@
 #include <fcntl.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <atomic>
 #include <cerrno>
 #include <csignal>
@@ -16,7 +17,6 @@
 #include <thread>
 
 #include "pipeline/io/atomic_output.h"
-
 #include "sim/core/error.h"
 #include "sim/core/log.h"
 #include "sim/core/parallel.h"
@@ -175,6 +175,12 @@ int parse_thread_count(const std::string& text) {
     return int(n);
 }
 
+int parse_error_exit(const CLI::App& app, const CLI::ParseError& e, const std::string& program) {
+    if (e.get_exit_code() == 0) return app.exit(e);  // --help, --version
+    log::error(std::string(e.what()) + " (" + program + " --help lists the flags)");
+    return kExitUsage;
+}
+
 void report_error_lines(const std::string& message) {
     size_t begin = 0;
     while (begin <= message.size()) {
@@ -216,9 +222,7 @@ int run_stage(const std::string& program, const std::string& description, int ar
         if (!threads_text.empty()) opt.threads = parse_thread_count(threads_text);
         if (!opt.frames.empty()) opt.frame_range = parse_frame_range(opt.frames);
     } catch (const CLI::ParseError& e) {
-        if (e.get_exit_code() == 0) return app.exit(e);  // --help, --version
-        log::error(std::string(e.what()) + " (" + program + " --help lists the flags)");
-        return kExitUsage;
+        return parse_error_exit(app, e, program);
     } catch (const UsageError& e) {
         log::error(e.what());
         return kExitUsage;

@@ -53,6 +53,10 @@ int parse_thread_count(const std::string& text);
 /// nullopt for a program that writes no stage folder (mc-measure).
 using LockModeOf = std::function<std::optional<LockMode>(const StageOptions&)>;
 
+/// What a program does with an argument parser's error: --help and --version print and exit 0;
+/// a usage error prints one "program: error: ..." line and returns kExitUsage.
+int parse_error_exit(const CLI::App& app, const CLI::ParseError& e, const std::string& program);
+
 /// Prints one "program: error: ..." line per line of a (possibly multi-line) message, so every
 /// problem a validation reports is greppable on its own.
 void report_error_lines(const std::string& message);

@@ -120,13 +120,13 @@ StageLock::StageLock(const fs::path& stage_dir, const std::string& program, Lock
 StageLock::~StageLock() { release(); }
 
 void StageLock::release() {
-    if (m_fd < 0) return;
+    const int fd = m_fd.exchange(-1);
+    if (fd < 0) return;
     // the last holder removes the file: an exclusive lock means no one shares it now
-    if (m_mode == LockMode::Exclusive || flock(m_fd, LOCK_EX | LOCK_NB) == 0) {
-        if (is_same_file(m_fd, m_path)) unlink(m_path.c_str());
+    if (m_mode == LockMode::Exclusive || flock(fd, LOCK_EX | LOCK_NB) == 0) {
+        if (is_same_file(fd, m_path)) unlink(m_path.c_str());
     }
-    close(m_fd);
-    m_fd = -1;
+    close(fd);
     std::error_code ec;
     for (const fs::path& p : m_made_dirs)
         if (fs::is_empty(p, ec)) fs::remove(p, ec);

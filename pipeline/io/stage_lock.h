@@ -5,6 +5,7 @@
 /// drops it when its holder dies however it dies (SIGKILL, a crash): a lock left by a dead
 /// process is no lock, and the next run takes it. An exclusive holder records its host, pid,
 /// program and start time in the file, and a refused writer names them.
+#include <atomic>
 #include <filesystem>
 #include <string>
 #include <vector>
@@ -41,7 +42,7 @@ private:
     std::filesystem::path m_stage_dir;
     std::filesystem::path m_path;
     LockMode m_mode;
-    int m_fd = -1;
+    std::atomic<int> m_fd{-1};  // atomic: the signal handling may release it from another thread
     std::vector<std::filesystem::path> m_made_dirs;  // made for the lock file, innermost first
 };
 

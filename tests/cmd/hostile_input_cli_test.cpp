@@ -140,7 +140,7 @@ protected:
 
     // runs the stages before `stage` (they must succeed)
     void run_before(const std::string& stage, const fs::path& shot) {
-        for (const std::string& s : {"init", "sim", "surface"}) {
+        for (const std::string s : {"init", "sim", "surface"}) {
             if (s == stage) return;
             const Result r = run(s, shot);
             ASSERT_EQ(r.code, 0) << s << ": " << r.err;
@@ -222,6 +222,15 @@ TEST_F(HostileInput, MissingOutIsAUsageErrorWithThePrefix) {
     const Result r = Process("mc-sim", {"--shot", shot.string()}, m_dir / "err.txt").wait();
     EXPECT_EQ(r.code, 2);
     expect_error(r, "sim", {"--out"});
+}
+
+TEST_F(HostileInput, ShotToolUsageErrorsHaveThePrefix) {
+    for (const std::vector<std::string>& args :
+         {std::vector<std::string>{"validate"}, std::vector<std::string>{"no-such-command"}}) {
+        const Result r = Process("mc-shot", args, m_dir / "err.txt").wait();
+        EXPECT_EQ(r.code, 2) << r.err;
+        expect_error(r, "shot", {"mc-shot --help"});
+    }
 }
 
 TEST_F(HostileInput, ThreadsAboveTheCapNameTheCap) {
@@ -405,7 +414,9 @@ public:
         m_fd = ::open(file.c_str(), O_RDWR | O_CREAT, 0644);
         EXPECT_GE(m_fd, 0);
         EXPECT_EQ(::flock(m_fd, how | LOCK_NB), 0);
-        if (!record.empty()) EXPECT_EQ(::write(m_fd, record.data(), record.size()), ssize_t(record.size()));
+        if (!record.empty()) {
+            EXPECT_EQ(::write(m_fd, record.data(), record.size()), ssize_t(record.size()));
+        }
     }
     ~HeldLock() { ::close(m_fd); }
 
@@ -422,7 +433,6 @@ TEST_P(SecondWriter, RefusedNamingTheHolder) {
     const fs::path shot = write_shot(tiny_shot());
     run_before(stage, shot);
     const fs::path lock = out() / ("." + stage + ".lock");
-    const std::string before = fs::exists(out() / stage) ? read_text(out() / stage / "manifest.json") : "";
     {
         HeldLock held(lock, LOCK_EX, kForeignHolder);
         const Result r = run(stage, shot);
@@ -437,7 +447,6 @@ TEST_P(SecondWriter, RefusedNamingTheHolder) {
     EXPECT_EQ(again.code, 0) << again.err;
     EXPECT_TRUE(fs::exists(out() / stage / "manifest.json"));
     expect_no_debris(out());
-    (void)before;
 }
 
 INSTANTIATE_TEST_SUITE_P(EveryStage, SecondWriter, ::testing::Values("init", "sim", "surface", "render"));
@@ -554,7 +563,9 @@ TEST_P(StoppedBySignal, CleansUpAndExits128PlusTheSignal) {
     expect_error(r, c.stage, {c.signal == SIGINT ? "SIGINT" : "SIGTERM"});
     expect_no_debris(out());
     EXPECT_FALSE(fs::exists(out() / "render")) << "no render folder from a stopped full run";
-    if (c.stage == "sim") EXPECT_FALSE(fs::exists(out() / "sim" / "manifest.json"));
+    if (c.stage == "sim") {
+        EXPECT_FALSE(fs::exists(out() / "sim" / "manifest.json"));
+    }
 }
 
 INSTANTIATE_TEST_SUITE_P(Stages, StoppedBySignal,
