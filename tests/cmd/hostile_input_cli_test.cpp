@@ -262,6 +262,27 @@ TEST_F(HostileInput, SurfaceRefusesFramesPastTheShot) {
     expect_no_debris(out());
 }
 
+TEST_F(HostileInput, RenderRefusesFramesPastTheShot) {
+    const fs::path shot = write_shot(tiny_shot());
+    run_before("render", shot);
+    const Result r = run("render", shot, {"--frames", "99-100"});
+    EXPECT_EQ(r.code, 2) << r.err;
+    expect_error(r, "render", {"--frames 99-100", "1-3"});
+    EXPECT_FALSE(fs::exists(out() / "render"));
+    expect_no_debris(out());
+}
+
+// the bounds are not the whole story: 0 (all cores) and the cap itself are accepted
+TEST_F(HostileInput, ThreadsZeroAndTheCapAreAccepted) {
+    const fs::path shot = write_shot(tiny_shot());
+    const unsigned hardware = std::max(1u, std::thread::hardware_concurrency());
+    for (const std::string& threads : {std::string("0"), std::to_string(4 * hardware)}) {
+        const Result r = run("init", shot, {"--threads", threads});
+        EXPECT_EQ(r.code, 0) << threads << ": " << r.err;
+    }
+    expect_no_debris(out());
+}
+
 // ---- shot values no run survives: exit 1 at load, file and key named, no output ----------------
 
 struct ShotCase {
