@@ -165,12 +165,15 @@ void check_particle_memory(const json& tree, const InitParams& init, Issues& iss
 
 void check_render_buffer(const json& tree, const std::optional<RenderParams>& render, Issues& issues) {
     if (!render || issues.has("/render")) return;
-    const double bytes = 4.0 * render->width * render->height * render->samples;
+    // llvmpipe pads each side to its 64-pixel tiles
+    const auto padded = [](int pixels) { return std::ceil(pixels / 64.0) * 64.0; };
+    const double bytes = 4.0 * padded(render->width) * padded(render->height) * render->samples;
     if (bytes <= kMaxRenderBufferBytes) return;
     issues.add("/render/resolution", issues.value_of(tree, "/render/resolution"),
                "with /render/samples = " + std::to_string(render->samples) + ", the multisampled colour buffer needs " +
                    g(bytes / 1073741824.0) + " GiB; OSMesa (llvmpipe) allocates at most 1 GiB per buffer: lower "
-                   "the resolution or the samples (width x height x samples <= 268435456)");
+                   "the resolution or the samples (width x height x samples <= 268435456, each side padded to "
+                   "64 pixels)");
 }
 
 }  // namespace
