@@ -25,7 +25,8 @@ constexpr double kMaxGridBlocks = 4.0e9;
 constexpr double kBytesPerParticle = 1024;
 // llvmpipe (OSMesa) allocates at most 1 GiB per render buffer (Mesa's LP_MAX_TEXTURE_SIZE); the
 // multisampled colour buffer is the largest: 4 bytes x samples per pixel
-constexpr double kMaxRenderBufferBytes = 1024.0 * 1024.0 * 1024.0;
+constexpr double kGiB = 1024.0 * 1024.0 * 1024.0;
+constexpr double kMaxRenderBufferBytes = kGiB;
 // a film frame [s]: a step too small for it is the step's fault, not the frame rate's
 constexpr Real kUsualFrameLength = 1.0 / 24;
 
@@ -157,8 +158,8 @@ void check_particle_memory(const json& tree, const InitParams& init, Issues& iss
     const double memory = physical_memory_bytes();
     if (count == 0 || count > kMaxInitParticles || memory == 0 || count * kBytesPerParticle <= memory) return;
     issues.add(pointer, issues.value_of(tree, pointer),
-               "makes about " + g(count) + " particles, which need about " + g(count * kBytesPerParticle / 1073741824.0) +
-                   " GiB (" + g(kBytesPerParticle) + " bytes each) on a machine with " + g(memory / 1073741824.0) +
+               "makes about " + g(count) + " particles, which need about " + g(count * kBytesPerParticle / kGiB) +
+                   " GiB (" + g(kBytesPerParticle) + " bytes each) on a machine with " + g(memory / kGiB) +
                    " GiB; raise the spacing",
                "m");
 }
@@ -171,7 +172,7 @@ void check_render_buffer(const json& tree, const std::optional<RenderParams>& re
     if (bytes <= kMaxRenderBufferBytes) return;
     issues.add("/render/resolution", issues.value_of(tree, "/render/resolution"),
                "with /render/samples = " + std::to_string(render->samples) + ", the multisampled colour buffer needs " +
-                   g(bytes / 1073741824.0) + " GiB; OSMesa (llvmpipe) allocates at most 1 GiB per buffer: lower "
+                   g(bytes / kGiB) + " GiB; OSMesa (llvmpipe) allocates at most 1 GiB per buffer: lower "
                    "the resolution or the samples (width x height x samples <= 268435456, each side padded to "
                    "64 pixels)");
 }

@@ -127,7 +127,8 @@ protected:
     // --shot SHOT --out OUT, one thread unless `extra` says otherwise, then `extra`
     std::vector<std::string> stage_args(const fs::path& shot, const std::vector<std::string>& extra) const {
         std::vector<std::string> args = {"--shot", shot.string(), "--out", out().string()};
-        if (std::find(extra.begin(), extra.end(), "--threads") == extra.end()) args.insert(args.end(), {"--threads", "1"});
+        if (std::find(extra.begin(), extra.end(), "--threads") == extra.end())
+            args.insert(args.end(), {"--threads", "1"});
         args.insert(args.end(), extra.begin(), extra.end());
         return args;
     }
@@ -160,7 +161,14 @@ protected:
     // one error line, prefixed with the stage, holding every `needle`
     static void expect_error(const Result& r, const std::string& stage, const std::vector<std::string>& needles) {
         EXPECT_NE(r.err.find("mc-" + stage + ": error: "), std::string::npos) << r.err;
-        for (const std::string& n : needles) EXPECT_NE(r.err.find(n), std::string::npos) << "no \"" << n << "\" in\n" << r.err;
+        for (const std::string& n : needles)
+            EXPECT_NE(r.err.find(n), std::string::npos) << "no \"" << n << "\" in\n" << r.err;
+    }
+
+    // a lock file an exclusive writer has recorded itself in
+    static bool has_holder_record(const fs::path& lock) {
+        std::error_code ec;
+        return fs::file_size(lock, ec) > 0 && !ec;
     }
 
     // waits up to `seconds` for `ready`; false on timeout
@@ -488,7 +496,7 @@ TEST_F(HostileInput, KilledWriterLeavesNoLockBehind) {
     const fs::path shot = write_shot(s);
     run_before("sim", shot);
     Process first = start("sim", shot);
-    ASSERT_TRUE(wait_for([&] { return fs::exists(out() / ".sim.lock") && fs::file_size(out() / ".sim.lock") > 0; }, 20));
+    ASSERT_TRUE(wait_for([&] { return has_holder_record(out() / ".sim.lock"); }, 20));
     // a second writer of the same folder, while the first runs
     const Result second = run("sim", shot, {"--frames", "1-1"});
     EXPECT_EQ(second.code, 1) << second.err;
@@ -509,7 +517,7 @@ TEST_F(HostileInput, TwoShotsOneFolderOnlyOneWrites) {
     const fs::path shot_a = write_shot(a, "a.json"), shot_b = write_shot(b, "b.json");
     ASSERT_EQ(run("init", shot_a).code, 0);
     Process first = start("sim", shot_a);
-    ASSERT_TRUE(wait_for([&] { return fs::exists(out() / ".sim.lock") && fs::file_size(out() / ".sim.lock") > 0; }, 20));
+    ASSERT_TRUE(wait_for([&] { return has_holder_record(out() / ".sim.lock"); }, 20));
     const Result second = run("sim", shot_b);
     EXPECT_EQ(second.code, 1) << second.err;
     expect_error(second, "sim", {"another writer holds it"});
@@ -576,7 +584,8 @@ TEST_P(StoppedBySignal, CleansUpAndExits128PlusTheSignal) {
     run_before(c.stage == "render" ? "surface" : c.stage, shot);
     Process p = start(c.stage, shot);
     // stopped while it writes: a frame written (sim), the partial folder made (render)
-    const fs::path sign = c.stage == "sim" ? out() / "sim" / "particles.0002.vdb" : out() / ".render.partial" / "frame.0001.png";
+    const fs::path sign =
+        c.stage == "sim" ? out() / "sim" / "particles.0002.vdb" : out() / ".render.partial" / "frame.0001.png";
     ASSERT_TRUE(wait_for([&] { return fs::exists(sign); }, 60)) << sign;
     p.signal(c.signal);
     const Result r = p.wait();
