@@ -67,11 +67,22 @@ std::string stage_of(const std::string& program) {
 // removes what the stage was writing (its .partial folder, temporary files, the lock) and exits
 // 128 + the signal, so the cleanup runs outside the handler, with no restriction on what it calls
 int g_signal_pipe[2] = {-1, -1};
+volatile std::sig_atomic_t g_stop_signal = 0;  // the signal received (0: none)
 std::atomic<StageLock*> g_stage_lock{nullptr};
 
 extern "C" void on_stop_signal(int signal_number) {
-    const unsigned char byte = static_cast<unsigned char>(signal_number);
+    g_stop_signal = signal_number;
+    const unsigned char byte = 1;
     [[maybe_unused]] const ssize_t n = write(g_signal_pipe[1], &byte, 1);
+}
+
+void set_stop_signal_action(void (*handler)(int)) {
+    struct sigaction action {};
+    action.sa_handler = handler;
+    sigemptyset(&action.sa_mask);
+    action.sa_flags = SA_RESTART;
+    sigaction(SIGTERM, &action, nullptr);
+    sigaction(SIGINT, &action, nullptr);
 }
 
 [[noreturn]] void clean_up_and_exit(int signal_number) {
@@ -97,17 +108,17 @@ extern "C" void on_stop_signal(int signal_number) {
 void handle_stop_signals() {
     if (pipe2(g_signal_pipe, O_CLOEXEC) != 0) return;  // no pipe: signals keep their default action
     std::thread([] {
-        unsigned char byte = 0;
-        while (read(g_signal_pipe[0], &byte, 1) < 0 && errno == EINTR) {
+        // only a signal the handler recorded stops the stage, never a stray byte
+        for (;;) {
+            unsigned char byte = 0;
+            const ssize_t n = read(g_signal_pipe[0], &byte, 1);
+            if (n < 0 && errno == EINTR) continue;
+            if (n != 1) break;
+            if (g_stop_signal != 0) clean_up_and_exit(g_stop_signal);
         }
-        clean_up_and_exit(byte);
+        set_stop_signal_action(SIG_DFL);  // the pipe failed: signals end the stage as they would
     }).detach();
-    struct sigaction action {};
-    action.sa_handler = on_stop_signal;
-    sigemptyset(&action.sa_mask);
-    action.sa_flags = SA_RESTART;
-    sigaction(SIGTERM, &action, nullptr);
-    sigaction(SIGINT, &action, nullptr);
+    set_stop_signal_action(on_stop_signal);
 }
 
 // the body under the stage folder's lock, with InputError and RuntimeError mapped to one
