@@ -105,4 +105,9 @@ struct SimModel {
 /// The elastic time-step bound C_E h / c_p [s].
 Real elastic_dt_bound(const SimModel& model);
 
+/// The smallest stable time step a run accepts, as a fraction of the frame length 1/fps: a step
+/// this much smaller than the frame would take over a billion substeps per frame. mc-sim stops a
+/// run whose step collapses below it; the shot loader refuses a shot whose step starts below it.
+constexpr double kCollapsedDtFraction = 1e-9;
+
 }  // namespace mudcrack

@@ -19,5 +19,6 @@ int main(int argc, char** argv) {
                          "re-surface every frame: vertex jumps between frames beyond the particles' moves, and "
                          "particles that change piece");
         },
-        [&](const StageOptions& options) { return run_measure_stage(options, measure_options); });
+        [&](const StageOptions& options) { return run_measure_stage(options, measure_options); },
+        [](const StageOptions&) { return std::optional<LockMode>(); });  // writes no stage folder
 }

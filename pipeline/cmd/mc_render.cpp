@@ -19,5 +19,11 @@ int main(int argc, char** argv) {
                          "from the frame PNGs already in DIR/render/ (rendered by --frames chunks), render the "
                          "turntable and write contact_sheet.png, the movies and manifest.json");
         },
-        [&](const StageOptions& options) { return run_render_stage(options, render_options); });
+        [&](const StageOptions& options) { return run_render_stage(options, render_options); },
+        // --frames chunks of one shot write their own frames into one folder side by side
+        [&](const StageOptions& options) {
+            return std::optional<LockMode>(options.frame_range.is_set() && !render_options.assemble
+                                               ? LockMode::Shared
+                                               : LockMode::Exclusive);
+        });
 }

@@ -1,17 +1,28 @@
 #include "pipeline/cmd/stage_cli.h"
 
+#include <fcntl.h>
 #include <unistd.h>
 
+#include <algorithm>
+#include <atomic>
+#include <cerrno>
+#include <csignal>
 #include <cstdio>
 #include <cstdlib>
 #include <exception>
 #include <filesystem>
+#include <memory>
+#include <optional>
 #include <regex>
+#include <thread>
 
+#include "pipeline/io/atomic_output.h"
 #include "sim/core/error.h"
 #include "sim/core/log.h"
 #include "sim/core/parallel.h"
 #include "sim/core/stats.h"
+
+namespace fs = std::filesystem;
 
 namespace mudcrack {
 namespace {
@@ -47,19 +58,138 @@ std::string filesystem_error_line(const std::filesystem::filesystem_error& e) {
     return e.path1().string() + (e.path2().empty() ? "" : " -> " + e.path2().string()) + ": " + what;
 }
 
+// the stage a program writes: "mc-render" -> "render"
+std::string stage_of(const std::string& program) {
+    return program.rfind("mc-", 0) == 0 ? program.substr(3) : program;
+}
+
+// SIGTERM and SIGINT: the handler only writes the signal's number into a pipe; a thread reads it,
+// removes what the stage was writing (its .partial folder, temporary files, the lock) and exits
+// 128 + the signal, so the cleanup runs outside the handler, with no restriction on what it calls
+int g_signal_pipe[2] = {-1, -1};
+volatile std::sig_atomic_t g_stop_signal = 0;  // the signal received (0: none)
+std::atomic<StageLock*> g_stage_lock{nullptr};
+
+extern "C" void on_stop_signal(int signal_number) {
+    g_stop_signal = signal_number;
+    const unsigned char byte = 1;
+    [[maybe_unused]] const ssize_t n = write(g_signal_pipe[1], &byte, 1);
+}
+
+void set_stop_signal_action(void (*handler)(int)) {
+    struct sigaction action {};
+    action.sa_handler = handler;
+    sigemptyset(&action.sa_mask);
+    action.sa_flags = SA_RESTART;
+    sigaction(SIGTERM, &action, nullptr);
+    sigaction(SIGINT, &action, nullptr);
+}
+
+[[noreturn]] void clean_up_and_exit(int signal_number) {
+    run_interrupt_cleanup();
+    StageLock* lock = g_stage_lock.load();
+    std::string what = "removed the partial output";
+    if (lock) {
+        // an exclusive holder's folder holds no one else's temporaries (ffmpeg's movie among them)
+        std::error_code ec;
+        if (lock->mode() == LockMode::Exclusive)
+            for (auto it = fs::directory_iterator(lock->stage_dir(), ec); !ec && it != fs::directory_iterator();
+                 it.increment(ec))
+                if (it->path().extension() == ".tmp") fs::remove(it->path(), ec);
+        lock->release();
+        what += " in " + lock->stage_dir().parent_path().string();
+    }
+    log::error(std::string("stopped by ") + (signal_number == SIGINT ? "SIGINT" : "SIGTERM") + ": " + what +
+               "; exit " + std::to_string(128 + signal_number));
+    std::fflush(stderr);
+    _exit(128 + signal_number);
+}
+
+void handle_stop_signals() {
+    if (pipe2(g_signal_pipe, O_CLOEXEC) != 0) return;  // no pipe: signals keep their default action
+    std::thread([] {
+        // only a signal the handler recorded stops the stage, never a stray byte
+        for (;;) {
+            unsigned char byte = 0;
+            const ssize_t n = read(g_signal_pipe[0], &byte, 1);
+            if (n < 0 && errno == EINTR) continue;
+            if (n != 1) break;
+            if (g_stop_signal != 0) clean_up_and_exit(g_stop_signal);
+        }
+        set_stop_signal_action(SIG_DFL);  // the pipe failed: signals end the stage as they would
+    }).detach();
+    set_stop_signal_action(on_stop_signal);
+}
+
+// the body under the stage folder's lock, with InputError and RuntimeError mapped to one
+// "program: error: ..." line and exit 1 (a UsageError: exit 2)
+int run_locked_body(const StageOptions& opt, const std::function<int(const StageOptions&)>& body,
+                    const LockModeOf& lock_mode) {
+    std::unique_ptr<StageLock> lock;  // released last, after the body's own cleanup
+    int code = kExitFailure;
+    try {
+        const std::optional<LockMode> mode = lock_mode ? lock_mode(opt) : LockMode::Exclusive;
+        if (mode) lock = std::make_unique<StageLock>(fs::path(opt.out) / stage_of(opt.program), opt.program, *mode);
+        // writers sharing a folder: temporary names unique to this one
+        if (mode == LockMode::Shared)
+            set_temporary_suffix("." + lock_host_name() + "." + std::to_string(getpid()) + ".tmp");
+        g_stage_lock = lock.get();
+        code = body(opt);
+    } catch (const UsageError& e) {
+        report_error_lines(e.what());
+        code = kExitUsage;
+    } catch (const InputError& e) {
+        report_error_lines(e.what());
+    } catch (const RuntimeError& e) {
+        report_error_lines(e.what());
+    } catch (const std::filesystem::filesystem_error& e) {
+        log::error(filesystem_error_line(e));
+    } catch (const std::exception& e) {
+        log::error(std::string("unexpected failure: ") + e.what());
+    }
+    g_stage_lock = nullptr;
+    return code;
+}
+
 }  // namespace
 
 FrameRange parse_frame_range(const std::string& text) {
-    static const std::regex range(R"(^\s*(\d+)\s*(?:-\s*(\d+))?\s*$)");
+    // at most 9 digits: a frame number fits an int
+    static const std::regex range(R"(^\s*(\d{1,9})\s*(?:-\s*(\d{1,9}))?\s*$)");
     std::smatch m;
     if (!std::regex_match(text, m, range))
-        throw InputError("--frames = \"" + text + "\": expected A-B or N (1-based frame numbers)");
+        throw UsageError("--frames = \"" + text + "\": expected A-B or N (1-based frame numbers)");
     FrameRange r;
     r.first = std::stoi(m[1]);
     r.last = m[2].matched ? std::stoi(m[2]) : r.first;
     if (r.first < 1 || r.last < r.first)
-        throw InputError("--frames = \"" + text + "\": expected 1 <= A <= B");
+        throw UsageError("--frames = \"" + text + "\": expected 1 <= A <= B");
     return r;
+}
+
+int max_thread_count() {
+    return kMaxThreadsPerHardwareThread * std::max(1, int(std::thread::hardware_concurrency()));
+}
+
+int parse_thread_count(const std::string& text) {
+    static const std::regex number(R"(^\s*(-?\d{1,12})\s*$)");
+    const int hardware = std::max(1, int(std::thread::hardware_concurrency()));
+    const std::string expected = "expected 0 (all " + std::to_string(hardware) + " hardware threads) or 1 to " +
+                                 std::to_string(max_thread_count()) + " (" +
+                                 std::to_string(kMaxThreadsPerHardwareThread) + " x the hardware threads)";
+    std::smatch m;
+    if (!std::regex_match(text, m, number)) throw UsageError("--threads = \"" + text + "\": " + expected);
+    const long long n = std::stoll(m[1]);
+    if (n < 0) throw UsageError("--threads = " + std::to_string(n) + ": " + expected);
+    if (n > max_thread_count())
+        throw UsageError("--threads = " + std::to_string(n) + ": more threads than a stage can use here: " + expected);
+    return int(n);
+}
+
+int parse_error_exit(const CLI::App& app, const CLI::ParseError& e, const std::string& program) {
+    if (e.get_exit_code() == 0) return app.exit(e);  // --help, --version
+    log::error(std::string(e.what()) + " (" + program + " --help lists the flags)");
+    return kExitUsage;
 }
 
 void report_error_lines(const std::string& message) {
@@ -75,29 +205,38 @@ void report_error_lines(const std::string& message) {
 
 int run_stage(const std::string& program, const std::string& description, int argc, char** argv,
               const std::function<void(CLI::App&)>& add_flags,
-              const std::function<int(const StageOptions&)>& body) {
+              const std::function<int(const StageOptions&)>& body, const LockModeOf& lock_mode) {
     reexec_with_passive_openmp_threads(argv);
+    handle_stop_signals();
     WallTimer timer;
     log::set_program(program);
     StageOptions opt;
     opt.program = program;
     CLI::App app{description, program};
+    std::string threads_text;
     app.set_version_flag("--version", std::string(program) + " (mudcrack) " MUDCRACK_VERSION);
     app.add_option("--shot", opt.shot, "shot file (JSON)")->required()->check(CLI::ExistingFile);
     app.add_option("--out", opt.out, "output root of the shot (stages write OUT/<stage>/)")->required();
     app.add_option("--frames", opt.frames, "frame range A-B or a single frame N (default: the shot's)");
-    app.add_option("--threads", opt.threads, "worker threads (default: all cores)")->check(CLI::NonNegativeNumber);
+    app.add_option("--threads", threads_text,
+                   "worker threads, at most " + std::to_string(kMaxThreadsPerHardwareThread) +
+                       " x the hardware threads (default: all cores)");
     app.add_option("--seed", opt.seed, "random seed (default: the shot's)");
     app.add_option("--log-level", opt.log_level, "error|warning|info|debug")
         ->check(CLI::IsMember({"error", "warning", "info", "debug"}));
     app.add_flag("--quiet", opt.quiet, "print errors and warnings only");
     app.add_flag("--keep-partial", opt.keep_partial, "keep the .partial/ output folder of a failed run");
     if (add_flags) add_flags(app);
+    // usage errors: the parser's and the flag values', one line each, exit 2
     try {
         app.parse(argc, argv);
+        if (!threads_text.empty()) opt.threads = parse_thread_count(threads_text);
+        if (!opt.frames.empty()) opt.frame_range = parse_frame_range(opt.frames);
     } catch (const CLI::ParseError& e) {
-        const int code = app.exit(e);
-        return code == 0 ? 0 : 2;
+        return parse_error_exit(app, e, program);
+    } catch (const UsageError& e) {
+        log::error(e.what());
+        return kExitUsage;
     }
     const log::Level level = opt.quiet ? log::Level::Warning
                              : opt.log_level == "error"   ? log::Level::Error
@@ -106,23 +245,7 @@ int run_stage(const std::string& program, const std::string& description, int ar
                                                           : log::Level::Info;
     log::set_level(level);
     set_thread_count(opt.threads);
-    int code = 1;
-    try {
-        if (!opt.frames.empty()) opt.frame_range = parse_frame_range(opt.frames);
-        code = body(opt);
-    } catch (const InputError& e) {
-        report_error_lines(e.what());
-        code = 1;
-    } catch (const RuntimeError& e) {
-        report_error_lines(e.what());
-        code = 1;
-    } catch (const std::filesystem::filesystem_error& e) {
-        log::error(filesystem_error_line(e));
-        code = 1;
-    } catch (const std::exception& e) {
-        log::error(std::string("unexpected failure: ") + e.what());
-        code = 1;
-    }
+    const int code = run_locked_body(opt, body, lock_mode);
     log::summarize_warnings();
     char line[160];
     std::snprintf(line, sizeof line, "%s in %.2f s, peak memory %.1f MiB, %d threads",

@@ -3,6 +3,8 @@
 #include <cerrno>
 #include <cstring>
 #include <fstream>
+#include <mutex>
+#include <set>
 #include <system_error>
 
 #include "sim/core/error.h"
@@ -10,19 +12,61 @@
 namespace fs = std::filesystem;
 
 namespace mudcrack {
+namespace {
+
+// the interrupt cleanup list
+std::mutex g_cleanup_mutex;
+std::set<fs::path>& cleanup_paths() {
+    static std::set<fs::path> paths;
+    return paths;
+}
+
+// what write_atomically appends to a file's name while writing it
+std::string& temporary_suffix() {
+    static std::string suffix = ".tmp";
+    return suffix;
+}
+
+}  // namespace
+
+void add_interrupt_cleanup(const fs::path& path) {
+    const std::lock_guard<std::mutex> lock(g_cleanup_mutex);
+    cleanup_paths().insert(path);
+}
+
+void remove_interrupt_cleanup(const fs::path& path) {
+    const std::lock_guard<std::mutex> lock(g_cleanup_mutex);
+    cleanup_paths().erase(path);
+}
+
+void run_interrupt_cleanup() {
+    // the lock is kept: the process exits next, and a thread about to start a temporary file
+    // waits in add_interrupt_cleanup instead of leaving it behind
+    g_cleanup_mutex.lock();
+    for (const fs::path& p : cleanup_paths()) {
+        std::error_code ec;
+        fs::remove_all(p, ec);
+    }
+    cleanup_paths().clear();
+}
+
+void set_temporary_suffix(const std::string& suffix) { temporary_suffix() = suffix; }
 
 void write_atomically(const fs::path& path, const std::function<void(const fs::path&)>& write) {
     fs::path tmp = path;
-    tmp += ".tmp";
+    tmp += temporary_suffix();
+    add_interrupt_cleanup(tmp);
     try {
         write(tmp);
     } catch (...) {
         std::error_code ec;
         fs::remove(tmp, ec);
+        remove_interrupt_cleanup(tmp);
         throw;
     }
     std::error_code ec;
     fs::rename(tmp, path, ec);
+    remove_interrupt_cleanup(tmp);
     if (ec) {
         const std::string reason = ec.message();
         fs::remove(tmp, ec);
@@ -49,6 +93,7 @@ StagingDir::StagingDir(fs::path final_dir, bool keep_partial)
     : m_final(std::move(final_dir)), m_keep_partial(keep_partial) {
     const fs::path parent = m_final.parent_path().empty() ? fs::path(".") : m_final.parent_path();
     m_partial = parent / ("." + m_final.filename().string() + ".partial");
+    if (!m_keep_partial) add_interrupt_cleanup(m_partial);
     std::error_code ec;
     fs::remove_all(m_partial, ec);
     fs::create_directories(m_partial, ec);
@@ -56,6 +101,7 @@ StagingDir::StagingDir(fs::path final_dir, bool keep_partial)
 }
 
 StagingDir::~StagingDir() {
+    remove_interrupt_cleanup(m_partial);
     if (m_committed || m_keep_partial) return;
     std::error_code ec;
     fs::remove_all(m_partial, ec);
@@ -65,6 +111,7 @@ void StagingDir::commit() {
     std::error_code ec;
     fs::remove_all(m_final, ec);
     fs::rename(m_partial, m_final, ec);
+    if (!ec) remove_interrupt_cleanup(m_partial);
     if (ec) throw RuntimeError(m_final.string() + ": cannot move the finished output into place: " + ec.message());
     m_committed = true;
 }

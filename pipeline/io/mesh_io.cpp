@@ -9,6 +9,7 @@
 #include <algorithm>
 #include <cctype>
 #include <climits>
+#include <cstdlib>
 #include <cstring>
 #include <cmath>
 #include <fstream>
@@ -135,6 +136,43 @@ void check_text_mesh(const fs::path& path) {
             throw InputError(path.string() + ": byte " + std::to_string(offset + uint64_t(nul - buffer)) +
                              " is NUL: an " + ext.substr(1) + " file is text (damaged or not a mesh?)");
         offset += uint64_t(n);
+    }
+}
+
+// A NaN or infinite coordinate ("v nan 0 0", "1e999") would be reported further on as a
+// degenerate or self-intersecting face, the vertex never named: it is refused first, with its
+// index. An OBJ is read here, so the index is the file's own (1-based, as OBJ faces count);
+// assimp numbers the vertices of other formats as it read them (mesh_vertices_finite below).
+void check_obj_vertices_finite(const fs::path& path) {
+    if (lowercase_extension(path) != ".obj") return;
+    std::ifstream is(path, std::ios::binary);
+    std::string line;
+    int64_t vertex = 0, line_number = 0;
+    while (std::getline(is, line)) {
+        ++line_number;
+        if (line.size() < 2 || line[0] != 'v' || (line[1] != ' ' && line[1] != '\t')) continue;
+        ++vertex;
+        std::istringstream fields(line.substr(2));
+        std::string word;
+        for (int k = 0; k < 3 && fields >> word; ++k)
+            if (!std::isfinite(std::strtod(word.c_str(), nullptr)))
+                throw InputError(path.string() + ": vertex " + std::to_string(vertex) + " (line " +
+                                 std::to_string(line_number) + ") has coordinate " + word.substr(0, 40) +
+                                 ": not finite; expected finite numbers");
+    }
+}
+
+void check_mesh_vertices_finite(const fs::path& path, const aiScene& scene) {
+    for (unsigned m = 0; m < scene.mNumMeshes; ++m) {
+        const aiMesh& mesh = *scene.mMeshes[m];
+        for (unsigned i = 0; i < mesh.mNumVertices; ++i) {
+            const aiVector3D& v = mesh.mVertices[i];
+            if (std::isfinite(v.x) && std::isfinite(v.y) && std::isfinite(v.z)) continue;
+            std::ostringstream where;
+            where << "vertex " << i << (scene.mNumMeshes > 1 ? " of mesh " + std::to_string(m) : std::string())
+                  << " (0-based, as read) is (" << v.x << ", " << v.y << ", " << v.z << ")";
+            throw InputError(path.string() + ": " + where.str() + ": not finite; expected finite numbers");
+        }
     }
 }
 
@@ -282,6 +320,7 @@ InputSurface load_input_surface(const fs::path& path) {
     }
     check_ply_header(path);
     check_text_mesh(path);
+    check_obj_vertices_finite(path);
     check_off_header(path);
     Assimp::Importer importer;
     // ValidateDataStructure runs before the other steps: assimp 5.2.5's readers can leave faces
@@ -294,6 +333,7 @@ InputSurface load_input_surface(const fs::path& path) {
     if (scene == nullptr || scene->mRootNode == nullptr) {
         throw InputError(path.string() + ": cannot read the mesh: " + importer.GetErrorString());
     }
+    check_mesh_vertices_finite(path, *scene);
     check_polygon_flags(path, *scene);
     scene = importer.ApplyPostProcessing(aiProcess_Triangulate | aiProcess_JoinIdenticalVertices);
     if (scene == nullptr || scene->mRootNode == nullptr) {

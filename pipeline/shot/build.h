@@ -49,6 +49,15 @@ CacheAttributes derive_cache(const nlohmann::json& tree, const SimModel& sim,
 void check_across(const nlohmann::json& tree, const InitParams& init, const SimModel& sim,
                   const std::optional<RenderParams>& render, Issues& issues);
 
+/// Physical plausibility, naming the key each refusal blames (pipeline/shot/plausibility.cpp):
+/// the time step the shot starts with (the fixed or largest step, the elastic bound, the
+/// velocity bound with the initial velocity and one frame of gravity) against mc-sim's floor
+/// of kCollapsedDtFraction frame lengths; /sim/h against OpenVDB's smallest voxel and against
+/// the domain (the grid's block count); a lattice source's particle count against the machine's
+/// memory; /render/resolution x /render/samples against what OSMesa allocates.
+void check_plausible(const nlohmann::json& tree, const InitParams& init, const SimModel& sim,
+                     const std::optional<RenderParams>& render, Issues& issues);
+
 /// Warnings for valid but doubtful settings: zeta below the bound of docs/physics.md §5.5, under
 /// which intact dried material breaks spuriously.
 void warn_doubtful(const SimModel& sim, const std::optional<SurfaceParams>& surface,

@@ -115,6 +115,7 @@ Shot parse_shot(const std::string& text, const std::string& path) {
     shot.render = spec::build_render(tree);
     shot.sim.cache = spec::derive_cache(tree, shot.sim, shot.surface, issues);
     spec::check_across(tree, shot.init, shot.sim, shot.render, issues);
+    spec::check_plausible(tree, shot.init, shot.sim, shot.render, issues);
     issues.throw_if_any();
     spec::warn_doubtful(shot.sim, shot.surface, path);
 

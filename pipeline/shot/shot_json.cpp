@@ -63,9 +63,14 @@ public:
         return true;
     }
 
-    // rethrown with its own type, so the caller's catch of json::parse_error sees it
+    // rethrown with its own type, so the caller's catch of json::parse_error sees it; a number
+    // too large for a double (nlohmann's out_of_range 406, "1e400") is named by its key here,
+    // where the key is known
     template <class Exception>
-    bool parse_error(std::size_t, const std::string&, const Exception& e) {
+    bool parse_error(std::size_t, const std::string& token, const Exception& e) {
+        if (e.id == kNumberOverflow)
+            throw InputError(m_issues.file() + ": " + pointer_of_next_value() + " = " + token.substr(0, 40) +
+                             ": number overflow: expected a number a double holds (magnitude below 1.8e308)");
         throw e;
     }
 
@@ -77,6 +82,15 @@ private:
         bool is_duplicate_key = false;
         std::string earlier_text;    // the value the object already holds at `key`
     };
+
+    static constexpr int kNumberOverflow = 406;
+
+    // the JSON pointer the value being read will have
+    std::string pointer_of_next_value() const {
+        if (m_open.empty()) return "(the root)";
+        const Container& c = m_open.back();
+        return c.pointer + "/" + (c.value->is_array() ? std::to_string(c.value->size()) : escape_key(c.key));
+    }
 
     // places a value in the innermost open container (or as the root); returns where it lives
     json* place(json v) {
@@ -113,12 +127,7 @@ private:
         if (m_open.size() >= kMaxDepth)
             throw InputError(m_issues.file() + ": JSON nested deeper than " + std::to_string(kMaxDepth) +
                              " levels: a shot is a few levels deep");
-        std::string pointer;
-        if (!m_open.empty()) {
-            const Container& parent = m_open.back();
-            pointer = parent.pointer + "/" +
-                      (parent.value->is_array() ? std::to_string(parent.value->size()) : escape_key(parent.key));
-        }
+        std::string pointer = m_open.empty() ? std::string() : pointer_of_next_value();
         Container c;
         c.value = place(std::move(empty));
         c.pointer = std::move(pointer);

@@ -281,9 +281,9 @@ TEST_F(McRenderCli, AssembleNamesAMissingOrStaleFrame) {
 TEST_F(McRenderCli, AssembleRefusesAFrameRange) {
     const Shot shot = write_shot(kSurfacedShot);
     write_surface(shot, 3);
-    EXPECT_EQ(run("--assemble --frames 1-2"), 1);
+    EXPECT_EQ(run("--assemble --frames 1-2"), 2);  // a usage error
     EXPECT_NE(m_stderr.find("--assemble with --frames 1-2"), std::string::npos) << m_stderr;
-    EXPECT_EQ(run("--frames 4-5"), 1);
+    EXPECT_EQ(run("--frames 4-5"), 2);
     EXPECT_NE(m_stderr.find("--frames 4-5: outside the frames 1-3"), std::string::npos) << m_stderr;
     EXPECT_FALSE(fs::exists(out() / "render/frame.0001.png"));
 }

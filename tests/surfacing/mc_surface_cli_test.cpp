@@ -287,7 +287,7 @@ TEST_F(McSurfaceCli, BadInputFailsNamingTheFileAndWritesNothing) {
 
     // frames outside the cache
     r = mc_surface(out, "--frames 2-9");
-    EXPECT_EQ(r.code, 1);
+    EXPECT_EQ(r.code, 2);  // a usage error
     EXPECT_NE(r.err.find("--frames"), std::string::npos) << r.err;
     EXPECT_FALSE(fs::exists(out / "surface"));
 }

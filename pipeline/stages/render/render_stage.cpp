@@ -275,7 +275,7 @@ int run_full(const StageOptions& opt, const RenderJob& job) {
 int run_frames(const StageOptions& opt, const RenderJob& job) {
     const int a = opt.frame_range.first, b = opt.frame_range.last;
     if (a < job.first || b > job.last)
-        throw InputError("--frames " + opt.frames + ": outside the frames " + std::to_string(job.first) + "-" +
+        throw UsageError("--frames " + opt.frames + ": outside the frames " + std::to_string(job.first) + "-" +
                          std::to_string(job.last) + " of " + job.input_manifest_path().string());
     const Bounds stage = stage_bounds(job);
     std::unique_ptr<Renderer> renderer = make_renderer(opt, job);
@@ -409,10 +409,10 @@ int run_render_stage(const StageOptions& opt, const RenderStageOptions& render_o
     const bool force_turntable = render_options.force_turntable, assemble = render_options.assemble;
     const Mode mode = assemble ? Mode::Assemble : opt.frame_range.is_set() ? Mode::Frames : Mode::Full;
     if (assemble && opt.frame_range.is_set())
-        throw InputError("--assemble with --frames " + opt.frames +
+        throw UsageError("--assemble with --frames " + opt.frames +
                          ": --assemble takes every frame of the shot; render chunks with --frames, then assemble");
     if (mode == Mode::Frames && force_turntable)
-        throw InputError("--turntable with --frames " + opt.frames +
+        throw UsageError("--turntable with --frames " + opt.frames +
                          ": a --frames run writes frame PNGs only; the turntable is rendered by --assemble");
     const RenderJob job = resolve_render_job(opt, force_turntable);
     switch (mode) {

@@ -11,9 +11,6 @@
 namespace mudcrack {
 namespace {
 
-// a stable step this much smaller than the frame would take over a billion substeps
-constexpr double kCollapsedDtFraction = 1e-9;
-
 std::string step_context(int frame, int substep, double time, double dt) {
     char buf[160];
     std::snprintf(buf, sizeof buf, "frame %d substep %d (t = %.9g s, dt = %.6g s): ", frame, substep,

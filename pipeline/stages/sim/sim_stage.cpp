@@ -7,6 +7,7 @@
 #include <optional>
 #include <regex>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include <nlohmann/json.hpp>
@@ -193,6 +194,20 @@ std::vector<std::string> attribute_names(const PointCloud& cloud) {
     return names;
 }
 
+// the frames a run writes: --frames, within the shot's, or the shot's
+std::pair<int, int> frames_to_write(const Shot& shot, const StageOptions& options) {
+    const TimeParams& time = shot.sim.time;
+    const int first = options.frame_range.is_set() ? options.frame_range.first : time.frame_start;
+    const int last = options.frame_range.is_set() ? options.frame_range.last : time.frame_end;
+    if (first < 1 || last < first)
+        throw InputError(shot.path + ": frames " + std::to_string(first) + "-" + std::to_string(last) +
+                         ": expected 1 <= start <= end");
+    if (options.frame_range.is_set() && (first < time.frame_start || last > time.frame_end))
+        throw UsageError("--frames " + options.frames + ": outside the frames " + std::to_string(time.frame_start) +
+                         "-" + std::to_string(time.frame_end) + " of " + shot.path + " (/frames/start, /frames/end)");
+    return {first, last};
+}
+
 }  // namespace
 
 int run_sim_stage(const Shot& shot, const StageOptions& options, const SimStageOptions& sim_options) {
@@ -200,15 +215,12 @@ int run_sim_stage(const Shot& shot, const StageOptions& options, const SimStageO
     const SimModel& model = shot.sim;
     const fs::path out(options.out);
     const fs::path sim_dir = out / "sim";
-    const InitParticles init = read_init(out / "init", shot);
-    const size_t n = init.X.size();
 
     // the frames to write
-    const int first = options.frame_range.is_set() ? options.frame_range.first : model.time.frame_start;
-    const int last = options.frame_range.is_set() ? options.frame_range.last : model.time.frame_end;
-    if (first < 1 || last < first)
-        throw InputError(shot.path + ": frames " + std::to_string(first) + "-" + std::to_string(last) +
-                         ": expected 1 <= start <= end");
+    const std::pair<int, int> frames = frames_to_write(shot, options);
+    const int first = frames.first, last = frames.second;
+    const InitParticles init = read_init(out / "init", shot);
+    const size_t n = init.X.size();
 
     // the starting state: a checkpoint (--resume) or the rest state at t = 0 (end of "frame 0")
     std::error_code ec;

@@ -204,7 +204,7 @@ int run_surface_stage(const StageOptions& options, const SurfaceStageOptions& su
         first = options.frame_range.first;
         last = options.frame_range.last;
         if (first < sim_first || last > sim_last)
-            throw InputError("--frames " + options.frames + ": outside the cached frames " + std::to_string(sim_first) +
+            throw UsageError("--frames " + options.frames + ": outside the cached frames " + std::to_string(sim_first) +
                              "-" + std::to_string(sim_last) + " of " + (sim_dir / "manifest.json").string());
     }
 

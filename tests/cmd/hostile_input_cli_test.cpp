@@ -1,0 +1,608 @@
+// Hostile input to the stage binaries (README, "Bad input"; docs/architecture.md §5): every case
+// ends in a clear refusal with the right exit code, a message naming the file, key or flag, and
+// nothing left behind (no .partial folder, temporary file, lock file or new output folder).
+// - Usage: bad --threads / --frames / --log-level values and unknown flags, for every stage:
+//   exit 2, one "mc-<stage>: error:" line naming the flag.
+// - Shot values inside their ranges that no run survives (a collapsed time step, h below OpenVDB's
+//   voxel, a grid or lattice too large, a framebuffer OSMesa cannot allocate, a number overflow):
+//   exit 1 at load, naming the file and the key, before any output folder exists.
+// - Non-finite input mesh vertices, named with their index.
+// - One writer per folder: a lock held elsewhere refuses the stage, naming its holder; a lock
+//   left by a dead writer is recovered; farm chunks share one.
+// - SIGTERM and SIGINT: the stage removes what it was writing and exits 128 + the signal.
+// Shots are tiny edits of shots/fig8_a.json (75 particles, 3 frames).
+#include <gtest/gtest.h>
+
+#include <fcntl.h>
+#include <signal.h>
+#include <sys/file.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <functional>
+#include <iterator>
+#include <sstream>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+
+namespace fs = std::filesystem;
+using nlohmann::json;
+
+namespace {
+
+const fs::path kBin = MUDCRACK_BIN_DIR;
+const fs::path kSource = MUDCRACK_SOURCE_DIR;
+const std::vector<std::string> kStages = {"init", "sim", "surface", "render", "measure"};
+
+std::string read_text(const fs::path& path) {
+    std::ifstream is(path, std::ios::binary);
+    std::stringstream ss;
+    ss << is.rdbuf();
+    return ss.str();
+}
+
+// fig8_a cut down: a 0.2 x 0.1 x 0.2 m block at spacing 0.05 (75 particles), 3 frames, a
+// 48 x 32 render with a 2-view turntable
+json tiny_shot() {
+    std::ifstream is(kSource / "shots/fig8_a.json");
+    json shot = json::parse(is, nullptr, true, /*ignore_comments=*/true);
+    shot["name"] = "hostile";
+    shot["source"]["box"] = {{"min", {-0.1, 0.0, -0.1}}, {"max", {0.1, 0.1, 0.1}}, {"spacing", 0.05}};
+    shot["frames"]["end"] = 3;
+    shot["render"] = {{"resolution", {48, 32}}, {"turntable", {{"views", 2}}}};
+    return shot;
+}
+
+struct Result {
+    int code = -1;  // exit code, or 128 + the signal that ended it
+    std::string err;
+};
+
+// a stage binary run in the background, stderr into a file
+class Process {
+public:
+    Process(const std::string& program, const std::vector<std::string>& args, const fs::path& err_file)
+        : m_err_file(err_file) {
+        std::vector<std::string> all = {(kBin / program).string()};
+        all.insert(all.end(), args.begin(), args.end());
+        std::vector<char*> argv;
+        for (std::string& a : all) argv.push_back(a.data());
+        argv.push_back(nullptr);
+        m_pid = ::fork();
+        if (m_pid == 0) {
+            const int err = ::open(err_file.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
+            const int null = ::open("/dev/null", O_WRONLY);
+            if (err < 0 || null < 0 || ::dup2(err, 2) < 0 || ::dup2(null, 1) < 0) ::_exit(126);
+            ::execv(argv[0], argv.data());
+            ::_exit(127);
+        }
+    }
+    pid_t pid() const { return m_pid; }
+    void signal(int s) const { ::kill(m_pid, s); }
+    Result wait() {
+        int status = 0;
+        while (::waitpid(m_pid, &status, 0) < 0 && errno == EINTR) {
+        }
+        Result r;
+        r.code = WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
+        r.err = read_text(m_err_file);
+        return r;
+    }
+
+private:
+    pid_t m_pid = -1;
+    fs::path m_err_file;
+};
+
+class HostileInput : public ::testing::Test {
+protected:
+    void SetUp() override {
+        const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
+        std::string name = std::string(info->test_suite_name()) + "_" + info->name();
+        for (char& c : name)
+            if (c == '/') c = '_';
+        m_dir = fs::temp_directory_path() / ("mc_hostile_" + name + "_" + std::to_string(::getpid()));
+        fs::remove_all(m_dir);
+        fs::create_directories(m_dir);
+    }
+    void TearDown() override {
+        if (!HasFailure()) fs::remove_all(m_dir);
+    }
+
+    fs::path write_shot(const json& shot, const std::string& name = "shot.json") {
+        const fs::path path = m_dir / name;
+        std::ofstream(path) << shot.dump(2);
+        return path;
+    }
+    fs::path out() const { return m_dir / "out"; }
+
+    // --shot SHOT --out OUT, one thread unless `extra` says otherwise, then `extra`
+    std::vector<std::string> stage_args(const fs::path& shot, const std::vector<std::string>& extra) const {
+        std::vector<std::string> args = {"--shot", shot.string(), "--out", out().string()};
+        if (std::find(extra.begin(), extra.end(), "--threads") == extra.end())
+            args.insert(args.end(), {"--threads", "1"});
+        args.insert(args.end(), extra.begin(), extra.end());
+        return args;
+    }
+    Result run(const std::string& stage, const fs::path& shot, const std::vector<std::string>& extra = {}) {
+        return Process("mc-" + stage, stage_args(shot, extra), m_dir / "stderr.txt").wait();
+    }
+    Process start(const std::string& stage, const fs::path& shot, const std::vector<std::string>& extra = {}) {
+        return Process("mc-" + stage, stage_args(shot, extra), m_dir / ("stderr_" + stage + ".txt"));
+    }
+
+    // runs the stages before `stage` (they must succeed)
+    void run_before(const std::string& stage, const fs::path& shot) {
+        for (const std::string s : {"init", "sim", "surface"}) {
+            if (s == stage) return;
+            const Result r = run(s, shot);
+            ASSERT_EQ(r.code, 0) << s << ": " << r.err;
+        }
+    }
+
+    // no .partial folder, temporary or lock file anywhere under `dir`
+    static void expect_no_debris(const fs::path& dir) {
+        if (!fs::exists(dir)) return;
+        for (const auto& e : fs::recursive_directory_iterator(dir)) {
+            const std::string name = e.path().filename().string();
+            EXPECT_EQ(name.find(".partial"), std::string::npos) << e.path();
+            EXPECT_NE(e.path().extension(), ".tmp") << e.path();
+            EXPECT_NE(e.path().extension(), ".lock") << e.path();
+        }
+    }
+    // one error line, prefixed with the stage, holding every `needle`
+    static void expect_error(const Result& r, const std::string& stage, const std::vector<std::string>& needles) {
+        EXPECT_NE(r.err.find("mc-" + stage + ": error: "), std::string::npos) << r.err;
+        for (const std::string& n : needles)
+            EXPECT_NE(r.err.find(n), std::string::npos) << "no \"" << n << "\" in\n" << r.err;
+    }
+
+    // a lock file an exclusive writer has recorded itself in
+    static bool has_holder_record(const fs::path& lock) {
+        std::error_code ec;
+        return fs::file_size(lock, ec) > 0 && !ec;
+    }
+
+    // waits up to `seconds` for `ready`; false on timeout
+    static bool wait_for(const std::function<bool()>& ready, double seconds) {
+        const auto end = std::chrono::steady_clock::now() + std::chrono::duration<double>(seconds);
+        while (std::chrono::steady_clock::now() < end) {
+            if (ready()) return true;
+            std::this_thread::sleep_for(std::chrono::milliseconds(5));
+        }
+        return false;
+    }
+
+    fs::path m_dir;
+};
+
+// ---- usage: every stage, every bad flag value: exit 2, "mc-<stage>: error:", the flag named -----
+
+struct UsageCase {
+    std::vector<std::string> args;
+    std::string names;  // what the message must hold
+};
+
+const UsageCase kUsageCases[] = {
+    {{"--threads", "-1"}, "--threads = -1: expected 0"},
+    {{"--threads", "0x10"}, "--threads = \"0x10\""},
+    {{"--threads", "100000"}, "--threads = 100000: more threads"},
+    {{"--threads", "99999999999999999999"}, "--threads = \"99999999999999999999\""},
+    {{"--frames", "3-"}, "--frames = \"3-\""},
+    {{"--frames", "a-b"}, "--frames = \"a-b\""},
+    {{"--frames", "5-2"}, "--frames = \"5-2\": expected 1 <= A <= B"},
+    {{"--frames", "0"}, "--frames = \"0\""},
+    {{"--frames", "99999999999"}, "--frames = \"99999999999\""},
+    {{"--log-level", "loud"}, "--log-level"},
+    {{"--no-such-flag"}, "--no-such-flag"},
+};
+
+class UsageErrors : public HostileInput, public ::testing::WithParamInterface<std::tuple<std::string, int>> {};
+
+TEST_P(UsageErrors, ExitTwoNamingTheFlag) {
+    const auto& [stage, index] = GetParam();
+    const UsageCase& c = kUsageCases[index];
+    const fs::path shot = write_shot(tiny_shot());
+    const Result r = run(stage, shot, c.args);
+    EXPECT_EQ(r.code, 2) << r.err;
+    expect_error(r, stage, {c.names});
+    EXPECT_LT(r.err.size(), 600u) << "a long message (a 309-digit bound?):\n" << r.err;
+    EXPECT_FALSE(fs::exists(out())) << "a usage error must write nothing";
+}
+
+INSTANTIATE_TEST_SUITE_P(AllStages, UsageErrors,
+                         ::testing::Combine(::testing::ValuesIn(kStages),
+                                            ::testing::Range(0, int(std::size(kUsageCases)))),
+                         [](const auto& info) {
+                             return std::get<0>(info.param) + "_" + std::to_string(std::get<1>(info.param));
+                         });
+
+TEST_F(HostileInput, MissingOutIsAUsageErrorWithThePrefix) {
+    const fs::path shot = write_shot(tiny_shot());
+    const Result r = Process("mc-sim", {"--shot", shot.string()}, m_dir / "err.txt").wait();
+    EXPECT_EQ(r.code, 2);
+    expect_error(r, "sim", {"--out"});
+}
+
+TEST_F(HostileInput, ShotToolUsageErrorsHaveThePrefix) {
+    for (const std::vector<std::string>& args :
+         {std::vector<std::string>{"validate"}, std::vector<std::string>{"no-such-command"}}) {
+        const Result r = Process("mc-shot", args, m_dir / "err.txt").wait();
+        EXPECT_EQ(r.code, 2) << r.err;
+        expect_error(r, "shot", {"mc-shot --help"});
+    }
+}
+
+TEST_F(HostileInput, ThreadsAboveTheCapNameTheCap) {
+    const fs::path shot = write_shot(tiny_shot());
+    const Result r = run("init", shot, {"--threads", "1000000"});
+    EXPECT_EQ(r.code, 2);
+    expect_error(r, "init", {"--threads = 1000000", "hardware threads"});
+}
+
+// ---- --frames against the shot's frames, in every per-frame stage -----------------------------
+
+TEST_F(HostileInput, SimRefusesFramesPastTheShot) {
+    const fs::path shot = write_shot(tiny_shot());
+    run_before("sim", shot);
+    const Result r = run("sim", shot, {"--frames", "99-100"});
+    EXPECT_EQ(r.code, 2) << r.err;
+    expect_error(r, "sim", {"--frames 99-100", "1-3", shot.string()});
+    EXPECT_FALSE(fs::exists(out() / "sim")) << "nothing simulated";
+    expect_no_debris(out());
+}
+
+TEST_F(HostileInput, SurfaceRefusesFramesPastTheShot) {
+    const fs::path shot = write_shot(tiny_shot());
+    run_before("surface", shot);
+    const Result r = run("surface", shot, {"--frames", "99-100"});
+    EXPECT_EQ(r.code, 2) << r.err;
+    expect_error(r, "surface", {"--frames 99-100"});
+    EXPECT_FALSE(fs::exists(out() / "surface"));
+    expect_no_debris(out());
+}
+
+TEST_F(HostileInput, RenderRefusesFramesPastTheShot) {
+    const fs::path shot = write_shot(tiny_shot());
+    run_before("render", shot);
+    const Result r = run("render", shot, {"--frames", "99-100"});
+    EXPECT_EQ(r.code, 2) << r.err;
+    expect_error(r, "render", {"--frames 99-100", "1-3"});
+    EXPECT_FALSE(fs::exists(out() / "render"));
+    expect_no_debris(out());
+}
+
+// the bounds are not the whole story: 0 (all cores) and the cap itself are accepted
+TEST_F(HostileInput, ThreadsZeroAndTheCapAreAccepted) {
+    const fs::path shot = write_shot(tiny_shot());
+    const unsigned hardware = std::max(1u, std::thread::hardware_concurrency());
+    for (const std::string& threads : {std::string("0"), std::to_string(4 * hardware)}) {
+        const Result r = run("init", shot, {"--threads", threads});
+        EXPECT_EQ(r.code, 0) << threads << ": " << r.err;
+    }
+    expect_no_debris(out());
+}
+
+// ---- shot values no run survives: exit 1 at load, file and key named, no output ----------------
+
+struct ShotCase {
+    std::string name;
+    std::function<void(json&)> edit;
+    std::string key;
+};
+
+const ShotCase kShotCases[] = {
+    {"density_1e_300", [](json& s) { s["material"]["density"] = 1e-300; }, "/material/density"},
+    {"youngs_modulus_1e300", [](json& s) { s["material"]["youngs_modulus"] = 1e300; }, "/material/youngs_modulus"},
+    {"dt_1e_300", [](json& s) { s["sim"]["dt"] = 1e-300; }, "/sim/dt"},
+    {"dt_max_1e_300", [](json& s) { s["sim"]["dt_max"] = 1e-300; }, "/sim/dt_max"},
+    {"fps_1e_300", [](json& s) { s["frames"]["fps"] = 1e-300; }, "/frames/fps"},
+    {"initial_velocity_1e30", [](json& s) { s["source"]["initial_velocity"] = {1e30, 0, 0}; },
+     "/source/initial_velocity"},
+    {"gravity_1e30", [](json& s) { s["sim"]["gravity"] = {0, -1e30, 0}; }, "/sim/gravity"},
+    {"h_1e_5", [](json& s) { s["sim"]["h"] = 1e-5; }, "/sim/h"},
+    {"h_1e_300", [](json& s) { s["sim"]["h"] = 1e-300; }, "/sim/h"},
+    {"domain_too_large_for_h",
+     [](json& s) { s["colliders"]["domain"] = {{"min", {-1e4, -1e4, -1e4}}, {"max", {1e4, 1e4, 1e4}}}; },
+     "/sim/h"},
+    {"resolution_16384", [](json& s) { s["render"]["resolution"] = {16384, 16384}; }, "/render/resolution"},
+    {"resolution_16384x8192", [](json& s) { s["render"]["resolution"] = {16384, 8192}; }, "/render/resolution"},
+    {"samples_64_at_4k", [](json& s) { s["render"]["resolution"] = {4096, 2160}; s["render"]["samples"] = 64; },
+     "/render/resolution"},
+};
+
+// a number too large for a double, written into the shot's text
+struct OverflowCase {
+    std::string name, from, to, key;
+};
+const OverflowCase kOverflowCases[] = {
+    {"density", "\"density\": 1,", "\"density\": 1e400,", "/material/density"},
+    {"negative_youngs", "\"youngs_modulus\": 2000", "\"youngs_modulus\": -1e400", "/material/youngs_modulus"},
+    {"array_element", "\"h\": 0.05", "\"h\": 0.05, \"gravity\": [0, -1e999, 0]", "/sim/gravity/1"},
+    {"fps", "\"fps\": 24", "\"fps\": 24e500", "/frames/fps"},
+};
+
+class ShotValues : public HostileInput,
+                   public ::testing::WithParamInterface<std::tuple<std::string, int>> {};
+
+TEST_P(ShotValues, RefusedAtLoadNamingTheKey) {
+    const auto& [stage, index] = GetParam();
+    const ShotCase& c = kShotCases[index];
+    json shot = tiny_shot();
+    c.edit(shot);
+    const fs::path path = write_shot(shot);
+    const Result r = run(stage, path);
+    EXPECT_EQ(r.code, 1) << r.err;
+    expect_error(r, stage, {path.string() + ": " + c.key});
+    EXPECT_EQ(r.err.find("unexpected failure"), std::string::npos) << r.err;
+    EXPECT_FALSE(fs::exists(out())) << "refused at load: no output folder";
+}
+
+INSTANTIATE_TEST_SUITE_P(InitAndSim, ShotValues,
+                         ::testing::Combine(::testing::Values("init", "sim"),
+                                            ::testing::Range(0, int(std::size(kShotCases)))),
+                         [](const auto& info) {
+                             return std::get<0>(info.param) + "_" + kShotCases[std::get<1>(info.param)].name;
+                         });
+
+// a lattice that fits mc-init's own limit (5e7 particles) but not this machine's memory, at the
+// loader's estimate of 1 KiB a particle
+TEST_F(HostileInput, LatticeBeyondMemoryNamesTheSpacing) {
+    const double memory = double(::sysconf(_SC_PHYS_PAGES)) * double(::sysconf(_SC_PAGE_SIZE));
+    const double particles = 1.5 * memory / 1024;
+    if (particles > 4.9e7) GTEST_SKIP() << "this machine's memory holds mc-init's largest lattice";
+    const double side = std::cbrt(particles) * 0.01;
+    json s = tiny_shot();
+    s["source"]["box"] = {{"min", {0, 0, 0}}, {"max", {side, side, side}}, {"spacing", 0.01}};
+    const fs::path path = write_shot(s);
+    for (const std::string stage : {"init", "sim"}) {
+        const Result r = run(stage, path);
+        EXPECT_EQ(r.code, 1) << r.err;
+        expect_error(r, stage, {path.string() + ": /source/box/spacing", "GiB"});
+        EXPECT_FALSE(fs::exists(out()));
+    }
+}
+
+class NumberOverflow : public HostileInput, public ::testing::WithParamInterface<int> {};
+
+TEST_P(NumberOverflow, NamesTheFileAndTheKey) {
+    const OverflowCase& c = kOverflowCases[GetParam()];
+    std::string text = tiny_shot().dump();
+    // the compact dump has no spaces: match the case's text without them
+    auto squeeze = [](std::string s) {
+        s.erase(std::remove(s.begin(), s.end(), ' '), s.end());
+        return s;
+    };
+    const size_t at = text.find(squeeze(c.from));
+    ASSERT_NE(at, std::string::npos) << c.from;
+    text.replace(at, squeeze(c.from).size(), c.to);
+    const fs::path path = m_dir / "shot.json";
+    std::ofstream(path) << text;
+    const Result r = run("sim", path);
+    EXPECT_EQ(r.code, 1) << r.err;
+    expect_error(r, "sim", {path.string() + ": " + c.key, "overflow"});
+    EXPECT_FALSE(fs::exists(out()));
+}
+
+INSTANTIATE_TEST_SUITE_P(Shot, NumberOverflow, ::testing::Range(0, int(std::size(kOverflowCases))),
+                         [](const auto& info) { return kOverflowCases[info.param].name; });
+
+// ---- non-finite mesh vertices: named with their index, before the surface checks --------------
+
+struct MeshCase {
+    std::string name, file, text, needle;
+};
+const char* const kTetrahedronFaces = "f 1 3 2\nf 1 2 4\nf 2 3 4\nf 1 4 3\n";
+const MeshCase kMeshCases[] = {
+    {"obj_nan", "nan.obj", std::string("v 0 0 0\nv 1 0 0\nv nan 1 0\nv 0 0 1\n") + kTetrahedronFaces, "vertex 3"},
+    {"obj_inf", "inf.obj", std::string("v 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 -inf\n") + kTetrahedronFaces, "vertex 4"},
+    {"obj_overflow", "big.obj", std::string("v 0 0 0\nv 1e999 0 0\nv 0 1 0\nv 0 0 1\n") + kTetrahedronFaces,
+     "vertex 2"},
+    {"ply_nan", "nan.ply",
+     "ply\nformat ascii 1.0\nelement vertex 4\nproperty float x\nproperty float y\nproperty float z\n"
+     "element face 4\nproperty list uchar int vertex_indices\nend_header\n0 0 0\n1 0 0\n0 nan 0\n0 0 1\n"
+     "3 0 2 1\n3 0 1 3\n3 1 2 3\n3 0 3 2\n",
+     "not finite"},
+};
+
+class MeshVertices : public HostileInput, public ::testing::WithParamInterface<int> {};
+
+TEST_P(MeshVertices, NonFiniteVertexNamed) {
+    const MeshCase& c = kMeshCases[GetParam()];
+    std::ofstream(m_dir / c.file) << c.text;
+    json shot = tiny_shot();
+    shot["source"] = {{"type", "mesh"}, {"mesh", {{"path", c.file}}}};
+    const fs::path path = write_shot(shot);
+    const Result r = run("init", path);
+    EXPECT_EQ(r.code, 1) << r.err;
+    expect_error(r, "init", {(m_dir / c.file).string(), c.needle, "not finite"});
+    EXPECT_EQ(r.err.find("degenerate"), std::string::npos) << r.err;
+    EXPECT_EQ(r.err.find("self-intersect"), std::string::npos) << r.err;
+    EXPECT_FALSE(fs::exists(out() / "init"));
+    expect_no_debris(out());
+}
+
+INSTANTIATE_TEST_SUITE_P(Init, MeshVertices, ::testing::Range(0, int(std::size(kMeshCases))),
+                         [](const auto& info) { return kMeshCases[info.param].name; });
+
+// ---- one writer per folder ----------------------------------------------------------------------
+
+// holds a stage folder's lock from this process as another writer would
+class HeldLock {
+public:
+    HeldLock(const fs::path& file, int how, const std::string& record) {
+        fs::create_directories(file.parent_path());
+        m_fd = ::open(file.c_str(), O_RDWR | O_CREAT, 0644);
+        EXPECT_GE(m_fd, 0);
+        EXPECT_EQ(::flock(m_fd, how | LOCK_NB), 0);
+        if (!record.empty()) {
+            EXPECT_EQ(::write(m_fd, record.data(), record.size()), ssize_t(record.size()));
+        }
+    }
+    ~HeldLock() { ::close(m_fd); }
+
+private:
+    int m_fd = -1;
+};
+
+const char* const kForeignHolder = "host=farmnode17\npid=424242\nprogram=mc-x\nstart=2026-11-25 17:30:02 UTC\n";
+
+class SecondWriter : public HostileInput, public ::testing::WithParamInterface<std::string> {};
+
+TEST_P(SecondWriter, RefusedNamingTheHolder) {
+    const std::string stage = GetParam();
+    const fs::path shot = write_shot(tiny_shot());
+    run_before(stage, shot);
+    const fs::path lock = out() / ("." + stage + ".lock");
+    {
+        HeldLock held(lock, LOCK_EX, kForeignHolder);
+        const Result r = run(stage, shot);
+        EXPECT_EQ(r.code, 1) << r.err;
+        expect_error(r, stage, {(out() / stage).string(), "farmnode17", "pid 424242", lock.string()});
+        EXPECT_EQ(read_text(lock), kForeignHolder) << "the holder's record is left alone";
+        EXPECT_FALSE(fs::exists(out() / ("." + stage + ".partial")));
+        EXPECT_FALSE(fs::exists(out() / stage)) << "nothing written";
+    }
+    // the holder gone (its file left behind, unlocked), the next run takes the lock and removes it
+    const Result again = run(stage, shot);
+    EXPECT_EQ(again.code, 0) << again.err;
+    EXPECT_TRUE(fs::exists(out() / stage / "manifest.json"));
+    expect_no_debris(out());
+}
+
+INSTANTIATE_TEST_SUITE_P(EveryStage, SecondWriter, ::testing::Values("init", "sim", "surface", "render"));
+
+TEST_F(HostileInput, StaleLockOfADeadWriterIsRecovered) {
+    const fs::path shot = write_shot(tiny_shot());
+    fs::create_directories(out());
+    std::ofstream(out() / ".init.lock") << "host=localhost\npid=999999\nprogram=mc-init\nstart=yesterday\n";
+    const Result r = run("init", shot);
+    EXPECT_EQ(r.code, 0) << r.err;
+    EXPECT_TRUE(fs::exists(out() / "init" / "manifest.json"));
+    expect_no_debris(out());
+}
+
+TEST_F(HostileInput, KilledWriterLeavesNoLockBehind) {
+    json s = tiny_shot();
+    s["frames"]["end"] = 400;
+    const fs::path shot = write_shot(s);
+    run_before("sim", shot);
+    Process first = start("sim", shot);
+    ASSERT_TRUE(wait_for([&] { return has_holder_record(out() / ".sim.lock"); }, 20));
+    // a second writer of the same folder, while the first runs
+    const Result second = run("sim", shot, {"--frames", "1-1"});
+    EXPECT_EQ(second.code, 1) << second.err;
+    expect_error(second, "sim", {"pid " + std::to_string(first.pid()), "mc-sim"});
+    first.signal(SIGKILL);
+    EXPECT_EQ(first.wait().code, 128 + SIGKILL);
+    // the kernel dropped the dead writer's lock: the next run proceeds
+    const Result next = run("sim", shot, {"--frames", "1-1"});
+    EXPECT_EQ(next.code, 0) << next.err;
+    expect_no_debris(out());
+}
+
+TEST_F(HostileInput, TwoShotsOneFolderOnlyOneWrites) {
+    json a = tiny_shot(), b = tiny_shot();
+    a["frames"]["end"] = 400;
+    b["name"] = "other";
+    b["material"]["youngs_modulus"] = 3000;
+    const fs::path shot_a = write_shot(a, "a.json"), shot_b = write_shot(b, "b.json");
+    ASSERT_EQ(run("init", shot_a).code, 0);
+    Process first = start("sim", shot_a);
+    ASSERT_TRUE(wait_for([&] { return has_holder_record(out() / ".sim.lock"); }, 20));
+    const Result second = run("sim", shot_b);
+    EXPECT_EQ(second.code, 1) << second.err;
+    expect_error(second, "sim", {"another writer holds it"});
+    first.signal(SIGTERM);
+    EXPECT_EQ(first.wait().code, 128 + SIGTERM);
+    expect_no_debris(out());
+}
+
+TEST_F(HostileInput, RenderChunksShareTheFolderAFullRunDoesNot) {
+    const fs::path shot = write_shot(tiny_shot());
+    run_before("render", shot);
+    const fs::path lock = out() / ".render.lock";
+    {
+        HeldLock chunk(lock, LOCK_SH, "");
+        const Result full = run("render", shot);
+        EXPECT_EQ(full.code, 1) << full.err;
+        expect_error(full, "render", {"farm chunks", lock.string()});
+        const Result other_chunk = run("render", shot, {"--frames", "2-2"});
+        EXPECT_EQ(other_chunk.code, 0) << other_chunk.err;
+        EXPECT_TRUE(fs::exists(out() / "render" / "frame.0002.png"));
+        EXPECT_TRUE(fs::exists(lock)) << "a chunk leaves the lock another chunk shares";
+    }
+    {
+        HeldLock full(lock, LOCK_EX, kForeignHolder);
+        const Result chunk = run("render", shot, {"--frames", "1-1"});
+        EXPECT_EQ(chunk.code, 1) << chunk.err;
+        expect_error(chunk, "render", {"pid 424242"});
+    }
+}
+
+TEST_F(HostileInput, SymlinkedStageFolderIsLockedWhereItLives) {
+    const fs::path shot = write_shot(tiny_shot());
+    run_before("sim", shot);
+    // out/sim -> elsewhere/sim, whose lock another writer holds
+    fs::create_directories(m_dir / "elsewhere" / "sim");
+    fs::create_directory_symlink(m_dir / "elsewhere" / "sim", out() / "sim");
+    HeldLock held(m_dir / "elsewhere" / ".sim.lock", LOCK_EX, kForeignHolder);
+    const Result r = run("sim", shot);
+    EXPECT_EQ(r.code, 1) << r.err;
+    expect_error(r, "sim", {"pid 424242", (m_dir / "elsewhere" / ".sim.lock").string()});
+}
+
+// ---- SIGTERM and SIGINT: nothing left behind, exit 128 + the signal ----------------------------
+
+struct SignalCase {
+    std::string stage;
+    int signal;
+};
+
+void PrintTo(const SignalCase& c, std::ostream* os) { *os << c.stage << " " << c.signal; }
+
+class StoppedBySignal : public HostileInput, public ::testing::WithParamInterface<SignalCase> {};
+
+TEST_P(StoppedBySignal, CleansUpAndExits128PlusTheSignal) {
+    const SignalCase c = GetParam();
+    json s = tiny_shot();
+    s["frames"]["end"] = c.stage == "sim" ? 400 : 3;
+    // a render long enough to be stopped midway: the particles (no surfacing), large, many views
+    if (c.stage == "render") {
+        s.erase("surfacing");
+        s["render"] = {{"resolution", {1024, 1024}}, {"turntable", {{"views", 200}}}};
+    }
+    const fs::path shot = write_shot(s);
+    run_before(c.stage == "render" ? "surface" : c.stage, shot);
+    Process p = start(c.stage, shot);
+    // stopped while it writes: a frame written (sim), the partial folder made (render)
+    const fs::path sign =
+        c.stage == "sim" ? out() / "sim" / "particles.0002.vdb" : out() / ".render.partial" / "frame.0001.png";
+    ASSERT_TRUE(wait_for([&] { return fs::exists(sign); }, 60)) << sign;
+    p.signal(c.signal);
+    const Result r = p.wait();
+    EXPECT_EQ(r.code, 128 + c.signal) << r.err;
+    expect_error(r, c.stage, {c.signal == SIGINT ? "SIGINT" : "SIGTERM"});
+    expect_no_debris(out());
+    EXPECT_FALSE(fs::exists(out() / "render")) << "no render folder from a stopped full run";
+    if (c.stage == "sim") {
+        EXPECT_FALSE(fs::exists(out() / "sim" / "manifest.json"));
+    }
+}
+
+INSTANTIATE_TEST_SUITE_P(Stages, StoppedBySignal,
+                         ::testing::Values(SignalCase{"sim", SIGTERM}, SignalCase{"sim", SIGINT},
+                                           SignalCase{"render", SIGTERM}, SignalCase{"render", SIGINT}),
+                         [](const auto& info) {
+                             return info.param.stage + (info.param.signal == SIGINT ? "_SIGINT" : "_SIGTERM");
+                         });
+
+}  // namespace
