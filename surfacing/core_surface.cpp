@@ -533,9 +533,9 @@ void build_crack(const CoreTopology& topo, const FrameCores& cores, const Fragme
 }
 
 /// The plates mode's debris (DebrisOutput::Points): the particles that tore loose.
-DebrisPoints collect_debris(const CoreTopology& topo, const ParticleFrame& frame, const Pieces& pieces) {
+DebrisPoints collect_debris(const CoreTopology& topo, const ParticleFrame& frame, const Pieces& pieces, Real spacing) {
     DebrisPoints d;
-    const Real radius = mean_particle_spacing(topo) / 2;
+    const Real radius = spacing / 2;
     for (int32_t p = 0; p < topo.n_particles; ++p) {
         if (pieces.id[p] != kDebris) continue;
         d.position.push_back(frame.P[p]);
@@ -559,14 +559,15 @@ void surface_plates(const CoreTopology& topo, const ParticleFrame& frame, const 
     frag.count = pieces.count;
     out.fragments = pieces.count;
     out.debris_particles = pieces.debris;
-    if (params.debris == DebrisOutput::Points) out.debris = collect_debris(topo, frame, pieces);
+    const Real spacing = mean_particle_spacing(topo);
+    if (params.debris == DebrisOutput::Points) out.debris = collect_debris(topo, frame, pieces, spacing);
 
-    const WallRestPositions walls = smooth_walls(topo, pieces.is_cut, pieces.id, params.wall_smoothing);
+    const WallRestPositions walls = smooth_walls(topo, pieces.is_cut, params.wall_smoothing);
     out.wall_points_smoothed = static_cast<int64_t>(walls.size());
     PlateCores plates;
     plates.walls = &walls;
     plates.piece = &pieces.id;
-    plates.close_gap = params.close_gaps * mean_particle_spacing(topo);
+    plates.close_gap = params.close_gaps * spacing;
     const FrameCores cores(topo, frame, pieces.is_cut, params, plates);
     build_boundary(topo, cores, frag, out);
     if (params.cracks) build_crack(topo, cores, frag, pieces.is_cut, params.wall_smoothing, out);

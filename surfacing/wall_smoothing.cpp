@@ -150,8 +150,7 @@ Vec3 mass_point(const std::vector<Vec3>& crossing, const CutEdgeGraph& g, const 
 
 }  // namespace
 
-WallRestPositions smooth_walls(const CoreTopology& topo, const std::vector<uint8_t>& is_cut,
-                               const std::vector<int32_t>& label, int iterations) {
+WallRestPositions smooth_walls(const CoreTopology& topo, const std::vector<uint8_t>& is_cut, int iterations) {
     if (iterations <= 0) return WallRestPositions();
     WallRestPositions out(topo.n_edges(), topo.n_faces, topo.n_tets());
     const CutEdgeGraph g = build_graph(topo, is_cut);

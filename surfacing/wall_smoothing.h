@@ -57,9 +57,6 @@ private:
 /// Places the walls through the edges with is_cut[e] != 0, with `iterations` Taubin steps
 /// (lambda 0.5, mu -0.53: a low-pass filter that does not shrink the wall) on the crossings.
 /// 0 iterations moves nothing (the dual-cell walls of the other modes). Deterministic.
-/// @param label the side of each particle (its piece): a wall between two labels first crosses
-///        each edge where the smoothed share of the two labels changes sign
-WallRestPositions smooth_walls(const CoreTopology& topo, const std::vector<uint8_t>& is_cut,
-                               const std::vector<int32_t>& label, int iterations);
+WallRestPositions smooth_walls(const CoreTopology& topo, const std::vector<uint8_t>& is_cut, int iterations);
 
 }  // namespace mudcrack

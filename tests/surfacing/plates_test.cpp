@@ -259,7 +259,7 @@ TEST(WallSmoothing, ACutAtAnAngleLiesCloserToItsPlaneThanTheDualCells) {
     for (int32_t p = 0; p < topo.n_particles; ++p) label[p] = side(topo.X[p]) > 0;
     for (int32_t e = 0; e < topo.n_edges(); ++e) cut[e] = label[topo.edges[e][0]] != label[topo.edges[e][1]];
     auto rms = [&](int iterations, RestPointKind kind) {
-        const WallRestPositions w = smooth_walls(topo, cut, label, iterations);
+        const WallRestPositions w = smooth_walls(topo, cut, iterations);
         double sum = 0;
         int n_points = 0;
         for (int32_t t = 0; t < topo.n_tets(); ++t) {
