@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <cmath>
 #include <string>
+#include <utility>
 
 #include "sim/core/error.h"
 #include "sim/core/parallel.h"
@@ -11,6 +12,7 @@
 #include "surfacing/edge_breaks.h"
 #include "surfacing/fragments.h"
 #include "surfacing/pieces.h"
+#include "surfacing/shot_fracture.h"
 #include "surfacing/wall_smoothing.h"
 #include "surfacing/weld_classes.h"
 
@@ -23,6 +25,19 @@ struct PointOwners {
     std::array<int32_t, 4> owner{};  // particle ids
     WeldReps rep{};                  // class representative of each owner slot
     Vec3 y0 = Vec3::Zero();          // rest position [m]
+    RestPointKind kind = RestPointKind::Particle;
+    int n_edges = 0;                 // edges between owners: 0, 1 (edge), 3 (face), 6 (tet)
+    std::array<int32_t, 6> edge{};   // their ids, in the order of the weld tables' mask bits
+
+    /// The weld classes under a mask of cut edges (bit k: edge[k]).
+    WeldReps reps_under(unsigned mask) const {
+        switch (kind) {
+            case RestPointKind::EdgeMidpoint: return {0, int8_t(mask & 1u), 2, 3};
+            case RestPointKind::FaceCentroid: return face_weld_reps(mask);
+            case RestPointKind::TetCentroid: return tet_weld_reps(mask);
+            default: return {0, 1, 2, 3};
+        }
+    }
 
     int slot_of(int32_t particle) const {
         for (int j = 0; j < n; ++j)
@@ -36,7 +51,17 @@ struct PlateCores {
     const WallRestPositions* walls = nullptr;   // smoothed rest points of the crack walls
     const std::vector<int32_t>* piece = nullptr; // piece of each particle (kDebris: none)
     Real close_gap = 0;                          // [m] sides closer than this meet
+    const std::vector<int32_t>* cut_frame = nullptr; // the frame each edge is cut from (ShotFracture)
+    Real open_speed = 0;                         // [m per frame] how fast a fresh crack's sides part
 };
+
+/// [particle spacings per frame] A fresh crack whose sides were welded apart from each other
+/// parts this fast beyond its particles' motion (FrameCores::opening): 0.4 spacings, 0.2 cells in
+/// a lattice of two particles per cell, under the quarter cell a viewer sees as a pop.
+constexpr Real kOpenSpeed = 0.4;
+/// Frames after a cut over which its sides may still be parting: a move of up to
+/// kOpeningFrames * kOpenSpeed spacings, beyond any a shot's band holds before it breaks.
+constexpr int kOpeningFrames = 24;
 
 /// smoothstep from 0 at a to 1 at b.
 Real smoothstep(Real a, Real b, Real x) {
@@ -79,6 +104,9 @@ public:
         o.owner = {m_topo.edges[e][0], m_topo.edges[e][1], 0, 0};
         o.rep = {0, int8_t(m_broken[e] ? 1 : 0), 2, 3};
         o.y0 = rest(RestPointKind::EdgeMidpoint, e, (m_topo.X[o.owner[0]] + m_topo.X[o.owner[1]]) / 2);
+        o.kind = RestPointKind::EdgeMidpoint;
+        o.n_edges = 1;
+        o.edge[0] = e;
         return o;
     }
     /// The centroid of the face of tet t opposite local corner l; owners sorted by id.
@@ -88,12 +116,15 @@ public:
         for (int k = 0, j = 0; k < 4; ++k)
             if (k != l) local[j++] = k;
         std::sort(local.begin(), local.end(), [&](int a, int b) { return tet[a] < tet[b]; });
+        PointOwners o;
         unsigned mask = 0;
         for (int k = 0; k < 3; ++k) {
             const int e = m_topo.tet_edges[t][kTetLocalEdge[local[kFaceEdgeOwners[k][0]]][local[kFaceEdgeOwners[k][1]]]];
             if (m_broken[e]) mask |= 1u << k;
+            o.edge[k] = e;
         }
-        PointOwners o;
+        o.kind = RestPointKind::FaceCentroid;
+        o.n_edges = 3;
         o.n = 3;
         o.owner = {tet[local[0]], tet[local[1]], tet[local[2]], 0};
         o.rep = face_weld_reps(mask);
@@ -107,6 +138,9 @@ public:
         for (int k = 0; k < 6; ++k)
             if (m_broken[m_topo.tet_edges[t][k]]) mask |= 1u << k;
         PointOwners o;
+        o.kind = RestPointKind::TetCentroid;
+        o.n_edges = 6;
+        for (int k = 0; k < 6; ++k) o.edge[k] = m_topo.tet_edges[t][k];
         o.n = 4;
         o.owner = tet;
         o.rep = tet_weld_reps(mask);
@@ -137,6 +171,7 @@ public:
         w.position /= members;
         w.saturation /= members;
         w.alpha /= members;
+        if (m_plates.cut_frame && m_plates.open_speed > 0) opening(o, rep, w.position);
         if (m_plates.piece && m_plates.close_gap > 0) close_gap(o, rep, w.position);
         return w;
     }
@@ -145,31 +180,70 @@ private:
     Vec3 rest(RestPointKind kind, int32_t id, const Vec3& y0) const {
         return m_plates.walls ? m_plates.walls->of(kind, id, y0) : y0;
     }
+    /// A fresh crack parts at a bounded speed (plates mode). Where the cuts of a recent frame
+    /// split this point's class, its side moved from where the class was welded before to where it
+    /// is welded now, by d: the side keeps max(0, |d| - age * open_speed) of that move undone, age
+    /// being the frames since that cut (1 on its frame), measured with today's particles. An edge
+    /// cut when its particles had already moved apart (a band the simulation stretched before it
+    /// broke, or a particle that tore loose) so parts its sides by open_speed per frame instead
+    /// of all at once; a crack cut as it opens, the common case, shows at once.
+    void opening(const PointOwners& o, int rep, Vec3& side) const {
+        const std::vector<int32_t>& cut_frame = *m_plates.cut_frame;
+        const int now = m_frame.frame;
+        bool fresh = false;
+        for (int k = 0; k < o.n_edges; ++k)
+            fresh |= cut_frame[o.edge[k]] > now - kOpeningFrames && cut_frame[o.edge[k]] <= now;
+        if (!fresh) return;
+        std::array<Vec3, 4> copy;
+        for (int j = 0; j < o.n; ++j) copy[j] = extrapolate(o.owner[j], o.y0);
+        auto welded_at_age = [&](int age) {
+            unsigned mask = 0;
+            for (int k = 0; k < o.n_edges; ++k)
+                if (cut_frame[o.edge[k]] <= now - age) mask |= 1u << k;
+            const WeldReps reps = o.reps_under(mask);
+            Vec3 sum = Vec3::Zero();
+            int members = 0;
+            for (int j = 0; j < o.n; ++j)
+                if (reps[j] == reps[rep]) {
+                    sum += copy[j];
+                    ++members;
+                }
+            return Vec3(sum / members);
+        };
+        Vec3 newer = welded_at_age(0), undone = Vec3::Zero();
+        for (int age = 1; age < kOpeningFrames; ++age) {
+            const Vec3 older = welded_at_age(age);
+            const Vec3 d = older - newer;
+            const Real left = d.norm() - age * m_plates.open_speed;
+            if (left > 0) undone += left * d.normalized();
+            newer = older;
+        }
+        side += undone;
+    }
+
     /// Close gaps (plates mode): the copies of this point's owners in other pieces are the far
-    /// side of a crack wall. Within close_gap of it, the side takes the mean of all the pieces'
-    /// copies, which the far side takes too; it blends back to its own by 2 close_gap.
+    /// side of a crack wall. Within close_gap of it, the side meets the far side half way, as the
+    /// far side does; it blends back to its own by 2 close_gap, so it never moves more than
+    /// close_gap for it. A crack inside one piece keeps its walls apart: two walls of one piece
+    /// at the same place would make it non-manifold to a reader that joins by position.
     void close_gap(const PointOwners& o, int rep, Vec3& side) const {
         const std::vector<int32_t>& piece = *m_plates.piece;
         int32_t mine = kDebris;
         for (int j = 0; j < o.n && mine == kDebris; ++j)
             if (o.rep[j] == rep) mine = piece[o.owner[j]];
-        Vec3 others = Vec3::Zero(), all = Vec3::Zero();
-        int n_others = 0, n_all = 0;
+        Vec3 others = Vec3::Zero();
+        int n_others = 0;
         for (int j = 0; j < o.n; ++j) {
             const int32_t p = o.owner[j];
-            if (piece[p] == kDebris) continue;
-            const Vec3 y = extrapolate(p, o.y0);
-            all += y;
-            ++n_all;
-            if (piece[p] != mine) {
-                others += y;
-                ++n_others;
-            }
+            if (piece[p] == kDebris || piece[p] == mine) continue;
+            others += extrapolate(p, o.y0);
+            ++n_others;
         }
         if (mine == kDebris || n_others == 0) return;
-        const Real gap = (side - others / n_others).norm();
-        const Vec3 mean = all / n_all;
-        side = mean + smoothstep(m_plates.close_gap, 2 * m_plates.close_gap, gap) * (side - mean);
+        const Vec3 far_side = others / n_others;
+        const Real gap = (side - far_side).norm();
+        const Vec3 middle = (side + far_side) / 2;
+        side = middle + smoothstep(m_plates.close_gap, 2 * m_plates.close_gap, gap) * (side - middle);
     }
 
     const CoreTopology& m_topo;
@@ -547,13 +621,12 @@ DebrisPoints collect_debris(const CoreTopology& topo, const ParticleFrame& frame
     return d;
 }
 
-/// The plates mode: pieces, smoothed walls, close gaps, then the same meshing as the other modes.
-void surface_plates(const CoreTopology& topo, const ParticleFrame& frame, const std::vector<uint8_t>& is_broken,
-                    const SurfaceParams& params, SurfacedFrame& out) {
-    PieceParams piece_params;
-    piece_params.min_width = params.min_piece_size * params.cell_size;
-    piece_params.debris_gap = params.debris_gap;
-    const Pieces pieces = find_pieces(topo, frame, is_broken, piece_params);
+/// The plates mode: the frame's pieces and walls from the shot's fracture, close gaps, then the
+/// same meshing as the other modes. With `in_sequence`, the frame is one of a shot's frames and
+/// fresh cracks part at kOpenSpeed; else (a frame on its own) they show at once.
+void surface_plates(const CoreTopology& topo, const ParticleFrame& frame, const ShotFracture& fracture,
+                    const SurfaceParams& params, bool in_sequence, SurfacedFrame& out) {
+    Pieces pieces = pieces_at_frame(topo, fracture, frame.frame);
     Fragments frag;
     frag.id = pieces.id;  // kDebris is a culled fragment's -1
     frag.count = pieces.count;
@@ -562,22 +635,28 @@ void surface_plates(const CoreTopology& topo, const ParticleFrame& frame, const 
     const Real spacing = mean_particle_spacing(topo);
     if (params.debris == DebrisOutput::Points) out.debris = collect_debris(topo, frame, pieces, spacing);
 
-    const WallRestPositions walls = smooth_walls(topo, pieces.is_cut, params.wall_smoothing);
-    out.wall_points_smoothed = static_cast<int64_t>(walls.size());
+    out.wall_points_smoothed = static_cast<int64_t>(fracture.walls.size());
     PlateCores plates;
-    plates.walls = &walls;
+    plates.walls = &fracture.walls;
     plates.piece = &pieces.id;
     plates.close_gap = params.close_gaps * spacing;
+    if (in_sequence) {
+        plates.cut_frame = &fracture.cut_frame;
+        plates.open_speed = kOpenSpeed * spacing;
+    }
     const FrameCores cores(topo, frame, pieces.is_cut, params, plates);
     build_boundary(topo, cores, frag, out);
-    if (params.cracks) build_crack(topo, cores, frag, pieces.is_cut, params.wall_smoothing, out);
-    out.particle_piece = pieces.id;
+    if (params.cracks)
+        build_crack(topo, cores, frag, pieces.is_cut, params.wall_smoothing, out);
+    out.particle_piece = std::move(pieces.id);
+    out.edge_cut = std::move(pieces.is_cut);
 }
 
 }  // namespace
 
 SurfacedFrame surface_frame(const CoreTopology& topo, const ParticleFrame& frame,
-                            const std::vector<int32_t>& first_break, const SurfaceParams& params) {
+                            const std::vector<int32_t>& first_break, const SurfaceParams& params,
+                            const ShotFracture* fracture) {
     check_frame_fits(topo, frame);
     if (first_break.size() != topo.edges.size())
         throw InputError("frame " + std::to_string(frame.frame) + ": edge break history has " +
@@ -592,7 +671,11 @@ SurfacedFrame surface_frame(const CoreTopology& topo, const ParticleFrame& frame
     parallel_for(topo.n_edges(), [&](int64_t e) { is_broken[e] = first_break[e] <= frame.frame ? 1 : 0; });
     out.broken_edges = count_broken_edges(first_break, frame.frame);
     if (params.mode == SurfaceMode::Plates) {
-        surface_plates(topo, frame, is_broken, params, out);
+        if (fracture) {
+            surface_plates(topo, frame, *fracture, params, true, out);
+        } else {
+            surface_plates(topo, frame, plan_shot_fracture(topo, frame, first_break, params), params, false, out);
+        }
         return out;
     }
 
@@ -603,6 +686,7 @@ SurfacedFrame surface_frame(const CoreTopology& topo, const ParticleFrame& frame
     const FrameCores cores(topo, frame, is_broken, params);
     build_boundary(topo, cores, frag, out);
     if (params.cracks) build_crack(topo, cores, frag, is_broken, 0, out);
+    out.edge_cut = std::move(is_broken);
     return out;
 }
 

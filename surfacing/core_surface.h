@@ -9,6 +9,7 @@
 #include "sim/core/particle_frame.h"
 #include "sim/core/tri_mesh.h"
 #include "surfacing/core_topology.h"
+#include "surfacing/shot_fracture.h"
 #include "surfacing/surface_params.h"
 
 namespace mudcrack {
@@ -33,6 +34,8 @@ struct SurfacedFrame {
     int64_t wall_points_smoothed = 0;       // crack-wall rest points moved by the smoothing
     DebrisPoints debris;                    // filled when params.debris == DebrisOutput::Points
     std::vector<int32_t> particle_piece;    // piece of each particle (kDebris: none), (n_particles)
+    std::vector<uint8_t> edge_cut;          // the edges the surface separates (broken, or in the
+                                            // plates mode cut), which set the weld classes, (n_edges)
 };
 
 /// Surfaces one frame. Deterministic: the result depends only on the arguments, never on the
@@ -43,18 +46,24 @@ struct SurfacedFrame {
 /// triplanar_uv of the rest position by the dominant axis of the crack triangle's rest normal,
 /// at the boundary's texture density (CoreTopology::uv_per_meter). Normals are area-weighted per
 /// welded vertex. Saturation and alpha are averaged over the owners of each welded vertex.
-/// In SurfaceMode::Plates the broken edges become pieces (pieces.h): face_fragment holds each
-/// face's piece id, crack walls are placed smoothly in rest space (wall_smoothing.h) and then
+/// In SurfaceMode::Plates the shot's fracture (shot_fracture.h) gives the frame its pieces and
+/// cuts: face_fragment holds each face's piece id, crack walls are placed smoothly in rest space
+/// (wall_smoothing.h) and then
 /// smoothed where they are, their rims held (params.wall_smoothing steps each), cores follow their
 /// particles' rotation without the Jw scaling (a crack is as wide as the particles moved apart),
-/// and a wall vertex whose two sides are closer than close_gaps spacings takes the mean of both,
-/// blending to each side's own position by 2 close_gaps, so a closed crack shows no gap and an
-/// opening one does not pop.
+/// and a wall vertex closer than close_gaps spacings to its far side in another piece meets it
+/// half way, blending to its own position by 2 close_gaps, so a closed crack between pieces
+/// shows no gap and an opening one does not pop.
 /// @note At a crack tip inside a tet, the two sides of an interface share welded vertices and
 ///       their normals cancel; such a vertex takes the normal of its first face.
 /// @param first_break first frame at which each edge broke (edge_breaks.h), (n_edges)
+/// @param fracture the plates mode's fracture of the shot (shot_fracture.h), planned once from its
+///        last frame; with it, a crack cut after its particles had moved apart parts at a bounded
+///        speed from frame to frame. Without it, the plates mode plans it from this frame and
+///        shows the frame on its own: every crack as open as its particles.
 /// Throws InputError when the frame does not fit the mesh (check_frame_fits).
 SurfacedFrame surface_frame(const CoreTopology& topo, const ParticleFrame& frame,
-                            const std::vector<int32_t>& first_break, const SurfaceParams& params);
+                            const std::vector<int32_t>& first_break, const SurfaceParams& params,
+                            const ShotFracture* fracture = nullptr);
 
 }  // namespace mudcrack

@@ -1,6 +1,7 @@
 #include "pipeline/measure/mesh_measures.h"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstring>
 #include <map>
@@ -9,6 +10,7 @@
 #include <unordered_set>
 
 #include "surfacing/pieces.h"
+#include "surfacing/weld_classes.h"
 
 namespace mudcrack {
 namespace {
@@ -143,36 +145,69 @@ MeshPieces measure_mesh_pieces(const TriMesh& boundary, const TriMesh& crack, Re
 
 namespace {
 
-/// The particles that own a rest point named by its weld key (core_surface.h).
-struct RestPointOwners {
-    const CoreTopology& topo;
-    std::vector<std::array<int32_t, 3>> face_particles;
-
-    explicit RestPointOwners(const CoreTopology& t) : topo(t), face_particles(t.n_faces) {
+/// The particles a vertex named by its weld key (core_surface.h) follows: the owners of its rest
+/// point in its weld class, as the frame's cut edges (SurfacedFrame::edge_cut) weld them.
+class WeldClassOwners {
+public:
+    explicit WeldClassOwners(const CoreTopology& t) : m_topo(t), m_face_tet(t.n_faces) {
         for (int32_t tet = 0; tet < t.n_tets(); ++tet)
-            for (int l = 0; l < 4; ++l) {
-                const auto& c = kTetOutwardFace[l];
-                face_particles[t.tet_faces[tet][l]] = {t.tets[tet][c[0]], t.tets[tet][c[1]], t.tets[tet][c[2]]};
-            }
+            for (int l = 0; l < 4; ++l) m_face_tet[t.tet_faces[tet][l]] = {tet, l};
     }
-    /// The mean position of the owners in `frame`.
-    Vec3 mean(uint64_t key, const ParticleFrame& frame) const {
+    /// The mean position in `frame` of the class's owners, with `cut` that frame's edge_cut.
+    Vec3 mean(uint64_t key, const std::vector<uint8_t>& cut, const ParticleFrame& frame) const {
         const auto kind = RestPointKind(key >> 62);
         const int32_t point = int32_t((key >> 2) & 0xffffffffu);
-        Vec3 sum = Vec3::Zero();
-        int n = 0;
-        auto add = [&](int32_t p) {
-            sum += frame.P[p].cast<Real>();
-            ++n;
-        };
+        const int rep = int(key & 3u);
+        std::array<int32_t, 4> owner{};
+        WeldReps reps{0, 1, 2, 3};
+        int n = 1;
         switch (kind) {
-            case RestPointKind::Particle: add(point); break;
-            case RestPointKind::EdgeMidpoint: for (int32_t p : topo.edges[point]) add(p); break;
-            case RestPointKind::FaceCentroid: for (int32_t p : face_particles[point]) add(p); break;
-            case RestPointKind::TetCentroid: for (int32_t p : topo.tets[point]) add(p); break;
+            case RestPointKind::Particle: owner[0] = point; break;
+            case RestPointKind::EdgeMidpoint:
+                n = 2;
+                owner = {m_topo.edges[point][0], m_topo.edges[point][1], 0, 0};
+                reps[1] = int8_t(cut[point] ? 1 : 0);
+                break;
+            case RestPointKind::FaceCentroid: {
+                const auto [tet, l] = m_face_tet[point];
+                const Tet& corners = m_topo.tets[tet];
+                std::array<int, 3> local{};
+                for (int k = 0, j = 0; k < 4; ++k)
+                    if (k != l) local[j++] = k;
+                std::sort(local.begin(), local.end(), [&](int a, int b) { return corners[a] < corners[b]; });
+                unsigned mask = 0;
+                for (int k = 0; k < 3; ++k) {
+                    const auto& pair = kFaceEdgeOwners[k];
+                    if (cut[m_topo.tet_edges[tet][kTetLocalEdge[local[pair[0]]][local[pair[1]]]]]) mask |= 1u << k;
+                }
+                n = 3;
+                owner = {corners[local[0]], corners[local[1]], corners[local[2]], 0};
+                reps = face_weld_reps(mask);
+                break;
+            }
+            case RestPointKind::TetCentroid: {
+                unsigned mask = 0;
+                for (int k = 0; k < 6; ++k)
+                    if (cut[m_topo.tet_edges[point][k]]) mask |= 1u << k;
+                n = 4;
+                owner = m_topo.tets[point];
+                reps = tet_weld_reps(mask);
+                break;
+            }
         }
-        return sum / n;
+        Vec3 sum = Vec3::Zero();
+        int members = 0;
+        for (int j = 0; j < n; ++j)
+            if (reps[j] == rep) {
+                sum += frame.P[owner[j]].cast<Real>();
+                ++members;
+            }
+        return sum / std::max(members, 1);
     }
+
+private:
+    const CoreTopology& m_topo;
+    std::vector<std::pair<int32_t, int>> m_face_tet;  // a tet holding each face, and the corner opposite it
 };
 
 struct KeyPiece {
@@ -201,14 +236,14 @@ std::unordered_map<KeyPiece, Vec3f, KeyPieceHash> keyed_positions(const Surfaced
 SurfaceMotion measure_surface_motion(const CoreTopology& topo, const SurfacedFrame& a, const ParticleFrame& frame_a,
                                      const SurfacedFrame& b, const ParticleFrame& frame_b, Real cell) {
     SurfaceMotion out;
-    const RestPointOwners owners(topo);
+    const WeldClassOwners owners(topo);
     const auto in_a = keyed_positions(a);
     std::vector<double> jumps;
     for (const auto& [kp, yb] : keyed_positions(b)) {
         const auto it = in_a.find(kp);
         if (it == in_a.end()) continue;
         const Vec3 moved = (yb - it->second).cast<Real>();
-        const Vec3 owners_moved = owners.mean(kp.key, frame_b) - owners.mean(kp.key, frame_a);
+        const Vec3 owners_moved = owners.mean(kp.key, b.edge_cut, frame_b) - owners.mean(kp.key, b.edge_cut, frame_a);
         jumps.push_back((moved - owners_moved).norm() / cell);
     }
     out.vertices_compared = static_cast<int64_t>(jumps.size());

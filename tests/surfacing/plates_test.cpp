@@ -11,6 +11,7 @@
 #include "surfacing/edge_breaks.h"
 #include "surfacing/lattice_mesh.h"
 #include "surfacing/pieces.h"
+#include "surfacing/shot_fracture.h"
 #include "surfacing/wall_smoothing.h"
 #include "tolerance.h"
 
@@ -299,6 +300,90 @@ TEST(Plates, NoPlateWideEnoughLeavesOnlyDebris) {
     EXPECT_EQ(s.fragments, 0);
     EXPECT_EQ(s.debris_particles, slab.topo.n_particles);
     EXPECT_TRUE(s.boundary.faces.empty());
+}
+
+
+/// The slab of TornSlab whose band breaks in two stages: its top half (y above 1.5 spacings) at
+/// frame `top`, the rest at frame `bottom`; `last` is its last frame, the plates `dx` apart.
+struct StagedTear {
+    TornSlab slab;
+    int last;
+    ParticleFrame last_frame;
+
+    StagedTear(int top, int bottom, int last_frame_number, double dx) : last(last_frame_number) {
+        for (int32_t e = 0; e < slab.topo.n_edges(); ++e) {
+            if (slab.first_break[e] == kNeverBroken) continue;
+            const auto [p, q] = slab.topo.edges[e];
+            const bool upper = std::min(slab.topo.X[p].y(), slab.topo.X[q].y()) > 1.5 * kH;
+            slab.first_break[e] = upper ? top : bottom;
+        }
+        last_frame = at(last, dx);
+    }
+    ParticleFrame at(int frame, double dx) const {
+        ParticleFrame f = slab.opened(dx);
+        f.frame = frame;
+        return f;
+    }
+};
+
+TEST(ShotFracture, EachFrameShowsTheLastFramesCutsMadeByThenAndPiecesOnlySplit) {
+    const StagedTear tear(2, 5, 6, 0.05);
+    const SurfaceParams params = plates_params();
+    const ShotFracture fracture = plan_shot_fracture(tear.slab.topo, tear.last_frame, tear.slab.first_break, params);
+    // the last frame is find_pieces of the last frame
+    PieceParams piece_params;
+    piece_params.min_width = params.min_piece_size * params.cell_size;
+    std::vector<uint8_t> broken_last(tear.slab.first_break.size());
+    for (size_t e = 0; e < broken_last.size(); ++e) broken_last[e] = tear.slab.first_break[e] <= tear.last;
+    const Pieces direct = find_pieces(tear.slab.topo, tear.last_frame, broken_last, piece_params);
+    const Pieces last = pieces_at_frame(tear.slab.topo, fracture, tear.last);
+    EXPECT_EQ(last.id, direct.id);
+    EXPECT_EQ(last.is_cut, direct.is_cut);
+    EXPECT_EQ(last.count, 2);
+
+    std::vector<uint8_t> cut_before(tear.slab.topo.edges.size(), 0);
+    std::vector<int32_t> id_before(tear.slab.topo.n_particles, 0);
+    for (int n = 1; n <= tear.last; ++n) {
+        const Pieces now = pieces_at_frame(tear.slab.topo, fracture, n);
+        for (int32_t e = 0; e < tear.slab.topo.n_edges(); ++e) {
+            // a cut of frame n is one of the last frame's cuts, made by then, and stays made
+            if (now.is_cut[e]) EXPECT_TRUE(direct.is_cut[e] && tear.slab.first_break[e] <= n) << "edge " << e;
+            EXPECT_GE(now.is_cut[e], cut_before[e]) << "frame " << n << ", edge " << e;
+        }
+        // the top half alone does not part the plates: one piece, with the smaller id, until frame 5
+        EXPECT_EQ(now.count, n < 5 ? 1 : 2) << "frame " << n;
+        for (int32_t p = 0; p < tear.slab.topo.n_particles; ++p) {
+            EXPECT_EQ(now.id[p], n < 5 ? 0 : direct.id[p]) << "frame " << n << ", particle " << p;
+            // a piece keeps its id until it splits, then the part with its smallest particle does
+            if (now.id[p] != id_before[p]) EXPECT_EQ(n, 5);
+        }
+        cut_before = now.is_cut;
+        id_before = now.id;
+    }
+}
+
+TEST(Plates, ACrackCutAfterItsParticlesPartedOpensAtABoundedSpeedThenAsFarAsThePlates) {
+    // the band is 0.2 m open from the start but breaks only at frame 3: in a shot its walls part
+    // by at most 2 kOpenSpeed spacings a frame (0.08 m here), then sit 0.2 m apart, as the frame
+    // surfaced on its own shows them at once
+    const StagedTear tear(3, 3, 10, 0.2);
+    const SurfaceParams params = plates_params();
+    const ShotFracture fracture = plan_shot_fracture(tear.slab.topo, tear.last_frame, tear.slab.first_break, params);
+    const double speed = 0.4 * mean_particle_spacing(tear.slab.topo);
+    double gap_before = 0;
+    for (int n = 3; n <= tear.last; ++n) {
+        const SurfacedFrame s =
+            surface_frame(tear.slab.topo, tear.at(n, 0.2), tear.slab.first_break, params, &fracture);
+        ASSERT_EQ(s.fragments, 2) << "frame " << n;
+        const double gap = (mean(wall_positions(s, 8)) - mean(wall_positions(s, 0))).x();
+        EXPECT_LE(gap - gap_before, 2 * speed + tol::kFloat) << "frame " << n;
+        EXPECT_GE(gap, gap_before - tol::kFloat) << "frame " << n;
+        gap_before = gap;
+    }
+    EXPECT_NEAR(gap_before, 0.2, tol::kFloat);  // by frame 10 each side has parted its last
+    // the same frame on its own (no shot around it) shows the crack as open as its plates
+    const SurfacedFrame alone = surface_frame(tear.slab.topo, tear.at(3, 0.2), tear.slab.first_break, params);
+    EXPECT_NEAR((mean(wall_positions(alone, 8)) - mean(wall_positions(alone, 0))).x(), 0.2, tol::kFloat);
 }
 
 }  // namespace

@@ -23,6 +23,7 @@
 #include "surfacing/core_topology.h"
 #include "surfacing/edge_breaks.h"
 #include "surfacing/fragments.h"
+#include "surfacing/shot_fracture.h"
 
 namespace fs = std::filesystem;
 using nlohmann::json;
@@ -107,11 +108,14 @@ json motion_fields(const SurfaceMotion& m) {
 /// The surfacing of consecutive frames, kept one frame back, for the motion measures (--motion).
 class MotionTracker {
 public:
-    MotionTracker(const CoreTopology& topo, const BreakHistory& history, const SurfaceParams& params, Real cell)
-        : m_topo(topo), m_history(history), m_params(params), m_cell(cell) {}
+    /// @param fracture the plates mode's fracture of the shot (as mc-surface planned it)
+    MotionTracker(const CoreTopology& topo, const BreakHistory& history, const SurfaceParams& params, Real cell,
+                  std::optional<ShotFracture> fracture)
+        : m_topo(topo), m_history(history), m_params(params), m_cell(cell), m_fracture(std::move(fracture)) {}
     /// Surfaces `frame`; the motion from the frame before, when there was one.
     std::optional<SurfaceMotion> step(ParticleFrame frame) {
-        SurfacedFrame now = surface_frame(m_topo, frame, m_history.first_break, m_params);
+        SurfacedFrame now = surface_frame(m_topo, frame, m_history.first_break, m_params,
+                                          m_fracture ? &*m_fracture : nullptr);
         std::optional<SurfaceMotion> motion;
         if (m_previous) motion = measure_surface_motion(m_topo, *m_previous, m_previous_frame, now, frame, m_cell);
         m_previous = std::move(now);
@@ -124,6 +128,7 @@ private:
     const BreakHistory& m_history;
     SurfaceParams m_params;
     Real m_cell;
+    std::optional<ShotFracture> m_fracture;
     std::optional<SurfacedFrame> m_previous;
     ParticleFrame m_previous_frame;
 };
@@ -216,7 +221,13 @@ int run_measure_stage(const StageOptions& options, const MeasureStageOptions& me
         if (!topo || !shot.surface)
             throw InputError("--motion: " + shot.path + " has no surfacing output in " + surface_dir.string() +
                              ": run mc-surface first");
-        motion_tracker.emplace(*topo, *history, *shot.surface, shot.sim.h);
+        std::optional<ShotFracture> fracture;
+        if (shot.surface->mode == SurfaceMode::Plates) {
+            const fs::path last_path = frame_path(sim_dir, "particles", history->last_frame, "vdb");
+            fracture = plan_shot_fracture(*topo, points_to_frame(read_points(last_path), last_path.string()),
+                                          history->first_break, *shot.surface);
+        }
+        motion_tracker.emplace(*topo, *history, *shot.surface, shot.sim.h, std::move(fracture));
     }
     json table = json::array();
     std::vector<std::pair<std::optional<MeshPieces>, std::optional<SurfaceMotion>>> mesh_rows;

@@ -30,6 +30,7 @@
 #include "surfacing/core_surface.h"
 #include "surfacing/edge_breaks.h"
 #include "surfacing/pieces.h"
+#include "surfacing/shot_fracture.h"
 
 namespace fs = std::filesystem;
 using nlohmann::json;
@@ -253,6 +254,14 @@ int run_surface_stage(const StageOptions& options, const SurfaceStageOptions& su
         history = scan_breaks(sim_dir, sim_first, sim_last, topo, params, source_hash);
         write_break_history(dir / kBreakHistoryFile, *history);
     }
+    // the plates mode's fracture, decided once from the shot's last frame (surfacing/shot_fracture.h)
+    std::optional<ShotFracture> fracture;
+    if (params.mode == SurfaceMode::Plates) {
+        fracture = plan_shot_fracture(topo, load_frame(sim_dir, sim_last, topo), history->first_break, params);
+        log::info("plates: the fracture of frame " + std::to_string(sim_last) + ": " +
+                  std::to_string(fracture->last.count) + " pieces, " + std::to_string(fracture->last.debris) +
+                  " debris particles, " + std::to_string(fracture->walls.size()) + " wall points");
+    }
     const double break_seconds = timer.seconds();
 
     // frames, in parallel; each writes its own files atomically
@@ -262,7 +271,7 @@ int run_surface_stage(const StageOptions& options, const SurfaceStageOptions& su
         const int n = first + i;
         const ParticleFrame frame = load_frame(sim_dir, n, topo);
         WallTimer t;
-        SurfacedFrame s = surface_frame(topo, frame, history->first_break, params);
+        SurfacedFrame s = surface_frame(topo, frame, history->first_break, params, fracture ? &*fracture : nullptr);
         results[i].surfacing_seconds = t.seconds();
         results[i].triangles = int64_t(s.boundary.faces.size() + s.crack.faces.size());
         const fs::path boundary_file = frame_path(dir, "boundary", n, params.format);

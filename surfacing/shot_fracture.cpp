@@ -1,0 +1,60 @@
+#include "surfacing/shot_fracture.h"
+
+#include <algorithm>
+
+#include "sim/core/parallel.h"
+#include "surfacing/edge_breaks.h"
+#include "surfacing/fragments.h"
+
+namespace mudcrack {
+
+ShotFracture plan_shot_fracture(const CoreTopology& topo, const ParticleFrame& last_frame,
+                                const std::vector<int32_t>& first_break, const SurfaceParams& params) {
+    const int last = last_frame.frame;
+    std::vector<uint8_t> is_broken(topo.edges.size());
+    parallel_for(topo.n_edges(), [&](int64_t e) { is_broken[e] = first_break[e] <= last ? 1 : 0; });
+    PieceParams piece_params;
+    piece_params.min_width = params.min_piece_size * params.cell_size;
+    piece_params.debris_gap = params.debris_gap;
+
+    ShotFracture fracture;
+    fracture.last = find_pieces(topo, last_frame, is_broken, piece_params);
+    // the frame each particle was first damaged (one of its edges broke)
+    std::vector<int32_t> first_damage(topo.n_particles, kNeverBroken);
+    for (int32_t e = 0; e < topo.n_edges(); ++e)
+        for (int32_t p : topo.edges[e]) first_damage[p] = std::min(first_damage[p], first_break[e]);
+    fracture.cut_frame.assign(topo.edges.size(), kNeverBroken);
+    parallel_for(topo.n_edges(), [&](int64_t e) {
+        if (!fracture.last.is_cut[e]) return;
+        const auto [p, q] = topo.edges[e];
+        fracture.cut_frame[e] = is_broken[e] ? first_break[e]
+                                             : std::min(last, std::max(first_damage[p], first_damage[q]));
+    });
+    fracture.walls = smooth_walls(topo, fracture.last.is_cut, params.wall_smoothing);
+    return fracture;
+}
+
+Pieces pieces_at_frame(const CoreTopology& topo, const ShotFracture& fracture, int frame) {
+    const Pieces& last = fracture.last;
+    Pieces pieces;
+    pieces.is_cut.resize(topo.edges.size());
+    parallel_for(topo.n_edges(), [&](int64_t e) { pieces.is_cut[e] = fracture.cut_frame[e] <= frame ? 1 : 0; });
+    const Fragments joined = find_fragments(topo, pieces.is_cut, 1);
+    // each joined part takes the smallest id of the last frame's pieces in it
+    std::vector<int32_t> part_id(joined.count, kDebris);
+    for (int32_t p = 0; p < topo.n_particles; ++p) {
+        int32_t& id = part_id[joined.id[p]];
+        if (last.id[p] != kDebris && (id == kDebris || last.id[p] < id)) id = last.id[p];
+    }
+    pieces.id.resize(topo.n_particles);
+    for (int32_t p = 0; p < topo.n_particles; ++p) {
+        pieces.id[p] = part_id[joined.id[p]];
+        pieces.debris += pieces.id[p] == kDebris;
+    }
+    for (int32_t id : part_id) pieces.count += id != kDebris;
+    // debris remembers the plate particle it tore from, whichever piece that is in now
+    pieces.root = last.root;
+    return pieces;
+}
+
+}  // namespace mudcrack

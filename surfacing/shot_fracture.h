@@ -1,0 +1,42 @@
+#pragma once
+/// The plates mode's fracture of a whole shot (docs/physics.md §5.7), decided once from its last
+/// frame, the way a post-fracture tool cuts the rest geometry once where the particles stretched.
+///
+/// Deciding the pieces frame by frame let a band particle change sides as its neighbours' openings
+/// changed, and a wall appear or vanish with it, so the welded vertices of a curling rim jumped by
+/// centimetres between frames while the particles moved by a millimetre. Here the last frame's
+/// pieces fix which side of each crack every particle is on, and where the walls run in the rest
+/// state; frame n shows the cuts the soil has made by then. A wall appears only where and when an
+/// edge breaks, a particle never changes side, and a wall vertex never moves in the rest state: a
+/// frame's mesh moves with its particles alone.
+#include <cstdint>
+#include <vector>
+
+#include "sim/core/particle_frame.h"
+#include "surfacing/core_topology.h"
+#include "surfacing/pieces.h"
+#include "surfacing/surface_params.h"
+#include "surfacing/wall_smoothing.h"
+
+namespace mudcrack {
+
+struct ShotFracture {
+    Pieces last;                     // the pieces of the last frame (find_pieces)
+    std::vector<int32_t> cut_frame;  // per edge: the first frame it is cut; kNeverBroken if never
+    WallRestPositions walls;         // the last frame's walls, placed in the rest state
+};
+
+/// The fracture of a shot whose last frame is `last_frame`. `first_break` is the shot's break
+/// history (edge_breaks.h), params its plates settings. A cut edge is cut from the frame it broke;
+/// one that never broke (between two band particles that joined different sides) from the frame
+/// both its particles are damaged, at the latest the last frame. Deterministic.
+ShotFracture plan_shot_fracture(const CoreTopology& topo, const ParticleFrame& last_frame,
+                                const std::vector<int32_t>& first_break, const SurfaceParams& params);
+
+/// The pieces of frame `frame` (at most the last frame): the particles joined through the edges
+/// not yet cut. Each such piece holds one or more of the last frame's pieces and takes the
+/// smallest of their ids, so an id lasts until a crack splits its piece; a piece holding none of
+/// them is debris. At the last frame these are exactly `fracture.last`.
+Pieces pieces_at_frame(const CoreTopology& topo, const ShotFracture& fracture, int frame);
+
+}  // namespace mudcrack
