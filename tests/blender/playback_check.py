@@ -2,16 +2,20 @@
 
     blender -b --factory-startup --python-exit-code 1 --python playback_check.py -- \
         --zip ADDON_ZIP --shot OUT/demo --expected EXPECTED.json --frames A,B,C --blend CLI.blend \
-        [--obj-shot OBJ_OUT/demo]
+        [--obj-shot OBJ_OUT/demo] [--ours-shot OURS_OUT/demo]
 
 Installs the add-on from its zip (into BLENDER_USER_SCRIPTS, a private folder the shell test
 sets), imports the shot with the File > Import operator, and checks at the frames given: the
 evaluated boundary and crack meshes against EXPECTED.json (vertex and face counts, position sums,
-UVs and vertex colors of vertex 0, read from the files with pipeline/io's assimp reader), an
-empty crack mesh where the manifest has no crack file, the material wiring, the scene's frame
-range and fps, y-up to z-up, the handler registered once, the LRU cache, the same frames
-written as .obj, and the .blend that the CLI script saved (handlers after a file load). Any
-failed check raises: exit status 1.
+UVs and vertex colors of vertex 0, read from the files with pipeline/io's assimp reader; the
+face attribute "piece": its distinct ids, their sum and the faces' sum), an empty crack mesh
+where the manifest has no crack file, the debris object (point count and the sums of velocity,
+pscale, id and piece, read with pipeline/io's debris reader) when the shot wrote debris and
+none when it did not, Object > Separate mudcrack pieces at the last frame, the material wiring,
+the scene's frame range and fps, y-up to z-up, the handler registered once, the LRU cache, the
+same frames written as .obj (no fragment ids, no debris) and by the `ours` surfacing (many
+piece ids, also separated), and the .blend that the CLI script saved (handlers after a file
+load). Any failed check raises: exit status 1.
 """
 import argparse
 import json
@@ -44,6 +48,7 @@ def args():
     p.add_argument("--frames", required=True)
     p.add_argument("--blend", required=True)
     p.add_argument("--obj-shot", help="the same frames surfaced with /surfacing/format obj")
+    p.add_argument("--ours-shot", help="the same frames surfaced with /surfacing/mode ours")
     return p.parse_args(sys.argv[sys.argv.index("--") + 1:])
 
 
@@ -51,16 +56,94 @@ def handler_count():
     return sum(1 for h in bpy.app.handlers.frame_change_pre if getattr(h, "__name__", "") == "mudcrack_frame_change")
 
 
-def shot_objects(scene, manifest_path):
-    """{kind: object} of the scene's mudcrack objects of a shot; exactly one per kind."""
+def has_debris(manifest):
+    return any((e.get("debris") or {}).get("file") for e in manifest["per_frame"])
+
+
+def shot_objects(scene, manifest_path, manifest):
+    """{kind: object} of the scene's mudcrack objects of a shot; exactly one per kind, and a
+    debris object exactly when the shot wrote debris files."""
     found = {}
     for obj in scene.objects:
         kind = obj.get("mudcrack_kind")
         if kind is not None and os.path.realpath(obj.get("mudcrack_manifest", "")) == os.path.realpath(manifest_path):
             check(kind not in found, f"two objects of kind {kind}: {found.get(kind) and found[kind].name}, {obj.name}")
             found[kind] = obj
-    check(set(found) == {"boundary", "crack"}, f"mudcrack objects {sorted(found)}: expected boundary and crack")
+    kinds = {"boundary", "crack"} | ({"debris"} if has_debris(manifest) else set())
+    check(set(found) == kinds, f"mudcrack objects {sorted(found)}: expected {sorted(kinds)}")
     return found
+
+
+def attribute_values(me, name, data_type, domain):
+    """The values of a mesh attribute as a flat list, or None (a failed check) when the mesh has
+    no such attribute of that type and domain."""
+    attr = me.attributes.get(name)
+    where = f"attribute '{name}'"
+    if not check(attr is not None, f"{where}: missing (attributes: {sorted(a.name for a in me.attributes)})"):
+        return None
+    if not check(attr.data_type == data_type and attr.domain == domain,
+                 f"{where}: {attr.data_type} on {attr.domain}, expected {data_type} on {domain}"):
+        return None
+    width = 3 if data_type == "FLOAT_VECTOR" else 1
+    values = [0] * (width * len(attr.data)) if data_type == "INT" else [0.0] * (width * len(attr.data))
+    attr.data.foreach_get("vector" if width == 3 else "value", values)
+    return values
+
+
+def check_debris_shown(obj, depsgraph, want, where):
+    """The debris object evaluates to one point per grain of radius pscale (its Geometry Nodes
+    modifier), so it shows in the viewport and in renders."""
+    clouds = [i.object.data for i in depsgraph.object_instances
+              if i.is_instance and i.parent and i.parent.original == obj and i.object.type == "POINTCLOUD"]
+    points = sum(len(c.points) for c in clouds)
+    radii = math.fsum(p.radius for c in clouds for p in c.points)
+    check(points == want["points"] and close(radii, want["pscale_sum"], 1e-6 * points + 1e-9),
+          f"{where}: shown as {points} points of radius sum {radii}; the file has {want['points']} "
+          f"of pscale sum {want['pscale_sum']}")
+
+
+def check_pieces(me, want, where):
+    """The face attribute "piece" against the file's fragment ids (mesh_info's piece keys)."""
+    if "pieces" not in want:  # no fragment ids in the file (obj): no attribute either
+        check(me.attributes.get("piece") is None, f"{where}: a 'piece' attribute from a file without fragment ids")
+        return
+    pieces = attribute_values(me, "piece", "INT", "FACE")
+    if pieces is None:
+        return
+    ids = set(pieces)
+    check(len(ids) == want["pieces"] and sum(ids) == want["piece_id_sum"],
+          f"{where}: {len(ids)} distinct pieces (id sum {sum(ids)}); the file has {want['pieces']} "
+          f"(id sum {want['piece_id_sum']})")
+    check(sum(pieces) == want["piece_face_sum"],
+          f"{where}: faces' piece sum {sum(pieces)} != the file's {want['piece_face_sum']} (faces in the wrong piece)")
+
+
+def check_debris(me, want, entry, where):
+    """A debris mesh against the file (mesh_info's debris keys) and the manifest's point count."""
+    n = len(me.vertices)
+    check(n == want["points"] and n == entry["debris"]["points"] and len(me.polygons) == 0 and len(me.edges) == 0,
+          f"{where}: {n} vertices, {len(me.edges)} edges, {len(me.polygons)} faces; the file has {want['points']} "
+          f"points, the manifest says {entry['debris']['points']} (points only)")
+    if n != want["points"]:
+        return
+    co = [0.0] * (3 * n)
+    me.vertices.foreach_get("co", co)
+    velocity = attribute_values(me, "velocity", "FLOAT_VECTOR", "POINT")
+    for name, values in (("position", co), ("velocity", velocity)):
+        if values is None:
+            continue
+        sums = [math.fsum(values[k::3]) for k in range(3)]
+        check(all(close(sums[k], want[f"{name}_sum"][k], 1e-5 * n + 1e-6) for k in range(3)),
+              f"{where}: {name} sum {sums} != the file's {want[name + '_sum']}")
+    pscale = attribute_values(me, "pscale", "FLOAT", "POINT")
+    if pscale is not None:
+        check(close(math.fsum(pscale), want["pscale_sum"], 1e-6 * n + 1e-9) and min(pscale, default=1) > 0,
+              f"{where}: pscale sum {math.fsum(pscale)} != the file's {want['pscale_sum']} (or a radius <= 0)")
+    for name in ("id", "piece"):
+        values = attribute_values(me, name, "INT", "POINT")
+        if values is not None:
+            check(sum(values) == want[f"{name}_sum"],
+                  f"{where}: {name} sum {sum(values)} != the file's {want[name + '_sum']}")
 
 
 def upstream_nodes(socket):
@@ -83,7 +166,8 @@ def check_frame(scene, objects, frame, manifest, expected, label):
     entry = next(e for e in manifest["per_frame"] if e["frame"] == frame)
     for kind, obj in objects.items():
         file = (entry.get(kind) or {}).get("file")
-        me = obj.evaluated_get(depsgraph).data
+        # the debris object's modifier turns its vertices into points: its own mesh holds them
+        me = obj.data if kind == "debris" else obj.evaluated_get(depsgraph).data
         where = f"{label}: frame {frame}: {kind}"
         if file is None:
             check(len(me.vertices) == 0 and len(me.polygons) == 0,
@@ -91,6 +175,10 @@ def check_frame(scene, objects, frame, manifest, expected, label):
                   f"and {len(me.polygons)} faces (expected an empty mesh, not an earlier frame's)")
             continue
         want = expected[os.path.join(manifest["_dir"], file)]
+        if kind == "debris":
+            check_debris(me, want, entry, where)
+            check_debris_shown(obj, depsgraph, want, where)
+            continue
         got_v, got_f = len(me.vertices), len(me.polygons)
         check(got_v == want["vertices"] and got_f == want["faces"],
               f"{where}: {got_v} vertices, {got_f} faces; {file} has {want['vertices']} and {want['faces']}")
@@ -98,6 +186,7 @@ def check_frame(scene, objects, frame, manifest, expected, label):
         if got_v != want["vertices"] or got_v == 0:
             continue
         check(all(len(p.vertices) == 3 for p in me.polygons[:1000]), f"{where}: faces are not triangles")
+        check_pieces(me, want, where)
         # positions as in the file (object space: the root turns y-up into z-up)
         sums = [0.0, 0.0, 0.0]
         co = [0.0] * (3 * got_v)
@@ -126,6 +215,48 @@ def check_frame(scene, objects, frame, manifest, expected, label):
         check(len(me.materials) == 1 and me.materials[0] is not None and
               me.materials[0].get("mudcrack_material") == kind,
               f"{where}: materials {[m and m.name for m in me.materials]}: expected the {kind} material")
+
+
+def check_separated_pieces(scene, objects, frame, manifest, expected):
+    """The operator's objects at `frame`: named piece_<id>, each face of its piece, soil faces in
+    the soil material's slot and walls in the crack's, and together every face of the frame's
+    boundary and crack files once (face counts and the faces' piece sums of mesh_info)."""
+    scene.frame_set(frame)
+    entry = next(e for e in manifest["per_frame"] if e["frame"] == frame)
+    wants = {kind: expected[os.path.join(manifest["_dir"], entry[kind]["file"])]
+             for kind in ("boundary", "crack") if (entry.get(kind) or {}).get("file")}
+    bpy.context.view_layer.objects.active = objects["boundary"]
+    before = set(bpy.data.objects)
+    result = bpy.ops.object.mudcrack_separate_pieces()
+    check(result == {"FINISHED"}, f"object.mudcrack_separate_pieces returned {result}")
+    made = [o for o in bpy.data.objects if o not in before]
+    check(all("mudcrack_piece" in o and o.get("mudcrack_frame") == frame for o in made),
+          "separating pieces made objects that are not pieces of the frame")
+    faces = {"boundary": 0, "crack": 0}
+    face_sums = {"boundary": 0, "crack": 0}
+    for obj in made:
+        piece = obj["mudcrack_piece"]
+        where = f"separated {obj.name}"
+        # (Blender appends .001 to the name when an earlier separation holds it)
+        check(obj.name.split(".")[0] == f"piece_{piece}", f"{where}: expected the name piece_{piece}")
+        check(obj.parent is not None and obj.parent == objects["boundary"].parent,
+              f"{where}: not under the shot's root")
+        me = obj.data
+        pieces = attribute_values(me, "piece", "INT", "FACE")
+        check(pieces is not None and set(pieces) == {piece}, f"{where}: faces of pieces {set(pieces or [])}")
+        slots = [0] * len(me.polygons)
+        me.polygons.foreach_get("material_index", slots)
+        kinds = [m.get("mudcrack_material") for m in me.materials]
+        for slot, kind in enumerate(kinds):
+            n = slots.count(slot)
+            faces[kind] = faces.get(kind, 0) + n
+            face_sums[kind] = face_sums.get(kind, 0) + n * piece
+    for kind, want in wants.items():
+        check(faces[kind] == want["faces"] and face_sums[kind] == want["piece_face_sum"],
+              f"separated pieces at frame {frame}: {faces[kind]} {kind} faces (piece sum {face_sums[kind]}); "
+              f"the file has {want['faces']} ({want['piece_face_sum']})")
+    check(len(made) >= max(w["pieces"] for w in wants.values()),
+          f"separated pieces at frame {frame}: {len(made)} objects for {[w['pieces'] for w in wants.values()]} pieces")
 
 
 def check_material(mat, kind):
@@ -196,7 +327,7 @@ def main():
     result = bpy.ops.import_scene.mudcrack_shot(filepath=a.shot)
     check(result == {"FINISHED"}, f"import_scene.mudcrack_shot returned {result}")
     scene = bpy.context.scene
-    objects = shot_objects(scene, manifest_path)
+    objects = shot_objects(scene, manifest_path, manifest)
     check(scene.frame_start == manifest["frames"]["first"] and scene.frame_end == manifest["frames"]["last"],
           f"scene frames {scene.frame_start}-{scene.frame_end}, shot {manifest['frames']['first']}-{manifest['frames']['last']}")
     check(close(scene.render.fps / scene.render.fps_base, fps, 1e-6),
@@ -225,7 +356,10 @@ def main():
     if soil is not None and crack is not None:
         check(crack < soil, f"the crack albedo ({crack:.3f}) is not darker than the soil's ({soil:.3f})")
 
-    # 6. the cache: revisiting a cached frame reuses its mesh; a zero budget keeps one mesh
+    # 6. Object > Separate mudcrack pieces at the last frame: one object per piece
+    check_separated_pieces(scene, objects, frames[2], manifest, expected)
+
+    # 7. the cache: revisiting a cached frame reuses its mesh; a zero budget keeps one mesh
     from mudcrack_blender import playback
     scene.frame_set(frames[1])
     mesh_at = objects["boundary"].data.name
@@ -243,20 +377,30 @@ def main():
           f"with a zero cache budget: cached {playback.cached_mesh_names(objects['boundary'])}, "
           f"boundary meshes in the file {boundary_meshes}")
 
-    # 7. the same frames as .obj (the surface manifest picked as the file): same checks
+    # 8. the same frames as .obj (the surface manifest picked as the file): same checks
     if a.obj_shot:
         obj_manifest_path, obj_manifest = read_manifest(a.obj_shot)
         result = bpy.ops.import_scene.mudcrack_shot(filepath=obj_manifest_path)
         check(result == {"FINISHED"}, f"importing {obj_manifest_path} returned {result}")
-        obj_objects = shot_objects(scene, obj_manifest_path)
+        obj_objects = shot_objects(scene, obj_manifest_path, obj_manifest)
         for frame in order:
             check_frame(scene, obj_objects, frame, obj_manifest, expected, "obj")
 
-    # 8. the .blend saved by the CLI script: handlers survive loading a file, and still run once
+    # 9. the same frames in the `ours` surfacing: its fragments are many pieces
+    if a.ours_shot:
+        ours_manifest_path, ours_manifest = read_manifest(a.ours_shot)
+        result = bpy.ops.import_scene.mudcrack_shot(filepath=a.ours_shot)
+        check(result == {"FINISHED"}, f"importing {a.ours_shot} returned {result}")
+        ours_objects = shot_objects(scene, ours_manifest_path, ours_manifest)
+        for frame in order:
+            check_frame(scene, ours_objects, frame, ours_manifest, expected, "ours")
+        check_separated_pieces(scene, ours_objects, frames[2], ours_manifest, expected)
+
+    # 10. the .blend saved by the CLI script: handlers survive loading a file, and still run once
     bpy.ops.wm.open_mainfile(filepath=a.blend)
     check(handler_count() == 1, f"{handler_count()} frame_change_pre handlers after opening a .blend: expected 1")
     scene = bpy.context.scene
-    objects = shot_objects(scene, manifest_path)
+    objects = shot_objects(scene, manifest_path, manifest)
     check(scene.frame_start == manifest["frames"]["first"] and scene.frame_end == manifest["frames"]["last"],
           "the CLI's .blend has another frame range")
     for frame in [frames[0], frames[1], frames[2]]:

@@ -24,7 +24,7 @@ import bpy  # noqa: E402
 import mudcrack_blender  # noqa: E402
 from mudcrack_blender import playback, preview  # noqa: E402
 from mudcrack_blender.meshfile import MeshFileError  # noqa: E402
-from mudcrack_blender.shot import ShotError  # noqa: E402
+from mudcrack_blender.shot import DEBRIS, ShotError  # noqa: E402
 
 
 def _args(argv):
@@ -52,6 +52,12 @@ def _args(argv):
     return args
 
 
+def _summary(kind, me):
+    if kind == DEBRIS:
+        return f"{kind} {len(me.vertices)} points"
+    return f"{kind} {len(me.vertices)} vertices {len(me.polygons)} faces"
+
+
 def main(argv):
     args = _args(argv)
     mudcrack_blender.register()
@@ -66,8 +72,7 @@ def main(argv):
     scene.frame_set(frame)
     print(f"mudcrack_blender: {root.name}: frames {scene.frame_start}-{scene.frame_end} at "
           f"{scene.render.fps / scene.render.fps_base:g} fps; frame {frame}: "
-          + ", ".join(f"{kind} {len(o.data.vertices)} vertices {len(o.data.polygons)} faces"
-                      for kind, o in objects.items()))
+          + ", ".join(_summary(kind, o.data) for kind, o in objects.items()))
     if args.render:
         shot = playback.surface_shot(root["mudcrack_shot"])
         preview.stage_for_still(scene, shot, objects, *args.resolution, args.samples, args.threads)

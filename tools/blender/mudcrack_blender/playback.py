@@ -1,10 +1,17 @@
-"""Per-frame playback of a mudcrack shot: two objects whose mesh follows the scene frame.
+"""Per-frame playback of a mudcrack shot: objects whose mesh follows the scene frame (the
+boundary, the cracks and, when the shot wrote debris points, the debris).
 
 Loading strategy: load on frame change, with a small LRU cache bounded in memory.
   * A frame_change_pre handler gives each mudcrack object (custom properties "mudcrack_kind" =
-    "boundary" or "crack", "mudcrack_manifest" = the surface manifest) the mesh of the scene's
-    frame, swapping `object.data`. A frame without a crack file gets an empty mesh, never the
-    previous frame's cracks.
+    "boundary", "crack" or "debris", "mudcrack_manifest" = the surface manifest) the mesh of the
+    scene's frame, swapping `object.data`. A frame without a crack (debris) file gets an empty
+    mesh, never the previous frame's cracks.
+  * Pieces: every face of the boundary and crack meshes carries its piece id (the fragment id,
+    UV channel 1 of the files) as the integer face attribute "piece", which Geometry Nodes reads
+    per frame (Object > Separate mudcrack pieces snapshots one object per piece: pieces.py).
+  * Debris is a mesh of vertices only with the point attributes "velocity", "pscale", "id" and
+    "piece", ready for Instance on Points; a Geometry Nodes modifier shows the vertices as points
+    of radius pscale (debris_points.py).
   * A mesh is built straight from the file (meshfile.py: pure-Python glb/obj reading,
     foreach_set into bpy.data.meshes): no importer, no operator, no objects per frame.
   * Each object keeps the meshes of its recently shown frames, least recently used first out,
@@ -39,9 +46,11 @@ import sys
 import bpy
 from bpy.app.handlers import persistent
 
+from .debris_points import add_debris_points_modifier
+from .debrisfile import read_debris_ply
 from .materials import COLOR_ATTRIBUTE, material_for
 from .meshfile import MeshFileError, read_mesh_file
-from .shot import KINDS, ShotError, SurfaceShot, load_surface_shot
+from .shot import DEBRIS, KINDS, ShotError, SurfaceShot, load_surface_shot
 
 __all__ = ["PROP_KIND", "PROP_MANIFEST", "PROP_CACHE_MB", "register_handlers", "unregister_handlers",
            "update_scene", "import_shot", "clear_caches", "cached_mesh_names", "surface_shot"]
@@ -53,6 +62,7 @@ PROP_FILE = "mudcrack_file"          # mesh: the file it was built from ("" for 
 DEFAULT_CACHE_MB = 512.0
 UV_TEXTURE = "UVMap"                 # UV channel 0, for texturing
 UV_FRAGMENT = "fragment"             # UV channel 1: (fragment id, 0)
+PIECE_ATTRIBUTE = "piece"            # int per face (meshes) or per point (debris): the piece id
 
 _shots = {}     # manifest path -> (mtime, SurfaceShot)
 _caches = {}    # (object name, manifest, kind) -> OrderedDict(file -> (mesh name, estimated bytes))
@@ -97,10 +107,27 @@ def empty_mesh():
     return me
 
 
+def face_pieces(data):
+    """The piece id of each triangle of MeshData, from its first corner's UV channel 1 (the
+    writer gives every vertex of a piece that piece's (id, 0); ids below 2^24 are exact in
+    float), or None when the file has no channel 1 (obj)."""
+    if data.uv1 is None:
+        return None
+    u = data.uv1[0::2]
+    return array("i", map(int, map(u.__getitem__, data.indices[0::3])))  # C loops: no per-face Python
+
+
+def add_attribute(me, name, kind, domain, values):
+    """A generic mesh attribute filled from a flat array ("value" or "vector" per element)."""
+    attr = me.attributes.new(name, kind, domain)
+    attr.data.foreach_set("vector" if kind == "FLOAT_VECTOR" else "value", values)
+    return attr
+
+
 def build_mesh(name, data, kind):
     """A bpy mesh of MeshData: triangles, smooth with the file's normals, UV channel 0
-    ("UVMap"), the fragment ids ("fragment", UV channel 1), COLOR_0 as the color attribute "Col"
-    and the kind's material."""
+    ("UVMap"), the fragment ids ("fragment", UV channel 1, and per face as the int attribute
+    "piece"), COLOR_0 as the color attribute "Col" and the kind's material."""
     me = bpy.data.meshes.new(name)
     n, m = data.vertex_count, data.face_count
     me.vertices.add(n)
@@ -127,6 +154,9 @@ def build_mesh(name, data, kind):
         colors.data.foreach_set("color", data.colors)
         me.color_attributes.active_color = colors
     me.update(calc_edges=True)
+    pieces = face_pieces(data)
+    if pieces is not None:
+        add_attribute(me, PIECE_ATTRIBUTE, "INT", "FACE", pieces)
     me.polygons.foreach_set("use_smooth", array("b", [1]) * m)
     if data.normals is not None and n:
         if hasattr(me, "use_auto_smooth"):
@@ -137,6 +167,37 @@ def build_mesh(name, data, kind):
     me.materials.append(material_for(kind))
     me.update()
     return me
+
+
+def build_debris_mesh(name, debris):
+    """A bpy mesh of DebrisData: one vertex per grain, no edges or faces, with the point
+    attributes "velocity" (m/s, y-up like the positions: the shot's root turns both), "pscale"
+    (radius, m), "id" (the same grain in every frame: Geometry Nodes' random values follow it)
+    and "piece" (the piece it tore from, or -1): the names Houdini's File SOP gives them too,
+    except "velocity", Blender's name for Houdini's "v"."""
+    me = bpy.data.meshes.new(name)
+    me.vertices.add(debris.point_count)
+    me.vertices.foreach_set("co", debris.positions)
+    add_attribute(me, "velocity", "FLOAT_VECTOR", "POINT", debris.velocities)
+    add_attribute(me, "pscale", "FLOAT", "POINT", debris.pscale)
+    add_attribute(me, "id", "INT", "POINT", debris.ids)
+    add_attribute(me, PIECE_ATTRIBUTE, "INT", "POINT", debris.pieces)
+    me.update()
+    return me
+
+
+def _estimated_debris_bytes(me):
+    """Blender's memory for a debris mesh, roughly: a vertex and 24 bytes of attributes a point."""
+    return 90 * len(me.vertices)
+
+
+def _build_for(kind, path, name):
+    """The mesh of a shot's file: a debris point file or a boundary/crack mesh file."""
+    if kind == DEBRIS:
+        me = build_debris_mesh(name, read_debris_ply(path))
+        return me, _estimated_debris_bytes(me)
+    me = build_mesh(name, read_mesh_file(path), kind)
+    return me, _estimated_bytes(me)
 
 
 def _cache_budget(obj):
@@ -160,10 +221,9 @@ def _mesh_for(obj, shot, frame):
             cache.move_to_end(path)
             return me
         del cache[path]  # removed behind our back (orphans purged, undo)
-    data = read_mesh_file(path)
-    me = build_mesh(f"{shot.name} {kind}.{min(max(frame, shot.first), shot.last):04d}", data, kind)
+    me, size = _build_for(kind, path, f"{shot.name} {kind}.{min(max(frame, shot.first), shot.last):04d}")
     me[PROP_FILE] = path
-    cache[path] = (me.name, _estimated_bytes(me))
+    cache[path] = (me.name, size)
     return me
 
 
@@ -185,7 +245,7 @@ def update_object(obj, frame):
     """Gives a mudcrack object its mesh of `frame`. A file that cannot be read shows an empty
     mesh and is reported once on stderr (a handler must not raise)."""
     manifest = obj.get(PROP_MANIFEST)
-    if obj.get(PROP_KIND) not in KINDS or not manifest:
+    if obj.get(PROP_KIND) not in KINDS + (DEBRIS,) or not manifest:
         return
     try:
         me = _mesh_for(obj, surface_shot(bpy.path.abspath(manifest)), frame)
@@ -248,7 +308,8 @@ def cached_mesh_names(obj):
 
 def import_shot(context, path, cache_mb=DEFAULT_CACHE_MB):
     """Imports a shot's surfacing output (a shot folder, its surface/ folder or manifest.json):
-    one object "<shot> boundary" and one "<shot> crack", children of an empty "<shot>" that turns
+    one object "<shot> boundary" and one "<shot> crack" (and "<shot> debris" when the shot wrote
+    debris points; a shot without them gets none), children of an empty "<shot>" that turns
     mudcrack's y-up into Blender's z-up (a +90 degree rotation about x: the only conversion), in
     a new collection "mudcrack <shot>". Sets the scene's frame range and fps from the manifest
     and shows the first frame. Returns (root, {kind: object}). Raises ShotError."""
@@ -273,12 +334,14 @@ def import_shot(context, path, cache_mb=DEFAULT_CACHE_MB):
     root["mudcrack_shot"] = shot.manifest_path
     collection.objects.link(root)
     objects = {}
-    for kind in KINDS:
+    for kind in KINDS + ((DEBRIS,) if shot.has_debris else ()):
         obj = bpy.data.objects.new(f"{shot.name} {kind}", empty_mesh())
         obj.parent = root
         obj[PROP_KIND] = kind
         obj[PROP_MANIFEST] = shot.manifest_path
         obj[PROP_CACHE_MB] = float(cache_mb)
+        if kind == DEBRIS:
+            add_debris_points_modifier(obj)
         collection.objects.link(obj)
         objects[kind] = obj
     frame = min(max(scene.frame_current, shot.first), shot.last)

@@ -3,16 +3,19 @@ Pure Python (no bpy), so it is usable outside Blender too.
 
 The manifest (written by mc-surface, or by the farm's merge) lists every frame with its boundary
 file and its crack file; a frame without an open crack has "crack": {"file": null} and no crack
-file on disk, and the add-on shows an empty crack mesh then.
+file on disk, and the add-on shows an empty crack mesh then. In the plates mode with
+"debris": "points" each frame also lists its debris point file ("debris": {"file": ...}); a
+shot without debris lists none, and the add-on makes no debris object for it.
 """
 import json
 import os
 
 from .meshfile import SUPPORTED_EXTENSIONS
 
-__all__ = ["ShotError", "SurfaceShot", "locate_manifest", "load_surface_shot"]
+__all__ = ["ShotError", "SurfaceShot", "locate_manifest", "load_surface_shot", "KINDS", "DEBRIS"]
 
-KINDS = ("boundary", "crack")
+KINDS = ("boundary", "crack")  # the mesh files of a frame
+DEBRIS = "debris"              # the point file of a frame (plates mode, "debris": "points")
 
 
 class ShotError(Exception):
@@ -45,7 +48,8 @@ class SurfaceShot:
 
     name: the shot (the output folder's name); surface_dir: absolute; first, last: frame range;
     fps: frames per second; format: mesh file extension; files[frame] = {"boundary": path or None,
-    "crack": path or None} (absolute paths; None: the frame has no such mesh).
+    "crack": path or None, "debris": path or None} (absolute paths; None: the frame has no such
+    file); has_debris: some frame has a debris file.
     """
 
     def __init__(self, manifest_path):
@@ -89,12 +93,14 @@ class SurfaceShot:
             except (KeyError, TypeError, ValueError):
                 raise ShotError(f"{where}: /per_frame/{i}: no frame number or boundary file") from None
             crack = (entry.get("crack") or {}).get("file")
+            debris = (entry.get("debris") or {}).get("file")
             self.files[n] = {kind: (os.path.join(self.surface_dir, f) if f else None)
-                             for kind, f in (("boundary", boundary), ("crack", crack))}
+                             for kind, f in (("boundary", boundary), ("crack", crack), (DEBRIS, debris))}
         missing = [n for n in range(self.first, self.last + 1) if n not in self.files]
         if missing:
             raise ShotError(f"{where}: /per_frame: no entry for frame(s) {_ranges(missing)} of "
                             f"{self.first}-{self.last} (an interrupted surfacing run? re-run make shot)")
+        self.has_debris = any(files[DEBRIS] for files in self.files.values())
 
     def _fps(self, frames):
         """/frames/fps; manifests written before it was recorded: the sim manifest's."""
@@ -120,7 +126,7 @@ class SurfaceShot:
         return fps
 
     def file(self, kind, frame):
-        """The mesh file of `kind` shown at scene frame `frame`, or None for an empty mesh.
+        """The file of `kind` (KINDS or DEBRIS) shown at scene frame `frame`, or None for an empty mesh.
         Outside the shot's range the nearest end frame holds (a cache's usual behaviour)."""
         frame = min(max(int(frame), self.first), self.last)
         return self.files[frame][kind]
