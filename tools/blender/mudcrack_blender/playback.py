@@ -160,6 +160,7 @@ def _mesh_for(obj, shot, frame):
             cache.move_to_end(path)
             return me
         del cache[path]  # removed behind our back (orphans purged, undo)
+    shot.verify(path)
     data = read_mesh_file(path)
     me = build_mesh(f"{shot.name} {kind}.{min(max(frame, shot.first), shot.last):04d}", data, kind)
     me[PROP_FILE] = path
@@ -246,14 +247,25 @@ def cached_mesh_names(obj):
     return names
 
 
+def check_frame_files(shot, frame):
+    """Raises ShotError when a mesh file of `frame` is damaged: an import or a CLI run refuses it
+    with that message instead of showing an empty mesh as playback does."""
+    for kind in KINDS:
+        path = shot.file(kind, frame)
+        if path is not None:
+            shot.verify(path)
+
+
 def import_shot(context, path, cache_mb=DEFAULT_CACHE_MB):
     """Imports a shot's surfacing output (a shot folder, its surface/ folder or manifest.json):
     one object "<shot> boundary" and one "<shot> crack", children of an empty "<shot>" that turns
     mudcrack's y-up into Blender's z-up (a +90 degree rotation about x: the only conversion), in
     a new collection "mudcrack <shot>". Sets the scene's frame range and fps from the manifest
-    and shows the first frame. Returns (root, {kind: object}). Raises ShotError."""
+    and shows the first frame. Returns (root, {kind: object}). Raises ShotError, also when that
+    frame's files are damaged."""
     shot = load_surface_shot(path)
     scene = context.scene
+    check_frame_files(shot, scene.frame_current)
     # a shot cached before must be read again (same path, maybe new files)
     _shots.pop(shot.manifest_path, None)
     register_handlers()
