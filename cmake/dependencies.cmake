@@ -4,6 +4,7 @@ find_package(OpenMP REQUIRED)                     # OpenMP::OpenMP_CXX
 find_package(TBB CONFIG REQUIRED)                 # TBB::tbb (oneTBB's own config)
 find_package(nlohmann_json 3.10 REQUIRED)         # nlohmann_json::nlohmann_json
 find_package(CLI11 REQUIRED)                      # CLI11::CLI11
+find_package(ZLIB REQUIRED)                       # ZLIB::ZLIB (file checksums; PNG needs it too)
 find_package(PNG REQUIRED)                        # PNG::PNG
 find_package(assimp REQUIRED)                     # assimp::assimp
 find_package(PkgConfig REQUIRED)

@@ -1,6 +1,7 @@
 // mc-shot: the shot file tool. `validate` checks a shot, `keys` prints the spec table, `slice`
 // writes the part of a shot one stage reads, only when it changed, so make reruns a stage exactly
-// when its inputs changed; `stages`, `reuse` and `summary` serve pipeline/shot.mk
+// when its inputs changed; `stages`, `reuse` and `summary` serve pipeline/shot.mk, `verify` the
+// farm's scripts
 // (pipeline/stages/shot/shot_tool.h). It has no --shot/--out, so it does not use run_stage, but
 // follows the same exit codes: 0 ok, 1 bad input, 2 bad usage.
 #include <exception>
@@ -57,6 +58,12 @@ int main(int argc, char** argv) {
     bool summary_json = false;
     summary_cmd->add_flag("--json", summary_json, "print one JSON object instead of the table (for scripts)");
 
+    std::string manifest_file;
+    CLI::App* verify = app.add_subcommand(
+        "verify", "check every file a stage manifest records against its checksum (exit 1 naming a damaged one)");
+    verify->add_option("MANIFEST", manifest_file, "a stage's manifest, e.g. out/demo/surface/manifest.json")
+        ->required();
+
     try {
         app.parse(argc, argv);
     } catch (const CLI::ParseError& e) {
@@ -78,6 +85,7 @@ int main(int argc, char** argv) {
             return 0;
         }
         if (summary_cmd->parsed()) return run_summary(out_dir, summary_json);
+        if (verify->parsed()) return run_verify(manifest_file);
         if (validate->parsed()) {
             const Shot shot = load_shot(file);
             std::cout << "ok: " << file << "\n" << shot_summary(shot) << "\n";

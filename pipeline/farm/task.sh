@@ -151,7 +151,8 @@ surface_frames() {
 
 # OUT/surface/manifest.json from the base and every chunk's manifest (each chunk contributes the
 # frames it ran), written last and atomically, like a local mc-surface run. Fails naming any
-# frame without a mesh or a manifest entry.
+# frame without a mesh or a manifest entry, and any file whose bytes are not those its chunk
+# recorded (mc-shot verify: "damaged").
 surface_merge() {
     local base=$out/farm/surface-base first_frame last_frame
     first_frame=$(jq -r .frames.first "$out/sim/manifest.json") &&
@@ -183,9 +184,12 @@ surface_merge() {
         [ -f "$(farm_frame_file "$out/surface" boundary "$n" "$format")" ] || missing="$missing $n"
     done
     [ -z "$missing" ] || { rm -f "$merged"; echo "frames without a boundary mesh:$missing"; return 1; }
+    # every file the chunks moved in, and the history, checked against the checksums their
+    # manifests recorded before the manifest that vouches for them is moved into place
     cp "$base/edge_breaks.bin" "$out/surface/.edge_breaks.bin.farm.tmp" &&
         mv -f "$out/surface/.edge_breaks.bin.farm.tmp" "$out/surface/edge_breaks.bin" &&
-        mv -f "$merged" "$out/surface/manifest.json"
+        "$bin/mc-shot" verify "$merged" &&
+        mv -f "$merged" "$out/surface/manifest.json" || { rm -f "$merged"; return 1; }
 }
 
 case $kind in

@@ -8,10 +8,12 @@
 #include <thread>
 
 #include "pipeline/io/atomic_output.h"
+#include "pipeline/io/checksum.h"
 #include "sim/core/error.h"
 #include "sim/core/parallel.h"
 
 namespace fs = std::filesystem;
+using nlohmann::json;
 
 namespace mudcrack {
 
@@ -97,6 +99,54 @@ nlohmann::json read_current_manifest(const fs::path& dir, const std::string& exp
         throw InputError(file + ": /shot_slice_hash = \"" + found + "\": stale for this shot (expected \"" +
                          expected_slice_hash + "\"): re-run " + producer_of(dir));
     return manifest;
+}
+
+json file_record(const fs::path& file) { return {{"file", file.filename().string()}, {"crc32", file_crc32(file)}}; }
+
+RecordedChecksums::RecordedChecksums(const json& manifest, const fs::path& manifest_file) {
+    add(manifest, manifest_file);
+}
+
+void RecordedChecksums::add(const json& manifest, const fs::path& manifest_file) {
+    m_verified = std::make_shared<Verified>();  // new records: nothing is verified against them yet
+    add_records(manifest, manifest_file);
+}
+
+void RecordedChecksums::add_records(const json& manifest, const fs::path& manifest_file) {
+    if (manifest.is_array()) {
+        for (const json& item : manifest) add_records(item, manifest_file);
+        return;
+    }
+    if (!manifest.is_object()) return;
+    const auto file = manifest.find("file"), crc = manifest.find("crc32");
+    if (file != manifest.end() && crc != manifest.end() && file->is_string() && crc->is_string())
+        m_records[file->get<std::string>()] = {crc->get<std::string>(), manifest_file};
+    for (const auto& [key, value] : manifest.items())
+        if (value.is_structured()) add_records(value, manifest_file);
+}
+
+void RecordedChecksums::verify(const fs::path& file) const {
+    {
+        const std::lock_guard<std::mutex> lock(m_verified->mutex);
+        if (m_verified->files.count(file)) return;
+    }
+    const fs::path dir = file.parent_path();
+    const std::string rerun = ": re-run " + producer_of(dir);
+    const auto it = m_records.find(file.filename().string());
+    std::error_code ec;
+    if (!fs::is_regular_file(file, ec)) throw InputError(file.string() + ": missing" + rerun);
+    if (it == m_records.end())
+        throw InputError(file.string() + ": no checksum recorded for it, so it cannot be verified" + rerun);
+    const std::string found = file_crc32(file);
+    if (found != it->second.crc32)
+        throw InputError(file.string() + ": damaged: its CRC-32 is " + found + ", but " +
+                         it->second.manifest_file.string() + " records " + it->second.crc32 + rerun);
+    const std::lock_guard<std::mutex> lock(m_verified->mutex);
+    m_verified->files.insert(file);
+}
+
+void RecordedChecksums::verify_all(const fs::path& dir) const {
+    for (const auto& [name, record] : m_records) verify(dir / name);
 }
 
 }  // namespace mudcrack

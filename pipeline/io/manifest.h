@@ -3,6 +3,10 @@
 /// the shot slice it read, its input manifests, frame range, wall time, measured rates, peak
 /// memory, and what it ran and allocated.
 #include <filesystem>
+#include <map>
+#include <memory>
+#include <mutex>
+#include <set>
 #include <string>
 
 #include <nlohmann/json.hpp>
@@ -33,5 +37,46 @@ nlohmann::json read_manifest(const std::filesystem::path& dir);
 /// /shot_slice_hash = "9f..": stale for this shot (expected "3c.."): re-run mc-sim").
 /// @param expected_slice_hash Shot::slice_hash of the stage that wrote dir
 nlohmann::json read_current_manifest(const std::filesystem::path& dir, const std::string& expected_slice_hash);
+
+/// A manifest's record of a file it names, the one form every stage writes:
+/// {"file": "<name in the manifest's folder>", "crc32": "<file_crc32 of its bytes>"}. Readers find
+/// the records wherever the stage put them (/caches, /per_frame/*/boundary, /images, ...).
+nlohmann::json file_record(const std::filesystem::path& file);
+
+/// The file records of one or more manifests, by file name, so a reader checks every file it reads
+/// against the checksum its writer recorded (docs/architecture.md §3).
+class RecordedChecksums {
+public:
+    RecordedChecksums() = default;
+    /// The records of `manifest`, read from `manifest_file` (see add).
+    RecordedChecksums(const nlohmann::json& manifest, const std::filesystem::path& manifest_file);
+    /// Adds every record found in `manifest` (any object holding a "file" and a "crc32" string),
+    /// read from `manifest_file`; a later record of the same name wins.
+    void add(const nlohmann::json& manifest, const std::filesystem::path& manifest_file);
+    bool has(const std::string& file_name) const { return m_records.count(file_name) > 0; }
+    size_t size() const { return m_records.size(); }
+    /// Stops the reader unless `file` is the file its record vouches for. Throws InputError
+    /// naming the file: "damaged" when its CRC-32 differs from the record, or no record / missing,
+    /// each with the stage to re-run. A file verified once is not read again by this object (a
+    /// stage that reads a file twice pays for one check). Thread-safe.
+    void verify(const std::filesystem::path& file) const;
+    /// Verifies every recorded file, each found in `dir` (mc-shot verify, for the farm's scripts).
+    void verify_all(const std::filesystem::path& dir) const;
+
+private:
+    void add_records(const nlohmann::json& manifest, const std::filesystem::path& manifest_file);
+
+    struct Record {
+        std::string crc32;
+        std::filesystem::path manifest_file;
+    };
+    std::map<std::string, Record> m_records;
+    // the files verified so far (shared by copies: they hold the same records)
+    struct Verified {
+        std::mutex mutex;
+        std::set<std::filesystem::path> files;
+    };
+    std::shared_ptr<Verified> m_verified = std::make_shared<Verified>();
+};
 
 }  // namespace mudcrack

@@ -77,8 +77,14 @@ std::string lock_holder_text(const fs::path& lock_file) {
 }
 
 StageLock::StageLock(const fs::path& stage_dir, const std::string& program, LockMode mode) : m_mode(mode) {
-    // a symlinked stage folder is locked where it lives, with the folder it points at
+    // a stage writes only into a folder of its own: through a link it would delete and replace
+    // another folder's files (another shot's, under /reuse), so a linked stage folder is refused,
+    // never followed or replaced (readers follow links: /reuse shares a stage that way)
     std::error_code ec;
+    if (fs::is_symlink(stage_dir, ec))
+        throw InputError(stage_dir.string() + ": a symbolic link (to " + fs::read_symlink(stage_dir, ec).string() +
+                         "): " + program + " writes only into a real folder, never through a link into another one: "
+                         "remove the link, or give --out a folder of its own");
     m_stage_dir = fs::weakly_canonical(fs::absolute(stage_dir), ec);
     if (ec) m_stage_dir = fs::absolute(stage_dir).lexically_normal();
     const fs::path parent = m_stage_dir.parent_path();

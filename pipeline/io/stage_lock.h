@@ -1,7 +1,8 @@
 #pragma once
 /// One writer per output folder (docs/architecture.md §3): a stage locks its folder
-/// OUT/<shot>/<stage>/ before it writes anything, through the file OUT/<shot>/.<stage>.lock
-/// (next to the folder a symlinked stage folder points at). The lock is flock(2)'s, so the kernel
+/// OUT/<shot>/<stage>/ before it writes anything, through the file OUT/<shot>/.<stage>.lock, and
+/// refuses a stage folder that is a symbolic link (it would write into another folder). The lock
+/// is flock(2)'s, so the kernel
 /// drops it when its holder dies however it dies (SIGKILL, a crash): a lock left by a dead
 /// process is no lock, and the next run takes it. An exclusive holder records its host, pid,
 /// program and start time in the file, and a refused writer names them.
@@ -24,13 +25,14 @@ public:
     /// Takes the lock of `stage_dir` for `program` ("mc-sim"), creating the folder's parent when
     /// it is missing (and removing it on release if it is still empty), without waiting.
     /// @throws InputError naming the folder and the holder (host, pid, program, start time) when
-    ///         another live writer holds it; RuntimeError when the lock file cannot be made
+    ///         another live writer holds it, or naming the link when the folder is a symbolic
+    ///         link; RuntimeError when the lock file cannot be made
     StageLock(const std::filesystem::path& stage_dir, const std::string& program, LockMode mode);
     ~StageLock();
     StageLock(const StageLock&) = delete;
     StageLock& operator=(const StageLock&) = delete;
 
-    /// The stage folder the lock covers, with symlinks resolved.
+    /// The stage folder the lock covers, absolute (links in the folders above it resolved).
     const std::filesystem::path& stage_dir() const { return m_stage_dir; }
     const std::filesystem::path& lock_path() const { return m_path; }
     LockMode mode() const { return m_mode; }

@@ -22,7 +22,9 @@
 #    the shot (glb, then obj, then ours) with the operator and checks the evaluated meshes at
 #    those frames against step 2 (their "piece" attribute too), the debris points and their
 #    attributes, the separated pieces, the empty crack mesh, materials, frame range, fps, y-up,
-#    the cache, and the CLI's .blend.
+#    the cache, and the CLI's .blend;
+# 5. a byte of the last frame's boundary file changed: cli.py refuses it, exit 1, naming the file
+#    and "damaged".
 # FAILS (does not skip) when blender is not installed: `make test` installs it.
 # BLENDER_TEST_KEEP=1 keeps the temporary folder.
 set -euo pipefail
@@ -156,4 +158,17 @@ blender_run --python "$here/playback_check.py" -- --zip "$zip" --shot "$out" --e
     { cat "$tmp/check.txt"; fail "playback_check.py failed"; }
 grep "^playback_check:" "$tmp/check.txt"
 grep -q "^playback_check: all checks passed" "$tmp/check.txt" || { cat "$tmp/check.txt"; fail "playback_check.py did not finish"; }
+
+echo "== a damaged mesh file: refused, naming it"
+damaged=$out/surface/$(jq -r --argjson f "$last" '.per_frame[] | select(.frame == $f) | .boundary.file' "$manifest")
+offset=$(($(stat -c %s "$damaged") / 2))
+byte=$(dd if="$damaged" bs=1 skip=$offset count=1 status=none | od -An -tu1)
+printf "\\x$(printf %02x $((255 - byte)))" | dd of="$damaged" bs=1 seek=$offset conv=notrunc status=none
+set +e
+blender_run --python "$cli" -- "$out" --frame last >"$tmp/cli_damaged.txt" 2>&1
+rc=$?
+set -e
+[ $rc -eq 1 ] || { cat "$tmp/cli_damaged.txt"; fail "cli.py on a damaged $damaged exited $rc, expected 1"; }
+grep -q "^mudcrack_blender: error: $damaged: damaged" "$tmp/cli_damaged.txt" ||
+    { cat "$tmp/cli_damaged.txt"; fail "cli.py on a damaged mesh file: no message naming it and \"damaged\""; }
 echo "PASS"

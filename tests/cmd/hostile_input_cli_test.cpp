@@ -9,8 +9,12 @@
 // - Non-finite input mesh vertices, named with their index.
 // - One writer per folder: a lock held elsewhere refuses the stage, naming its holder; a lock
 //   left by a dead writer is recovered; farm chunks share one.
+// - A stage folder that is a symbolic link: refused by every stage, the link and its target kept.
+// - Damaged files: a flipped byte anywhere in a sim cache, an init file, a mesh or an image stops
+//   its reader naming the file and "damaged"; mc-sim --resume simulates a damaged frame again.
 // - SIGTERM and SIGINT: the stage removes what it was writing and exits 128 + the signal.
-// Shots are tiny edits of shots/fig8_a.json (75 particles, 3 frames).
+// Shots are tiny edits of shots/fig8_a.json (75 particles, 3 frames; longer or finer where a run
+// must be stopped midway).
 #include <gtest/gtest.h>
 
 #include <fcntl.h>
@@ -26,6 +30,7 @@
 #include <fstream>
 #include <functional>
 #include <iterator>
+#include <map>
 #include <sstream>
 #include <string>
 #include <thread>
@@ -548,16 +553,163 @@ TEST_F(HostileInput, RenderChunksShareTheFolderAFullRunDoesNot) {
     }
 }
 
-TEST_F(HostileInput, SymlinkedStageFolderIsLockedWhereItLives) {
+// ---- a stage folder that is a symbolic link: refused by every writer, the link and its target
+// left as they were ---------------------------------------------------------------------------
+
+class SymlinkedStageFolder : public HostileInput, public ::testing::WithParamInterface<std::string> {};
+
+TEST_P(SymlinkedStageFolder, IsRefusedAndLeftAlone) {
+    const std::string stage = GetParam();
+    const fs::path shot = write_shot(tiny_shot());
+    run_before(stage, shot);
+    // out/<stage> -> elsewhere/<stage>, a folder of something else
+    const fs::path target = m_dir / "elsewhere" / stage, link = out() / stage;
+    fs::create_directories(target);
+    fs::create_directories(out());
+    std::ofstream(target / "keep.txt") << "not the stage's\n";
+    fs::remove_all(link);
+    fs::create_directory_symlink(target, link);
+    const Result r = run(stage, shot);
+    EXPECT_EQ(r.code, 1) << r.err;
+    expect_error(r, stage, {link.string() + ": a symbolic link", "mc-" + stage});
+    EXPECT_TRUE(fs::is_symlink(link)) << "the link is not replaced";
+    EXPECT_EQ(read_text(target / "keep.txt"), "not the stage's\n");
+    EXPECT_EQ(std::distance(fs::directory_iterator(target), fs::directory_iterator()), 1) << "nothing written there";
+    expect_no_debris(out());
+    expect_no_debris(m_dir / "elsewhere");
+}
+
+INSTANTIATE_TEST_SUITE_P(EveryStage, SymlinkedStageFolder, ::testing::Values("init", "sim", "surface", "render"));
+
+// ---- damaged files: any flipped byte is caught by every reader, naming the file and "damaged";
+// mc-sim --resume simulates a damaged frame again -------------------------------------------------
+
+// flips every bit of the byte at `offset` of `file`
+void flip_byte(const fs::path& file, size_t offset) {
+    std::fstream f(file, std::ios::in | std::ios::out | std::ios::binary);
+    f.seekg(std::streamoff(offset));
+    const int byte = f.get();
+    f.seekp(std::streamoff(offset));
+    f.put(char(~byte));
+}
+
+// offsets in a file of `size` bytes: its first byte, inside its header, the middle, the last
+std::vector<size_t> damage_offsets(size_t size) { return {0, 7, 40, size / 2, size - 1}; }
+
+// the file of `dir` whose name starts with `prefix` ("boundary.0002.")
+fs::path file_starting(const fs::path& dir, const std::string& prefix) {
+    for (const auto& e : fs::directory_iterator(dir))
+        if (e.path().filename().string().rfind(prefix, 0) == 0) return e.path();
+    return {};
+}
+
+// each offset of `file` damaged in turn (the file restored after each), `read` run on it: it must
+// exit 1 naming the file and "damaged", and leave no output behind
+void expect_damage_refused(const fs::path& file, const std::string& stage, const std::function<Result()>& read,
+                           const std::function<void()>& expect_nothing_written) {
+    ASSERT_TRUE(fs::is_regular_file(file)) << file;
+    const std::string clean = read_text(file);
+    for (const size_t offset : damage_offsets(clean.size())) {
+        SCOPED_TRACE(file.string() + " byte " + std::to_string(offset));
+        flip_byte(file, offset);
+        const Result r = read();
+        EXPECT_EQ(r.code, 1) << r.err;
+        EXPECT_NE(r.err.find("mc-" + stage + ": error: " + file.string() + ": damaged"), std::string::npos) << r.err;
+        expect_nothing_written();
+        std::ofstream(file, std::ios::binary | std::ios::trunc) << clean;
+    }
+}
+
+TEST_F(HostileInput, DamagedSimCacheIsRefusedBySurfaceAndMeasure) {
+    const fs::path shot = write_shot(tiny_shot());
+    run_before("surface", shot);
+    const fs::path cache = out() / "sim" / "particles.0002.vdb";
+    expect_damage_refused(cache, "surface", [&] { return run("surface", shot); }, [&] {
+        EXPECT_FALSE(fs::exists(out() / "surface"));
+        expect_no_debris(out());
+    });
+    expect_damage_refused(cache, "measure", [&] { return run("measure", shot); }, [] {});
+}
+
+TEST_F(HostileInput, DamagedInitFilesAreRefused) {
     const fs::path shot = write_shot(tiny_shot());
     run_before("sim", shot);
-    // out/sim -> elsewhere/sim, whose lock another writer holds
-    fs::create_directories(m_dir / "elsewhere" / "sim");
-    fs::create_directory_symlink(m_dir / "elsewhere" / "sim", out() / "sim");
-    HeldLock held(m_dir / "elsewhere" / ".sim.lock", LOCK_EX, kForeignHolder);
+    const Result sim = run("sim", shot);
+    ASSERT_EQ(sim.code, 0) << sim.err;
+    flip_byte(out() / "init" / "particles.vdb", 100);
     const Result r = run("sim", shot);
     EXPECT_EQ(r.code, 1) << r.err;
-    expect_error(r, "sim", {"pid 424242", (m_dir / "elsewhere" / ".sim.lock").string()});
+    expect_error(r, "sim", {(out() / "init" / "particles.vdb").string() + ": damaged"});
+    flip_byte(out() / "init" / "tets.vtu", 100);
+    const Result s = run("surface", shot);
+    EXPECT_EQ(s.code, 1) << s.err;
+    expect_error(s, "surface", {(out() / "init" / "tets.vtu").string() + ": damaged"});
+}
+
+TEST_F(HostileInput, DamagedMeshIsRefusedByRenderAndMeasure) {
+    const fs::path shot = write_shot(tiny_shot());
+    run_before("render", shot);
+    const fs::path mesh = file_starting(out() / "surface", "boundary.0002.");
+    expect_damage_refused(mesh, "render", [&] { return run("render", shot); }, [&] {
+        EXPECT_FALSE(fs::exists(out() / "render"));
+        expect_no_debris(out());
+    });
+    expect_damage_refused(mesh, "measure", [&] { return run("measure", shot); }, [] {});
+    // the farm's merge checks what the chunks moved in with mc-shot verify
+    flip_byte(mesh, 12);
+    const Result v = Process("mc-shot", {"verify", (out() / "surface" / "manifest.json").string()},
+                             m_dir / "verify.txt").wait();
+    EXPECT_EQ(v.code, 1) << v.err;
+    expect_error(v, "shot", {mesh.string() + ": damaged"});
+}
+
+TEST_F(HostileInput, DamagedImageIsRefusedByTheAssembly) {
+    const fs::path shot = write_shot(tiny_shot());
+    run_before("render", shot);
+    const Result chunk = run("render", shot, {"--frames", "1-3"});
+    ASSERT_EQ(chunk.code, 0) << chunk.err;
+    const fs::path image = out() / "render" / "frame.0002.png";
+    expect_damage_refused(image, "render", [&] { return run("render", shot, {"--assemble"}); }, [&] {
+        EXPECT_FALSE(fs::exists(out() / "render" / "manifest.json"));
+        EXPECT_FALSE(fs::exists(out() / "render" / "contact_sheet.png"));
+        expect_no_debris(out());
+    });
+    const Result assembled = run("render", shot, {"--assemble"});
+    ASSERT_EQ(assembled.code, 0) << assembled.err;
+    // a finished render folder: every image its manifest records, checked
+    const std::vector<std::string> verify = {"verify", (out() / "render" / "manifest.json").string()};
+    EXPECT_EQ(Process("mc-shot", verify, m_dir / "verify.txt").wait().code, 0);
+    flip_byte(out() / "render" / "turntable.0001.png", 30);
+    const Result v = Process("mc-shot", verify, m_dir / "verify.txt").wait();
+    EXPECT_EQ(v.code, 1) << v.err;
+    expect_error(v, "shot", {(out() / "render" / "turntable.0001.png").string() + ": damaged"});
+}
+
+TEST_F(HostileInput, ResumeSimulatesADamagedFrameAgain) {
+    json s = tiny_shot();
+    s["frames"]["end"] = 4;
+    s["sim"]["checkpoint_every"] = 1;
+    const fs::path shot = write_shot(s);
+    run_before("sim", shot);
+    ASSERT_EQ(run("sim", shot).code, 0);
+    const auto cache = [&](int f) { return out() / "sim" / ("particles.000" + std::to_string(f) + ".vdb"); };
+    std::vector<std::string> clean;
+    for (int f = 1; f <= 4; ++f) clean.push_back(read_text(cache(f)));
+    const json clean_manifest = json::parse(read_text(out() / "sim" / "manifest.json"));
+    // checkpoints 3 and 4 are kept: frame 2 damaged sends the resume back to t = 0, frame 4 to
+    // checkpoint 3
+    for (const int damaged : {2, 4}) {
+        SCOPED_TRACE("frame " + std::to_string(damaged));
+        flip_byte(cache(damaged), clean[size_t(damaged - 1)].size() / 2);
+        const Result r = run("sim", shot, {"--resume"});
+        EXPECT_EQ(r.code, 0) << r.err;
+        EXPECT_NE(r.err.find(cache(damaged).string() + ": damaged"), std::string::npos) << r.err;
+        for (int f = 1; f <= 4; ++f)
+            EXPECT_EQ(read_text(cache(f)), clean[size_t(f - 1)]) << "frame " << f << " differs from the clean run's";
+        const json manifest = json::parse(read_text(out() / "sim" / "manifest.json"));
+        EXPECT_EQ(manifest["caches"], clean_manifest["caches"]);
+        EXPECT_EQ(run("surface", shot).code, 0);
+    }
 }
 
 // ---- SIGTERM and SIGINT: nothing left behind, exit 128 + the signal ----------------------------
@@ -571,35 +723,48 @@ void PrintTo(const SignalCase& c, std::ostream* os) { *os << c.stage << " " << c
 
 class StoppedBySignal : public HostileInput, public ::testing::WithParamInterface<SignalCase> {};
 
-TEST_P(StoppedBySignal, CleansUpAndExits128PlusTheSignal) {
-    const SignalCase c = GetParam();
+// a shot whose `stage` runs long enough to be stopped midway
+json long_running_shot(const std::string& stage) {
     json s = tiny_shot();
-    s["frames"]["end"] = c.stage == "sim" ? 400 : 3;
-    // a render long enough to be stopped midway: the particles (no surfacing), large, many views
-    if (c.stage == "render") {
+    s["frames"]["end"] = stage == "sim" ? 400 : stage == "surface" ? 100 : 3;
+    // a lattice whose files take a while to write (62,500 particles)
+    if (stage == "init") s["source"]["box"]["spacing"] = 0.004;
+    // the particles (no surfacing), large, many views
+    if (stage == "render") {
         s.erase("surfacing");
         s["render"] = {{"resolution", {1024, 1024}}, {"turntable", {{"views", 200}}}};
     }
-    const fs::path shot = write_shot(s);
+    return s;
+}
+
+TEST_P(StoppedBySignal, CleansUpAndExits128PlusTheSignal) {
+    const SignalCase c = GetParam();
+    const fs::path shot = write_shot(long_running_shot(c.stage));
     run_before(c.stage == "render" ? "surface" : c.stage, shot);
     Process p = start(c.stage, shot);
-    // stopped while it writes: a frame written (sim), the partial folder made (render)
-    const fs::path sign =
-        c.stage == "sim" ? out() / "sim" / "particles.0002.vdb" : out() / ".render.partial" / "frame.0001.png";
+    // stopped while it writes: a frame written (sim), its partial folder made (init), a frame in
+    // it (surface, render)
+    const std::map<std::string, fs::path> signs = {{"init", out() / ".init.partial"},
+                                                   {"sim", out() / "sim" / "particles.0002.vdb"},
+                                                   {"surface", out() / ".surface.partial" / "boundary.0001.glb"},
+                                                   {"render", out() / ".render.partial" / "frame.0001.png"}};
+    const fs::path sign = signs.at(c.stage);
     ASSERT_TRUE(wait_for([&] { return fs::exists(sign); }, 60)) << sign;
     p.signal(c.signal);
     const Result r = p.wait();
     EXPECT_EQ(r.code, 128 + c.signal) << r.err;
     expect_error(r, c.stage, {c.signal == SIGINT ? "SIGINT" : "SIGTERM"});
     expect_no_debris(out());
-    EXPECT_FALSE(fs::exists(out() / "render")) << "no render folder from a stopped full run";
-    if (c.stage == "sim") {
-        EXPECT_FALSE(fs::exists(out() / "sim" / "manifest.json"));
-    }
+    if (c.stage == "sim")
+        EXPECT_FALSE(fs::exists(out() / "sim" / "manifest.json"));  // its frames stay for --resume
+    else
+        EXPECT_FALSE(fs::exists(out() / c.stage)) << "no stage folder from a stopped run";
 }
 
 INSTANTIATE_TEST_SUITE_P(Stages, StoppedBySignal,
-                         ::testing::Values(SignalCase{"sim", SIGTERM}, SignalCase{"sim", SIGINT},
+                         ::testing::Values(SignalCase{"init", SIGTERM}, SignalCase{"init", SIGINT},
+                                           SignalCase{"sim", SIGTERM}, SignalCase{"sim", SIGINT},
+                                           SignalCase{"surface", SIGTERM}, SignalCase{"surface", SIGINT},
                                            SignalCase{"render", SIGTERM}, SignalCase{"render", SIGINT}),
                          [](const auto& info) {
                              return info.param.stage + (info.param.signal == SIGINT ? "_SIGINT" : "_SIGTERM");

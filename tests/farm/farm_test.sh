@@ -18,6 +18,7 @@
 # 5. compares every cache, mesh, image and movie (VDB, VTU, GLB, edge breaks, PNG, MP4) byte for
 #    byte (the edge break history without its header's input hash, which covers the sim's wall
 #    times): frames rendered in chunks and assembled by another job equal a local mc-render run;
+#    and the checksums the sim, surface and render manifests record for them are the local run's;
 # 6. removes the last two frames of the second render chunk and the render manifest (what a render
 #    task killed during the first of them leaves) and checks the re-run submits only those frames
 #    and the assembly, then compares again;
@@ -109,9 +110,14 @@ compare_outputs() {
                 fail "$stage/manifest.json $key differs"
         done
     done
-    [ "$(jq -c '[.per_frame[] | [.frame, .boundary.faces, .broken_edges, .fragments]]' "$local_out/surface/manifest.json")" = \
-      "$(jq -c '[.per_frame[] | [.frame, .boundary.faces, .broken_edges, .fragments]]' "$out/surface/manifest.json")" ] ||
+    local entries='[.per_frame[] | [.frame, .boundary.faces, .broken_edges, .fragments, .boundary.crc32, .crack.crc32]]'
+    [ "$(jq -c "$entries" "$local_out/surface/manifest.json")" = "$(jq -c "$entries" "$out/surface/manifest.json")" ] ||
         fail "surface/manifest.json per_frame entries differ"
+    # the checksums readers verify: the same files, the same records
+    [ "$(jq -c .caches "$local_out/sim/manifest.json")" = "$(jq -c .caches "$out/sim/manifest.json")" ] ||
+        fail "sim/manifest.json /caches differ"
+    [ "$(jq -c .images "$local_out/render/manifest.json")" = "$(jq -c .images "$out/render/manifest.json")" ] ||
+        fail "render/manifest.json /images differ"
     echo "   $compared files byte-identical"
 }
 

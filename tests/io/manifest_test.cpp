@@ -1,8 +1,15 @@
-// manifest.json: common fields, atomic pretty write, and the "run mc-<stage> first" message.
+// manifest.json: common fields, atomic pretty write, the "run mc-<stage> first" message, and the
+// file records (CRC-32) readers verify files against.
 #include <gtest/gtest.h>
 
-#include <regex>
+#include <zlib.h>
 
+#include <fstream>
+#include <random>
+#include <regex>
+#include <vector>
+
+#include "pipeline/io/checksum.h"
 #include "pipeline/io/manifest.h"
 #include "scratch_dir.h"
 #include "sim/core/error.h"
@@ -78,6 +85,64 @@ TEST(Manifest, CurrentManifestIsChecked) {
     m["shot_slice_hash"] = "abc";
     write_manifest(sim, m);
     EXPECT_EQ(read_current_manifest(sim, "abc"), m);
+}
+
+TEST(FileChecksum, IsZlibsCrc32) {
+    ScratchDir dir;
+    std::ofstream(dir / "a.txt", std::ios::binary) << "123456789";  // CRC-32's check value
+    EXPECT_EQ(file_crc32(dir / "a.txt"), "cbf43926");
+    std::ofstream(dir / "empty", std::ios::binary).close();
+    EXPECT_EQ(file_crc32(dir / "empty"), "00000000");
+    EXPECT_THROW(file_crc32(dir / "missing"), InputError);
+}
+
+// the carry-less folding and zlib's tables agree on every length (below, at and past the 64 bytes
+// folding starts at, and not a multiple of 16), whole or continued in two pieces
+TEST(FileChecksum, FoldingMatchesZlibAtEveryLength) {
+    std::mt19937 rng(7);
+    std::vector<unsigned char> bytes(4099);
+    for (unsigned char& b : bytes) b = static_cast<unsigned char>(rng());
+    for (size_t n = 0; n <= bytes.size(); n += (n < 300 ? 1 : 37)) {
+        const uint32_t expected = uint32_t(crc32(0, bytes.data(), uInt(n)));
+        EXPECT_EQ(crc32_update(0, bytes.data(), n), expected) << n << " bytes";
+        const size_t half = n / 3;
+        EXPECT_EQ(crc32_update(crc32_update(0, bytes.data(), half), bytes.data() + half, n - half), expected)
+            << n << " bytes in two pieces";
+    }
+}
+
+TEST(RecordedChecksums, FindsRecordsAnywhereAndCatchesEveryFlippedByte) {
+    ScratchDir dir;
+    const std::string bytes(300, 'x');
+    std::ofstream(dir / "boundary.0001.glb", std::ios::binary) << bytes;
+    std::ofstream(dir / "other.bin", std::ios::binary) << "other";
+    nlohmann::json m = make_manifest("surface", "s.json", "h");
+    m["per_frame"] = {{{"frame", 1}, {"boundary", file_record(dir / "boundary.0001.glb")}}};
+    const RecordedChecksums records(m, dir / "manifest.json");
+    EXPECT_EQ(records.size(), 1u);
+    EXPECT_TRUE(records.has("boundary.0001.glb"));
+    EXPECT_NO_THROW(records.verify(dir / "boundary.0001.glb"));
+    for (size_t offset = 0; offset < bytes.size(); ++offset) {
+        std::string damaged = bytes;
+        damaged[offset] = char(damaged[offset] ^ 0x01);
+        std::ofstream(dir / "boundary.0001.glb", std::ios::binary | std::ios::trunc) << damaged;
+        try {
+            RecordedChecksums(m, dir / "manifest.json").verify(dir / "boundary.0001.glb");
+            ADD_FAILURE() << "byte " << offset << " flipped, not caught";
+        } catch (const InputError& e) {
+            EXPECT_NE(std::string(e.what()).find("boundary.0001.glb: damaged"), std::string::npos) << e.what();
+            EXPECT_NE(std::string(e.what()).find("re-run mc-"), std::string::npos) << e.what();
+        }
+    }
+    try {
+        records.verify(dir / "other.bin");
+        ADD_FAILURE() << "a file without a record passed";
+    } catch (const InputError& e) {
+        EXPECT_NE(std::string(e.what()).find("other.bin: no checksum recorded"), std::string::npos) << e.what();
+    }
+    EXPECT_THROW(records.verify(dir / "boundary.0002.glb"), InputError);
+    // a file is read once per reader: verified before it was damaged, it is not read again
+    EXPECT_NO_THROW(records.verify(dir / "boundary.0001.glb"));
 }
 
 }  // namespace

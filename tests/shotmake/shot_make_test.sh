@@ -70,9 +70,12 @@ compare_runs() {
         [ -f "$serial/$rel" ] || fail "make -j2 wrote $rel, the serial run did not"
     done < <(find "$parallel"/{init,sim,surface,render} -type f \( -name '*.vdb' -o -name '*.vtu' -o -name '*.glb' \
         -o -name '*.png' -o -name '*.mp4' -o -name 'edge_breaks.bin' \) -print0)
-    [ "$(jq -c '[.per_frame[] | [.frame, .boundary.faces, .broken_edges, .fragments]]' "$serial/surface/manifest.json")" = \
-      "$(jq -c '[.per_frame[] | [.frame, .boundary.faces, .broken_edges, .fragments]]' "$parallel/surface/manifest.json")" ] ||
+    local entries='[.per_frame[] | [.frame, .boundary.faces, .broken_edges, .fragments, .boundary.crc32, .crack.crc32]]'
+    [ "$(jq -c "$entries" "$serial/surface/manifest.json")" = "$(jq -c "$entries" "$parallel/surface/manifest.json")" ] ||
         fail "surface/manifest.json per_frame entries differ between the serial and the make -j2 run"
+    # the checksums readers verify: the chunked run records the serial run's
+    [ "$(jq -c .images "$serial/render/manifest.json")" = "$(jq -c .images "$parallel/render/manifest.json")" ] ||
+        fail "render/manifest.json /images differ between the serial and the make -j2 run"
     for stage in surface render; do
         [ "$(jq -cS .frames "$serial/$stage/manifest.json")" = "$(jq -cS .frames "$parallel/$stage/manifest.json")" ] ||
             fail "$stage/manifest.json frames differ: $(jq -cS .frames "$serial/$stage/manifest.json") vs $(jq -cS .frames "$parallel/$stage/manifest.json")"

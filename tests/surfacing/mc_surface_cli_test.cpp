@@ -68,13 +68,19 @@ protected:
         fs::create_directories(out / "init");
         fs::create_directories(out / "sim");
         write_tet_mesh_vtu(out / "init" / "tets.vtu", m_mesh);
-        write_manifest(out / "init", make_manifest("init", m_shot.path, m_shot.slice_hash(Stage::Init)));
+        nlohmann::json init = make_manifest("init", m_shot.path, m_shot.slice_hash(Stage::Init));
+        init["outputs"] = {file_record(out / "init" / "tets.vtu")};
+        write_manifest(out / "init", init);
         for (int n = 1; n <= kFrames; ++n) write_points(cache(out, n), frame_to_points(frame(n)), 0.05);
         json_manifest(out);
     }
+    /// The sim manifest, recording the checksums of the caches there are now.
     void json_manifest(const fs::path& out) const {
         nlohmann::json m = make_manifest("sim", m_shot.path, m_shot.slice_hash(Stage::Sim));
         m["frames"] = {{"first", 1}, {"last", kFrames}, {"count", kFrames}};
+        m["caches"] = nlohmann::json::array();
+        for (int n = 1; n <= kFrames; ++n)
+            if (fs::exists(cache(out, n))) m["caches"].push_back(file_record(cache(out, n)));
         write_manifest(out / "sim", m);
     }
     ParticleFrame frame(int n) const {
@@ -256,9 +262,15 @@ TEST_F(McSurfaceCli, BadInputFailsNamingTheFileAndWritesNothing) {
     std::ofstream(cache(out, 3), std::ios::binary) << bytes.substr(0, bytes.size() / 2);
     CliRun r = mc_surface(out);
     EXPECT_EQ(r.code, 1);
-    EXPECT_NE(r.err.find("particles.0003.vdb"), std::string::npos) << r.err;
+    EXPECT_NE(r.err.find("particles.0003.vdb: damaged"), std::string::npos) << r.err;
     EXPECT_FALSE(fs::exists(out / "surface"));
     EXPECT_FALSE(fs::exists(out / ".surface.partial"));
+    // the same, truncated by a writer that recorded it so: the reader's own checks name it
+    json_manifest(out);
+    r = mc_surface(out);
+    EXPECT_EQ(r.code, 1);
+    EXPECT_NE(r.err.find("particles.0003.vdb"), std::string::npos) << r.err;
+    EXPECT_FALSE(fs::exists(out / "surface"));
 
     // a cache from another shot: other particle count
     ParticleFrame other = frame(3);
@@ -268,6 +280,7 @@ TEST_F(McSurfaceCli, BadInputFailsNamingTheFileAndWritesNothing) {
     other.alpha.resize(other.P.size());
     other.Fe.resize(other.P.size());
     write_points(cache(out, 3), frame_to_points(other), 0.05);
+    json_manifest(out);
     r = mc_surface(out);
     EXPECT_EQ(r.code, 1);
     EXPECT_NE(r.err.find("particles.0003.vdb"), std::string::npos) << r.err;

@@ -70,7 +70,6 @@ void add_init_fields(json& m, const InitParams& params, bool parallel_mesh, cons
     m["uv_method"] = r.uv_method;
     m["build_seconds"] = build_seconds;
     m["rates"] = {{"tets_per_s", q.tets / build_seconds}, {"particles_per_s", q.particles / build_seconds}};
-    m["outputs"] = json::array({"particles.vdb", "tets.vtu"});
 }
 
 void print_summary(const InitParams& params, const InitResult& r, double build_seconds, double wall_seconds,
@@ -117,6 +116,9 @@ int run_init_stage(const StageOptions& opt, bool parallel_mesh) {
     write_tet_mesh_vtu(staging.path() / "tets.vtu", r.mesh);
     json manifest = make_manifest("init", opt.shot, shot.slice_hash(Stage::Init));
     add_init_fields(manifest, params, mesher.parallel, r, build_seconds);
+    // what the later stages read, with the checksums they verify
+    manifest["outputs"] =
+        json::array({file_record(staging.path() / "particles.vdb"), file_record(staging.path() / "tets.vtu")});
     manifest["wall_seconds"] = wall.seconds();
     manifest["peak_memory_bytes"] = peak_rss_bytes();
     write_manifest(staging.path(), manifest);  // last: its presence means the stage completed

@@ -69,20 +69,24 @@ json crack_fields(const FragmentSizes& sizes, const SurfacePolygons& polygons, c
 }
 
 /// The first mesh of a frame's surfacing file named by the surface manifest's entry `which`
-/// ("boundary" or "crack"), or an empty mesh when the frame has none.
-TriMesh read_frame_mesh(const fs::path& surface_dir, const json& entry, const char* which) {
+/// ("boundary" or "crack"), verified against its recorded checksum, or an empty mesh when the
+/// frame has none.
+TriMesh read_frame_mesh(const fs::path& surface_dir, const RecordedChecksums& surface_files, const json& entry,
+                        const char* which) {
     if (!entry.contains(which) || entry[which].value("file", json()).is_null()) return TriMesh();
-    std::vector<TriMesh> meshes = import_meshes(surface_dir / entry[which]["file"].get<std::string>());
+    const fs::path file = surface_dir / entry[which]["file"].get<std::string>();
+    surface_files.verify(file);
+    std::vector<TriMesh> meshes = import_meshes(file);
     return meshes.empty() ? TriMesh() : std::move(meshes.front());
 }
 
 /// What a close-up sees in frame n's mesh files (mesh_measures.h), when the surface folder has them.
-std::optional<MeshPieces> measure_frame_meshes(const fs::path& surface_dir, const json& surface_manifest, int n,
-                                               Real cell) {
+std::optional<MeshPieces> measure_frame_meshes(const fs::path& surface_dir, const json& surface_manifest,
+                                               const RecordedChecksums& surface_files, int n, Real cell) {
     for (const json& entry : surface_manifest.value("per_frame", json::array()))
         if (entry.value("frame", 0) == n)
-            return measure_mesh_pieces(read_frame_mesh(surface_dir, entry, "boundary"),
-                                       read_frame_mesh(surface_dir, entry, "crack"), cell);
+            return measure_mesh_pieces(read_frame_mesh(surface_dir, surface_files, entry, "boundary"),
+                                       read_frame_mesh(surface_dir, surface_files, entry, "crack"), cell);
     return std::nullopt;
 }
 
@@ -154,8 +158,9 @@ int run_measure_stage(const StageOptions& options, const MeasureStageOptions& me
     const Shot shot = load_shot(options.shot);
     const fs::path out(options.out);
     const fs::path init_dir = out / "init", sim_dir = out / "sim", surface_dir = out / "surface";
-    read_current_manifest(init_dir, shot.slice_hash(Stage::Init));
+    const json init_manifest = read_current_manifest(init_dir, shot.slice_hash(Stage::Init));
     const json sim_manifest = read_current_manifest(sim_dir, shot.slice_hash(Stage::Sim));
+    const RecordedChecksums sim_files(sim_manifest, sim_dir / "manifest.json");
     int first = 0, last = 0;
     try {
         first = sim_manifest.at("frames").at("first").get<int>();
@@ -171,6 +176,7 @@ int run_measure_stage(const StageOptions& options, const MeasureStageOptions& me
         last = options.frame_range.last;
     }
 
+    RecordedChecksums(init_manifest, init_dir / "manifest.json").verify(init_dir / "tets.vtu");
     const TetMesh mesh = read_tet_mesh_vtu(init_dir / "tets.vtu");
     const std::vector<Real> rest_volume = particle_rest_volumes(mesh);
     const Real spacing = particle_spacing(rest_volume);
@@ -195,9 +201,12 @@ int run_measure_stage(const StageOptions& options, const MeasureStageOptions& me
     std::optional<BreakHistory> history;
     int min_particles = 1;
     json surface_manifest;
+    RecordedChecksums surface_files;
     if (fs::exists(surface_dir / "manifest.json")) {
         surface_manifest = read_current_manifest(surface_dir, shot.slice_hash(Stage::Surface));
+        surface_files = RecordedChecksums(surface_manifest, surface_dir / "manifest.json");
         min_particles = surface_manifest.value("min_fragment_particles", 1);
+        surface_files.verify(surface_dir / kBreakHistoryFile);
         topo = build_core_topology(mesh);
         history = read_break_history(surface_dir / kBreakHistoryFile, std::nullopt, topo->n_edges());
         if (!history)
@@ -233,6 +242,7 @@ int run_measure_stage(const StageOptions& options, const MeasureStageOptions& me
     std::vector<std::pair<std::optional<MeshPieces>, std::optional<SurfaceMotion>>> mesh_rows;
     for (int n = first; n <= last; ++n) {
         const fs::path path = frame_path(sim_dir, "particles", n, "vdb");
+        sim_files.verify(path);
         const PointCloud cloud = read_points(path);
         const ParticleFrame frame = points_to_frame(cloud, path.string());
         if (frame.size() != mesh.X.size())
@@ -269,7 +279,8 @@ int run_measure_stage(const StageOptions& options, const MeasureStageOptions& me
             network = measure_crack_network(*topo, is_broken, columns, min_particles);
             row["broken_edges"] = broken;
             row.update(crack_fields(sizes, polygons, network, measure_crack_depth(*topo, is_broken, columns)));
-            const std::optional<MeshPieces> meshes = measure_frame_meshes(surface_dir, surface_manifest, n, shot.sim.h);
+            const std::optional<MeshPieces> meshes =
+                measure_frame_meshes(surface_dir, surface_manifest, surface_files, n, shot.sim.h);
             if (meshes) row.update(mesh_fields(*meshes));
             std::optional<SurfaceMotion> motion;
             if (motion_tracker) motion = motion_tracker->step(frame);

@@ -19,8 +19,15 @@ namespace {
 
 constexpr float kParticleRadiusFactor = 0.55f;  // sprite radius / estimated particle spacing
 
-ParticleFrame read_particle_frame(const fs::path& path) {
+ParticleFrame read_particle_frame(const FrameSource& src, int f) {
+    const fs::path path = src.particles_path(f);
+    src.checksums.verify(path);
     return points_to_frame(read_points(path), path.string());
+}
+
+std::vector<TriMesh> import_verified_meshes(const FrameSource& src, const fs::path& file) {
+    src.checksums.verify(file);
+    return import_meshes(file);
 }
 
 /// Particle spacing estimated from the cloud's bounding box volume per particle (the init
@@ -117,6 +124,7 @@ RenderJob resolve_render_job(const StageOptions& opt, bool force_turntable) {
     job.input_manifest =
         read_current_manifest(src.dir, shot.slice_hash(src.has_meshes ? Stage::Surface : Stage::Sim));
     const json& input = job.input_manifest;
+    src.checksums = RecordedChecksums(input, job.input_manifest_path());
     if (src.has_meshes) {
         job.surface_frames = index_surface_frames(input);
         src.frames_without_cracks = job.surface_frames.frames_without_cracks;
@@ -141,19 +149,21 @@ RenderJob resolve_render_job(const StageOptions& opt, bool force_turntable) {
                 throw InputError(p.string() + ": missing: run " + (src.has_meshes ? "mc-surface" : "mc-sim") +
                                  " for frame " + std::to_string(f));
     if (!src.has_meshes)
-        src.particle_radius = estimate_particle_radius(read_particle_frame(src.particles_path(job.first)), shot.sim.h);
+        src.particle_radius = estimate_particle_radius(read_particle_frame(src, job.first), shot.sim.h);
     return job;
 }
 
 Scene load_scene(const FrameSource& src, int f) {
     Scene scene;
     if (src.has_meshes) {
-        for (TriMesh& m : import_meshes(src.boundary_path(f))) scene.meshes.push_back({std::move(m), SurfaceKind::Boundary});
+        for (TriMesh& m : import_verified_meshes(src, src.boundary_path(f)))
+            scene.meshes.push_back({std::move(m), SurfaceKind::Boundary});
         if (src.has_cracks_at(f))
-            for (TriMesh& m : import_meshes(src.crack_path(f))) scene.meshes.push_back({std::move(m), SurfaceKind::Crack});
+            for (TriMesh& m : import_verified_meshes(src, src.crack_path(f)))
+                scene.meshes.push_back({std::move(m), SurfaceKind::Crack});
         return scene;
     }
-    ParticleFrame pf = read_particle_frame(src.particles_path(f));
+    ParticleFrame pf = read_particle_frame(src, f);
     scene.particles.positions = std::move(pf.P);
     scene.particles.saturation = std::move(pf.saturation);
     scene.particles.alpha = std::move(pf.alpha);

@@ -11,6 +11,7 @@
 #include <nlohmann/json.hpp>
 
 #include "pipeline/cmd/stage_cli.h"
+#include "pipeline/io/manifest.h"
 #include "pipeline/shot/shot.h"
 #include "render/render_params.h"
 #include "render/scene.h"
@@ -25,6 +26,7 @@ struct FrameSource {
     std::string format;         // mesh extension ("glb", ...) or "vdb"
     float particle_radius = 0;  // [m], particles only
     std::set<int> frames_without_cracks;  // mc-surface writes no crack file for a frame with no crack
+    RecordedChecksums checksums;  // of every file, from the input manifest: each is verified as it is read
 
     bool has_cracks_at(int f) const { return has_cracks && !frames_without_cracks.count(f); }
     std::filesystem::path boundary_path(int f) const;
@@ -71,7 +73,8 @@ struct RenderJob {
 /// @throws InputError naming the file, key and value of what is missing, stale or out of range
 RenderJob resolve_render_job(const StageOptions& opt, bool force_turntable);
 
-/// The scene of frame f, meshes tagged boundary/crack by the file they came from.
+/// The scene of frame f, meshes tagged boundary/crack by the file they came from, each file verified
+/// against its recorded checksum (InputError naming a damaged one).
 Scene load_scene(const FrameSource& src, int f);
 
 /// Bounds over every frame of the shot: the camera, the ground and the shadow stay put, and a

@@ -40,7 +40,8 @@ constexpr int kMaxThumbnailWidth = 320;   // [px]
 /// Assemble run, done in one process; the farm runs them as separate jobs.
 enum class Mode {
     Full,      // every frame, the turntable, the contact sheet, the movies, manifest.json
-    Frames,    // --frames A-B: frame.A..B PNGs only, each renamed into DIR/render/ when complete
+    Frames,    // --frames A-B: frame.A..B PNGs only, each renamed into DIR/render/ when complete, and
+               // their statistics and checksums in DIR/render/.chunk.AAAA-BBBB.json
     Assemble,  // --assemble: the turntable, contact sheet, movies and manifest from the frame PNGs
 };
 
@@ -241,6 +242,17 @@ std::optional<int> numbered_png(const fs::path& p, const std::string& stem) {
     return std::stoi(digits);
 }
 
+/// The records (file_record) of the images and movies a finished render folder holds, in one
+/// order for a full run and an assembly: frames, turntable views, the contact sheet, the movies.
+json image_records(const RenderJob& job, const fs::path& dir, int views, const json& movies) {
+    json records = json::array();
+    for (int f = job.first; f <= job.last; ++f) records.push_back(file_record(dir / frame_file("frame", f)));
+    for (int v = 1; v <= views; ++v) records.push_back(file_record(dir / frame_file("turntable", v)));
+    records.push_back(file_record(dir / "contact_sheet.png"));
+    for (const json& movie : movies) records.push_back(file_record(dir / movie.get<std::string>()));
+    return records;
+}
+
 int run_full(const StageOptions& opt, const RenderJob& job) {
     WallTimer total;
     const Bounds stage = stage_bounds(job);
@@ -259,6 +271,7 @@ int run_full(const StageOptions& opt, const RenderJob& job) {
     if (turntable.has_movie) movies.push_back("turntable.mp4");
 
     json m = render_manifest(job, *renderer, stats, turntable, movies, assembly.sheet_summary());
+    m["images"] = image_records(job, dir, turntable.views, movies);
     m["wall_seconds"] = total.seconds();
     m["peak_memory_bytes"] = peak_rss_bytes();
     write_manifest(dir, m);
@@ -287,14 +300,17 @@ int run_frames(const StageOptions& opt, const RenderJob& job) {
     double seconds = 0;
     try {
         fs::remove(dir / "manifest.json");
-        const FrameStats stats = render_frames(job, *renderer, stage, a, b, dir, {});
+        // the statistics file grows frame by frame: a chunk stopped midway leaves the checksums of
+        // the frames it finished, which the assembly verifies them against
         json chunk = {{"first", a}, {"last", b}, {"frames", json::array()}};
         for (int f = a; f <= b; ++f) {
-            chunk["frames"].push_back(
-                {{"frame", f}, {"triangles", stats.triangles.at(f)}, {"seconds", stats.seconds.at(f)}});
+            const FrameStats stats = render_frames(job, *renderer, stage, f, f, dir, {});
+            json record = file_record(dir / frame_file("frame", f));
+            record.update({{"frame", f}, {"triangles", stats.triangles.at(f)}, {"seconds", stats.seconds.at(f)}});
+            chunk["frames"].push_back(record);
+            write_text_atomically(chunk_stats_path(dir, a, b), chunk.dump(2) + "\n");
             seconds += stats.seconds.at(f);
         }
-        write_text_atomically(chunk_stats_path(dir, a, b), chunk.dump(2) + "\n");
     } catch (...) {
         if (made_dir) fs::remove_all(dir, ec);
         throw;
@@ -304,8 +320,9 @@ int run_frames(const StageOptions& opt, const RenderJob& job) {
     return 0;
 }
 
-/// The per-frame statistics the chunks left in dir (a later file wins for a frame in two).
-FrameStats read_chunk_stats(const fs::path& dir, int first, int last) {
+/// The per-frame statistics the chunks left in dir (a later file wins for a frame in two), and the
+/// checksums of the frames they rendered (added to `images`).
+FrameStats read_chunk_stats(const fs::path& dir, int first, int last, RecordedChecksums& images) {
     std::vector<fs::path> files;
     for (const fs::directory_entry& e : fs::directory_iterator(dir))
         if (e.is_regular_file() && is_chunk_stats(e.path())) files.push_back(e.path());
@@ -316,6 +333,7 @@ FrameStats read_chunk_stats(const fs::path& dir, int first, int last) {
         try {
             std::ifstream is(p);
             const json c = json::parse(is);
+            images.add(c, p);
             for (const json& e : c.at("frames")) {
                 const int f = e.at("frame").get<int>();
                 if (f < first || f > last) continue;
@@ -332,8 +350,9 @@ FrameStats read_chunk_stats(const fs::path& dir, int first, int last) {
 
 /// --assemble: from the frame PNGs in DIR/render/, the turntable, contact sheet, movies and the
 /// manifest (last), each file written atomically, byte-identical to what a full run writes. Files a
-/// full run would not leave (frames outside the shot, extra turntable views, chunk statistics,
-/// movies not made) are removed.
+/// full run would not leave (frames outside the shot, extra turntable views, movies not made) are
+/// removed; the chunk statistics stay, hidden: they hold the checksums a later assembly (after
+/// some chunks are rendered again) verifies the frames it did not re-render against.
 int run_assemble(const StageOptions& opt, const RenderJob& job) {
     WallTimer total;
     const fs::path dir = fs::path(opt.out) / "render";
@@ -349,6 +368,10 @@ int run_assemble(const StageOptions& opt, const RenderJob& job) {
                              ": stale, re-render it (mc-render --frames " + std::to_string(f) + "-" +
                              std::to_string(f) + ")");
     }
+    // every frame is verified against the checksum its chunk recorded before anything is written
+    RecordedChecksums frame_images;
+    const FrameStats stats = read_chunk_stats(dir, job.first, job.last, frame_images);
+    for (int f = job.first; f <= job.last; ++f) frame_images.verify(dir / frame_file("frame", f));
     fs::remove(dir / "manifest.json");
     std::unique_ptr<Renderer> renderer = make_renderer(opt, job);
     const bool has_ffmpeg = !find_on_path("ffmpeg").empty();
@@ -386,17 +409,15 @@ int run_assemble(const StageOptions& opt, const RenderJob& job) {
     if (!turntable.has_movie) fs::remove(dir / "turntable.mp4");
     if (!has_ffmpeg) fs::remove(dir / "preview.mp4");
 
-    const FrameStats stats = read_chunk_stats(dir, job.first, job.last);
     if (int(stats.seconds.size()) != job.last - job.first + 1)
         log::info("frame statistics cover " + std::to_string(stats.seconds.size()) + " of " +
                   std::to_string(job.last - job.first + 1) + " frames: seconds_per_frame and triangles are null");
     json m = render_manifest(job, *renderer, stats, turntable, movies, assembly.sheet_summary());
+    m["images"] = image_records(job, dir, turntable.views, movies);
     m["assembled"] = true;
     m["wall_seconds"] = total.seconds();
     m["peak_memory_bytes"] = peak_rss_bytes();
     write_manifest(dir, m);
-    for (const fs::directory_entry& e : fs::directory_iterator(dir))
-        if (is_chunk_stats(e.path())) fs::remove(e.path());
     print_table(job, renderer.get(), "assemble", job.first, job.last, turntable,
                 m["seconds_per_frame"].is_number() ? m["seconds_per_frame"].get<double>() : -1.0,
                 has_ffmpeg ? "preview.mp4 turntable.mp4" : "none (no ffmpeg)", dir);

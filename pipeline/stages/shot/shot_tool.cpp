@@ -220,4 +220,17 @@ int run_summary(const std::string& out, bool as_json) {
     return 0;
 }
 
+int run_verify(const std::string& manifest_file) {
+    const std::filesystem::path path(manifest_file);
+    std::ifstream is(path);
+    if (!is) throw InputError(manifest_file + ": cannot read");
+    const nlohmann::json manifest = nlohmann::json::parse(is, nullptr, /*allow_exceptions=*/false);
+    if (!manifest.is_object()) throw InputError(manifest_file + ": malformed manifest: expected a JSON object");
+    const RecordedChecksums records(manifest, path);
+    if (records.size() == 0) throw InputError(manifest_file + ": records no file checksums: nothing to verify");
+    records.verify_all(path.parent_path().empty() ? std::filesystem::path(".") : path.parent_path());
+    std::cout << "ok: " << records.size() << " files verified against " << manifest_file << "\n";
+    return 0;
+}
+
 }  // namespace mudcrack

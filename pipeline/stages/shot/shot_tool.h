@@ -27,4 +27,10 @@ int run_slice(const std::string& file, const std::string& stage_name, const std:
 /// @throws InputError when `out` holds no stage's manifest
 int run_summary(const std::string& out, bool as_json);
 
+/// Verifies every file a stage manifest records (its "file" + "crc32" records, each file in the
+/// manifest's folder) and prints "ok: N files verified against MANIFEST". The manifest may have
+/// any name (the farm's merge checks its manifest before moving it into place). Returns 0.
+/// @throws InputError naming the first missing or damaged file, or an unreadable manifest
+int run_verify(const std::string& manifest_file);
+
 }  // namespace mudcrack

@@ -116,6 +116,11 @@ void write_sim_checkpoint(const fs::path& path, const SimCheckpoint& checkpoint)
     c.meta_int["totals.allocated_nodes_max"] = t.allocated_nodes_max;
     c.meta_double["totals.max_speed"] = t.max_speed;
     c.meta_int["totals.retries"] = t.retries;
+    // the frame caches' checksums, as numbers (a CRC-32 fits an int64)
+    for (const auto& [frame, crc] : checkpoint.cache_crc32) {
+        c.i64["caches.frame"].push_back(frame);
+        c.i64["caches.crc32"].push_back(int64_t(std::stoull(crc, nullptr, 16)));
+    }
     write_checkpoint(path, c);
 }
 
@@ -164,6 +169,16 @@ SimCheckpoint read_sim_checkpoint(const fs::path& path) {
     t.max_speed = c.require_double("totals.max_speed");
     // written since step retries were added; an older checkpoint's run retried nothing
     t.retries = c.meta_int.count("totals.retries") ? c.meta_int.at("totals.retries") : 0;
+    // none recorded (no cache written yet, or an older checkpoint): no frame it precedes is trusted
+    if (c.i64.count("caches.frame")) {
+        const std::vector<int64_t>& frames = c.require_i64("caches.frame");
+        const std::vector<int64_t>& crcs = c.require_i64("caches.crc32", frames.size());
+        for (size_t i = 0; i < frames.size(); ++i) {
+            char hex[16];
+            std::snprintf(hex, sizeof hex, "%08llx", static_cast<unsigned long long>(crcs[i]) & 0xffffffffULL);
+            sc.cache_crc32[int(frames[i])] = hex;
+        }
+    }
     return sc;
 }
 

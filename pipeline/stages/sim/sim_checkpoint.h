@@ -4,6 +4,7 @@
 /// DIR/sim/checkpoint.####.bin (#### = the frame whose end the state is at). `--resume` restarts
 /// from one and must then produce caches bitwise identical to an uninterrupted run.
 #include <filesystem>
+#include <map>
 #include <string>
 #include <vector>
 
@@ -19,6 +20,10 @@ struct SimCheckpoint {
     int threads = 0;         // worker threads of that run (bitwise determinism is per count)
     SimState state;          // workspace is not saved (step() rebuilds it)
     SimTotals totals;        // counters from t = 0 to the end of `frame`
+    // the CRC-32 (file_crc32) of every frame cache the runs leading here wrote, by frame: what a
+    // resume checks the frames it keeps against, since the manifest that records them is written
+    // only when a run completes
+    std::map<int, std::string> cache_crc32;
 };
 
 /// "dir/checkpoint.0042.bin".

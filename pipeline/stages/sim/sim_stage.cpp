@@ -4,6 +4,7 @@
 #include <cstdio>
 #include <filesystem>
 #include <limits>
+#include <map>
 #include <optional>
 #include <regex>
 #include <string>
@@ -15,6 +16,7 @@
 #include "pipeline/stages/sim/sim_checkpoint.h"
 #include "pipeline/stages/sim/sim_frame_stepper.h"
 #include "pipeline/stages/sim/sim_progress.h"
+#include "pipeline/io/checksum.h"
 #include "pipeline/io/manifest.h"
 #include "pipeline/io/points_io.h"
 #include "sim/core/error.h"
@@ -24,6 +26,7 @@
 #include "sim/mpm/simulation.h"
 
 namespace fs = std::filesystem;
+using nlohmann::json;
 
 namespace mudcrack {
 namespace {
@@ -44,6 +47,7 @@ InitParticles read_init(const fs::path& init_dir, const Shot& shot) {
     init.manifest = read_current_manifest(init_dir, shot.slice_hash(Stage::Init));
 
     const fs::path particles_file = init_dir / "particles.vdb";
+    RecordedChecksums(init.manifest, init_dir / "manifest.json").verify(particles_file);
     const PointCloud cloud = read_points(particles_file);
     const std::vector<float>* volume0 = cloud.find_float("volume0");
     if (!volume0)
@@ -117,18 +121,27 @@ std::string kept_frames_note(int first, int kept, const fs::path& sim_dir) {
            " (no manifest written)";
 }
 
-// a frame cache that exists and reads back whole: frames are renamed into place only once written
-// and checked, but a cache damaged since (or left by a build that did not check its writes) must
-// not be kept by a resume
-bool is_complete_frame(const fs::path& file) {
-    if (!fs::exists(file)) return false;
-    try {
-        read_points_metadata(file);  // checks the layout against the file's size
-        return true;
-    } catch (const InputError& e) {
-        log::warn("bad frame cache", std::string(e.what()) + ": the checkpoints after it are not used");
-        return false;
+// a frame cache a resume may keep: the bytes whose checksum the checkpoint recorded (a cache
+// damaged since, missing, or not recorded is not kept: the frames from it on are simulated again)
+bool is_intact_frame(const fs::path& file, int frame, const std::map<int, std::string>& cache_crc32) {
+    std::error_code ec;
+    if (!fs::is_regular_file(file, ec)) return false;
+    std::string problem;
+    const auto recorded = cache_crc32.find(frame);
+    if (recorded == cache_crc32.end()) {
+        problem = file.string() + ": no checksum recorded for it";
+    } else {
+        try {
+            const std::string found = file_crc32(file);
+            if (found == recorded->second) return true;
+            problem = file.string() + ": damaged: its CRC-32 is " + found + ", the checkpoint records " +
+                      recorded->second;
+        } catch (const InputError& e) {
+            problem = e.what();
+        }
     }
+    log::warn("bad frame cache", problem + ": the checkpoints after it are not used");
+    return false;
 }
 
 // the newest checkpoint that is intact, made from this shot's sim slice, for these particles,
@@ -164,7 +177,7 @@ std::optional<SimCheckpoint> find_resume_checkpoint(const fs::path& sim_dir, con
         }
         bool has_frames = true;
         for (int f = first; f <= c && has_frames; ++f)
-            has_frames = is_complete_frame(frame_path(sim_dir, "particles", f, "vdb"));
+            has_frames = is_intact_frame(frame_path(sim_dir, "particles", f, "vdb"), f, checkpoint.cache_crc32);
         if (!has_frames) {
             log::info(file.string() + ": some frames before it are missing or damaged, not used");
             continue;
@@ -192,6 +205,16 @@ std::vector<std::string> attribute_names(const PointCloud& cloud) {
     for (const auto& [name, values] : cloud.floats) names.push_back(name);
     for (const auto& [name, values] : cloud.mat3s) names.push_back(name);
     return names;
+}
+
+// the manifest's records of frames first..last's caches, with the checksums every reader verifies
+json cache_records(const fs::path& sim_dir, int first, int last, const std::map<int, std::string>& cache_crc32) {
+    json records = json::array();
+    for (int f = first; f <= last; ++f)
+        records.push_back({{"frame", f},
+                           {"file", frame_path(sim_dir, "particles", f, "vdb").filename().string()},
+                           {"crc32", cache_crc32.at(f)}});
+    return records;
 }
 
 // the frames a run writes: --frames, within the shot's, or the shot's
@@ -233,10 +256,12 @@ int run_sim_stage(const Shot& shot, const StageOptions& options, const SimStageO
     }
     SimState state;
     SimTotals totals;
+    std::map<int, std::string> cache_crc32;  // of the frame caches on disk, by frame
     int done_frame = 0;  // the state is at the end of this frame
     if (resumed) {
         state = std::move(resumed->state);
         totals = resumed->totals;
+        cache_crc32 = std::move(resumed->cache_crc32);
         done_frame = resumed->frame;
         log::info("resuming from " + checkpoint_path(sim_dir, done_frame).string());
     } else {
@@ -288,7 +313,9 @@ int run_sim_stage(const Shot& shot, const StageOptions& options, const SimStageO
             cloud.meta_int["mudcrack:substeps"] = frame_substeps;
             cloud.meta_double["mudcrack:time"] = state.time;
             try {
-                write_points(frame_path(sim_dir, "particles", frame, "vdb"), cloud, model.h);
+                const fs::path cache = frame_path(sim_dir, "particles", frame, "vdb");
+                write_points(cache, cloud, model.h);
+                cache_crc32[frame] = file_crc32(cache);
             } catch (const RuntimeError& e) {  // a full disk: what is done stays for --resume
                 progress.finish();
                 throw RuntimeError(std::string(e.what()) + kept_frames_note(first, frame - 1, sim_dir));
@@ -304,6 +331,7 @@ int run_sim_stage(const Shot& shot, const StageOptions& options, const SimStageO
             checkpoint.slice_hash = shot.slice_hash(Stage::Sim);
             checkpoint.threads = thread_count();
             checkpoint.totals = totals;
+            checkpoint.cache_crc32 = cache_crc32;
             // lend the state to the checkpoint instead of copying it (it can be GBs)
             checkpoint.state = std::move(state);
             try {
@@ -350,6 +378,7 @@ int run_sim_stage(const Shot& shot, const StageOptions& options, const SimStageO
                       {"Jw", !state.Jw.empty()},
                       {"plasticity", !state.alpha.empty()}};
     m["cached_attributes"] = cached_attributes;
+    m["caches"] = cache_records(sim_dir, first, last, cache_crc32);
     m["checkpoint_every"] = model.checkpoint_every;
     std::vector<std::string> checkpoints;
     for (const int c : list_checkpoint_frames(sim_dir)) checkpoints.push_back(checkpoint_path(sim_dir, c).filename().string());

@@ -49,9 +49,12 @@ uint64_t break_source_hash(const json& sim_manifest, const SurfaceParams& params
     return fnv1a64(s.data(), s.size());
 }
 
-/// Loads one sim cache and checks that it is the expected frame of this mesh.
-ParticleFrame load_frame(const fs::path& sim_dir, int frame_number, const CoreTopology& topo) {
+/// Loads one sim cache, verified against the checksum the sim manifest records, and checks that it
+/// is the expected frame of this mesh.
+ParticleFrame load_frame(const fs::path& sim_dir, const RecordedChecksums& sim_files, int frame_number,
+                         const CoreTopology& topo) {
     const fs::path path = frame_path(sim_dir, "particles", frame_number, "vdb");
+    sim_files.verify(path);
     const PointCloud cloud = read_points(path);  // missing, truncated, foreign or other-version files throw
     ParticleFrame frame = points_to_frame(cloud, path.string());
     const auto it = cloud.meta_int.find("mudcrack:frame");
@@ -65,6 +68,18 @@ ParticleFrame load_frame(const fs::path& sim_dir, int frame_number, const CoreTo
         throw InputError(path.string() + ": " + e.what() + " in DIR/init/tets.vtu");
     }
     return frame;
+}
+
+/// Whether the break history of an existing surface folder is the file its manifest recorded: a
+/// damaged one is not reused but scanned again.
+bool is_intact_break_history(const fs::path& surface_dir, const json& manifest) {
+    try {
+        RecordedChecksums(manifest, surface_dir / "manifest.json").verify(surface_dir / kBreakHistoryFile);
+        return true;
+    } catch (const InputError& e) {
+        log::warn("break history", std::string(e.what()) + ": scanning the frames again");
+        return false;
+    }
 }
 
 /// Runs fn(i) for i in [0, n), over items in parallel when there are enough of them (each item
@@ -108,8 +123,8 @@ void link_folder_contents(const fs::path& from, const fs::path& to) {
 }
 
 /// The break history of frames first..last: Eq. 14 on every cached frame (order-free: a minimum).
-BreakHistory scan_breaks(const fs::path& sim_dir, int first, int last, const CoreTopology& topo,
-                         const SurfaceParams& params, uint64_t source_hash) {
+BreakHistory scan_breaks(const fs::path& sim_dir, const RecordedChecksums& sim_files, int first, int last,
+                         const CoreTopology& topo, const SurfaceParams& params, uint64_t source_hash) {
     BreakHistory h;
     h.source_hash = source_hash;
     h.first_frame = first;
@@ -117,7 +132,7 @@ BreakHistory scan_breaks(const fs::path& sim_dir, int first, int last, const Cor
     h.first_break = no_edge_breaks(topo);
     std::mutex merge;
     for_each_item(last - first + 1, [&](int i) {
-        const ParticleFrame frame = load_frame(sim_dir, first + i, topo);
+        const ParticleFrame frame = load_frame(sim_dir, sim_files, first + i, topo);
         std::vector<int32_t> mine = no_edge_breaks(topo);
         record_edge_breaks(topo, frame, params, mine);
         const std::lock_guard<std::mutex> lock(merge);
@@ -193,6 +208,7 @@ int run_surface_stage(const StageOptions& options, const SurfaceStageOptions& su
     const fs::path out = options.out, init_dir = out / "init", sim_dir = out / "sim", surface_dir = out / "surface";
     const json init_manifest = read_current_manifest(init_dir, shot.slice_hash(Stage::Init));
     const json sim_manifest = read_current_manifest(sim_dir, shot.slice_hash(Stage::Sim));
+    const RecordedChecksums sim_files(sim_manifest, sim_dir / "manifest.json");
     int sim_first = 0, sim_last = -1;
     try {
         sim_first = sim_manifest.at("frames").at("first").get<int>();
@@ -212,6 +228,7 @@ int run_surface_stage(const StageOptions& options, const SurfaceStageOptions& su
     // preprocessing, once per tet mesh
     WallTimer timer;
     const fs::path tets_file = init_dir / "tets.vtu";
+    RecordedChecksums(init_manifest, init_dir / "manifest.json").verify(tets_file);
     const TetMesh mesh = read_tet_mesh_vtu(tets_file);
     CoreTopology topo;
     try {
@@ -247,11 +264,12 @@ int run_surface_stage(const StageOptions& options, const SurfaceStageOptions& su
     timer.reset();
     const uint64_t source_hash = break_source_hash(sim_manifest, params, topo);
     std::optional<BreakHistory> history;
-    if (update_in_place) history = read_break_history(surface_dir / kBreakHistoryFile, source_hash, topo.n_edges());
+    if (update_in_place && is_intact_break_history(surface_dir, previous))
+        history = read_break_history(surface_dir / kBreakHistoryFile, source_hash, topo.n_edges());
     const bool reused = history && history->first_frame <= sim_first && history->last_frame >= last;
     if (!reused) {
         log::info("break history: scanning frames " + std::to_string(sim_first) + "-" + std::to_string(sim_last));
-        history = scan_breaks(sim_dir, sim_first, sim_last, topo, params, source_hash);
+        history = scan_breaks(sim_dir, sim_files, sim_first, sim_last, topo, params, source_hash);
         write_break_history(dir / kBreakHistoryFile, *history);
     }
     // the plates mode's fracture, decided once from the shot's last frame (surfacing/shot_fracture.h)
@@ -269,7 +287,7 @@ int run_surface_stage(const StageOptions& options, const SurfaceStageOptions& su
     std::vector<FrameResult> results(n_frames);
     for_each_item(n_frames, [&](int i) {
         const int n = first + i;
-        const ParticleFrame frame = load_frame(sim_dir, n, topo);
+        const ParticleFrame frame = load_frame(sim_dir, sim_files, n, topo);
         WallTimer t;
         SurfacedFrame s = surface_frame(topo, frame, history->first_break, params, fracture ? &*fracture : nullptr);
         results[i].surfacing_seconds = t.seconds();
@@ -292,11 +310,13 @@ int run_surface_stage(const StageOptions& options, const SurfaceStageOptions& su
         if (params.debris == DebrisOutput::Points) {
             const fs::path debris_file = frame_path(dir, "debris", n, "ply");
             write_debris_ply(debris_file, s.debris);
-            entry["debris"] = {{"file", debris_file.filename().string()}, {"points", s.debris.size()}};
+            entry["debris"] = file_record(debris_file);
+            entry["debris"]["points"] = s.debris.size();
         }
         // each mesh moves into its export and is freed after it: a frame's peak memory holds
         // one copy of its meshes
         export_meshes(boundary_file, take_mesh(s.boundary), params.format);
+        entry["boundary"]["crc32"] = file_crc32(boundary_file);
         if (params.cracks) {
             // a frame without cracks gets no crack file: a glTF mesh cannot be empty, and
             // assimp writes an empty mesh that no reader (assimp included) accepts; the manifest
@@ -307,7 +327,10 @@ int run_surface_stage(const StageOptions& options, const SurfaceStageOptions& su
             entry["crack"] = {{"file", s.crack.faces.empty() ? json(nullptr) : json(crack_file.filename().string())},
                               {"vertices", s.crack.positions.size()},
                               {"faces", s.crack.faces.size()}};
-            if (!s.crack.faces.empty()) export_meshes(crack_file, take_mesh(s.crack), params.format);
+            if (!s.crack.faces.empty()) {
+                export_meshes(crack_file, take_mesh(s.crack), params.format);
+                entry["crack"]["crc32"] = file_crc32(crack_file);
+            }
         }
         results[i].entry = std::move(entry);
     });
@@ -349,7 +372,8 @@ int run_surface_stage(const StageOptions& options, const SurfaceStageOptions& su
     m["preprocessing_seconds"] = preprocessing_seconds;
     m["topology_bytes"] = topo.memory_bytes();
     m["topology_bytes_per_tet"] = double(topo.memory_bytes()) / topo.n_tets();
-    m["break_history"] = {{"file", kBreakHistoryFile}, {"reused", reused}, {"frames_scanned", reused ? 0 : sim_last - sim_first + 1},
+    m["break_history"] = {{"file", kBreakHistoryFile}, {"crc32", file_crc32(dir / kBreakHistoryFile)},
+                          {"reused", reused}, {"frames_scanned", reused ? 0 : sim_last - sim_first + 1},
                           {"seconds", break_seconds}};
     m["surfacing_seconds"] = surfacing_seconds;
     m["tets_per_second"] = surfacing_seconds > 0 ? double(topo.n_tets()) * n_frames / surfacing_seconds : 0.0;

@@ -69,6 +69,7 @@ def main(argv):
                 bpy.data.objects.remove(obj)
     root, objects = playback.import_shot(context, args.shot, args.cache_mb)
     frame = {"first": scene.frame_start, "last": scene.frame_end}.get(args.frame, args.frame)
+    playback.check_frame_files(playback.surface_shot(root["mudcrack_shot"]), frame)  # a damaged file: exit 1
     scene.frame_set(frame)
     print(f"mudcrack_blender: {root.name}: frames {scene.frame_start}-{scene.frame_end} at "
           f"{scene.render.fps / scene.render.fps_base:g} fps; frame {frame}: "

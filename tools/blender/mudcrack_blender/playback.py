@@ -221,6 +221,7 @@ def _mesh_for(obj, shot, frame):
             cache.move_to_end(path)
             return me
         del cache[path]  # removed behind our back (orphans purged, undo)
+    shot.verify(path)
     me, size = _build_for(kind, path, f"{shot.name} {kind}.{min(max(frame, shot.first), shot.last):04d}")
     me[PROP_FILE] = path
     cache[path] = (me.name, size)
@@ -306,15 +307,26 @@ def cached_mesh_names(obj):
     return names
 
 
+def check_frame_files(shot, frame):
+    """Raises ShotError when a mesh or debris file of `frame` is damaged: an import or a CLI run
+    refuses it with that message instead of showing an empty mesh as playback does."""
+    for kind in KINDS + (DEBRIS,):
+        path = shot.file(kind, frame)
+        if path is not None:
+            shot.verify(path)
+
+
 def import_shot(context, path, cache_mb=DEFAULT_CACHE_MB):
     """Imports a shot's surfacing output (a shot folder, its surface/ folder or manifest.json):
     one object "<shot> boundary" and one "<shot> crack" (and "<shot> debris" when the shot wrote
     debris points; a shot without them gets none), children of an empty "<shot>" that turns
     mudcrack's y-up into Blender's z-up (a +90 degree rotation about x: the only conversion), in
     a new collection "mudcrack <shot>". Sets the scene's frame range and fps from the manifest
-    and shows the first frame. Returns (root, {kind: object}). Raises ShotError."""
+    and shows the first frame. Returns (root, {kind: object}). Raises ShotError, also when that
+    frame's files are damaged."""
     shot = load_surface_shot(path)
     scene = context.scene
+    check_frame_files(shot, scene.frame_current)
     # a shot cached before must be read again (same path, maybe new files)
     _shots.pop(shot.manifest_path, None)
     register_handlers()

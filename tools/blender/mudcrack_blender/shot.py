@@ -5,14 +5,16 @@ The manifest (written by mc-surface, or by the farm's merge) lists every frame w
 file and its crack file; a frame without an open crack has "crack": {"file": null} and no crack
 file on disk, and the add-on shows an empty crack mesh then. In the plates mode with
 "debris": "points" each frame also lists its debris point file ("debris": {"file": ...}); a
-shot without debris lists none, and the add-on makes no debris object for it.
+shot without debris lists none, and the add-on makes no debris object for it. Each file's record
+holds its CRC-32 ("crc32"), and a file is verified against it before it is shown.
 """
 import json
 import os
+import zlib
 
 from .meshfile import SUPPORTED_EXTENSIONS
 
-__all__ = ["ShotError", "SurfaceShot", "locate_manifest", "load_surface_shot", "KINDS", "DEBRIS"]
+__all__ = ["ShotError", "SurfaceShot", "file_crc32", "locate_manifest", "load_surface_shot", "KINDS", "DEBRIS"]
 
 KINDS = ("boundary", "crack")  # the mesh files of a frame
 DEBRIS = "debris"              # the point file of a frame (plates mode, "debris": "points")
@@ -83,6 +85,7 @@ class SurfaceShot:
                             f"{' and '.join(e[1:] for e in SUPPORTED_EXTENSIONS)} meshes; re-run the surfacing "
                             "with \"surfacing\": {\"format\": \"glb\"} (the default)")
         self.files = {}
+        self.crc32 = {}  # path -> the CRC-32 mc-surface recorded for it
         per_frame = m.get("per_frame")
         if not isinstance(per_frame, list):
             raise ShotError(f"{where}: /per_frame: missing or not a list")
@@ -96,6 +99,10 @@ class SurfaceShot:
             debris = (entry.get("debris") or {}).get("file")
             self.files[n] = {kind: (os.path.join(self.surface_dir, f) if f else None)
                              for kind, f in (("boundary", boundary), ("crack", crack), (DEBRIS, debris))}
+            for kind in KINDS + (DEBRIS,):
+                record = entry.get(kind)
+                if self.files[n][kind] and isinstance(record, dict) and isinstance(record.get("crc32"), str):
+                    self.crc32[self.files[n][kind]] = record["crc32"]
         missing = [n for n in range(self.first, self.last + 1) if n not in self.files]
         if missing:
             raise ShotError(f"{where}: /per_frame: no entry for frame(s) {_ranges(missing)} of "
@@ -125,11 +132,32 @@ class SurfaceShot:
             raise ShotError(f"{source} = {frames.get('fps')}: expected a number > 0")
         return fps
 
+    def verify(self, path):
+        """Raises ShotError unless the file at `path` holds the bytes whose checksum mc-surface
+        recorded in the manifest: a damaged file (or one no checksum vouches for) is never shown."""
+        recorded = self.crc32.get(path)
+        if recorded is None:
+            raise ShotError(f"{path}: no checksum recorded for it in {self.manifest_path}, so it cannot be "
+                            "verified: re-run mc-surface")
+        found = file_crc32(path)
+        if found != recorded:
+            raise ShotError(f"{path}: damaged: its CRC-32 is {found}, but {self.manifest_path} records "
+                            f"{recorded}: re-run mc-surface")
+
     def file(self, kind, frame):
         """The file of `kind` (KINDS or DEBRIS) shown at scene frame `frame`, or None for an empty mesh.
         Outside the shot's range the nearest end frame holds (a cache's usual behaviour)."""
         frame = min(max(int(frame), self.first), self.last)
         return self.files[frame][kind]
+
+
+def file_crc32(path):
+    """The CRC-32 of a file's bytes as mc-surface records it (zlib's, 8 lowercase hex digits)."""
+    crc = 0
+    with open(path, "rb") as f:
+        for block in iter(lambda: f.read(1 << 20), b""):
+            crc = zlib.crc32(block, crc)
+    return f"{crc & 0xffffffff:08x}"
 
 
 def _ranges(numbers):
