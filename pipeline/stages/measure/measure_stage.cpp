@@ -233,6 +233,7 @@ int run_measure_stage(const StageOptions& options, const MeasureStageOptions& me
         std::optional<ShotFracture> fracture;
         if (shot.surface->mode == SurfaceMode::Plates) {
             const fs::path last_path = frame_path(sim_dir, "particles", history->last_frame, "vdb");
+            sim_files.verify(last_path);
             fracture = plan_shot_fracture(*topo, points_to_frame(read_points(last_path), last_path.string()),
                                           history->first_break, *shot.surface);
         }

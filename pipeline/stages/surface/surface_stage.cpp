@@ -275,7 +275,7 @@ int run_surface_stage(const StageOptions& options, const SurfaceStageOptions& su
     // the plates mode's fracture, decided once from the shot's last frame (surfacing/shot_fracture.h)
     std::optional<ShotFracture> fracture;
     if (params.mode == SurfaceMode::Plates) {
-        fracture = plan_shot_fracture(topo, load_frame(sim_dir, sim_last, topo), history->first_break, params);
+        fracture = plan_shot_fracture(topo, load_frame(sim_dir, sim_files, sim_last, topo), history->first_break, params);
         log::info("plates: the fracture of frame " + std::to_string(sim_last) + ": " +
                   std::to_string(fracture->last.count) + " pieces, " + std::to_string(fracture->last.debris) +
                   " debris particles, " + std::to_string(fracture->walls.size()) + " wall points");
