@@ -13,7 +13,7 @@ include pipeline/farm.mk
 # One apt-get line: everything the build, the tests, the demo asset and the previews need.
 APT_PACKAGES := cmake make g++ pkg-config \
   libeigen3-dev libcgal-dev libgmp-dev libmpfr-dev libassimp-dev libopenvdb-dev libboost-iostreams-dev \
-  libosmesa6-dev libtbb-dev libpng-dev nlohmann-json3-dev libcli11-dev \
+  libosmesa6-dev libtbb-dev libpng-dev zlib1g-dev nlohmann-json3-dev libcli11-dev \
   libgtest-dev libgmock-dev libbenchmark-dev libcgal-demo tetgen ffmpeg \
   slurm-wlm munge jq time
 
