@@ -111,22 +111,16 @@ public:
     }
     /// The centroid of the face of tet t opposite local corner l; owners sorted by id.
     PointOwners face_point(int32_t t, int l) const {
-        const Tet& tet = m_topo.tets[t];
-        std::array<int, 3> local{};
-        for (int k = 0, j = 0; k < 4; ++k)
-            if (k != l) local[j++] = k;
-        std::sort(local.begin(), local.end(), [&](int a, int b) { return tet[a] < tet[b]; });
+        const FaceOwners f = face_owners(m_topo, t, l);
         PointOwners o;
         unsigned mask = 0;
-        for (int k = 0; k < 3; ++k) {
-            const int e = m_topo.tet_edges[t][kTetLocalEdge[local[kFaceEdgeOwners[k][0]]][local[kFaceEdgeOwners[k][1]]]];
-            if (m_broken[e]) mask |= 1u << k;
-            o.edge[k] = e;
-        }
+        for (int k = 0; k < 3; ++k)
+            if (m_broken[f.edge[k]]) mask |= 1u << k;
         o.kind = RestPointKind::FaceCentroid;
         o.n_edges = 3;
         o.n = 3;
-        o.owner = {tet[local[0]], tet[local[1]], tet[local[2]], 0};
+        o.owner = {f.owner[0], f.owner[1], f.owner[2], 0};
+        o.edge = {f.edge[0], f.edge[1], f.edge[2], 0, 0, 0};
         o.rep = face_weld_reps(mask);
         o.y0 = rest(RestPointKind::FaceCentroid, m_topo.tet_faces[t][l],
                     (m_topo.X[o.owner[0]] + m_topo.X[o.owner[1]] + m_topo.X[o.owner[2]]) / 3);

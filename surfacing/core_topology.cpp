@@ -1,5 +1,7 @@
 #include "surfacing/core_topology.h"
 
+#include "surfacing/weld_classes.h"
+
 #include <Eigen/Dense>
 #include <algorithm>
 #include <cmath>
@@ -324,6 +326,24 @@ CoreTopology build_core_topology(const TetMesh& mesh) {
     const FaceBuckets fb = build_faces(mesh, topo);
     build_skin(mesh, fb, topo);
     return topo;
+}
+
+}  // namespace mudcrack
+
+namespace mudcrack {
+
+FaceOwners face_owners(const CoreTopology& topo, int32_t tet, int l) {
+    const Tet& corners = topo.tets[tet];
+    std::array<int, 3> local{};
+    for (int k = 0, j = 0; k < 4; ++k)
+        if (k != l) local[j++] = k;
+    std::sort(local.begin(), local.end(), [&](int a, int b) { return corners[a] < corners[b]; });
+    FaceOwners f;
+    for (int k = 0; k < 3; ++k) {
+        f.owner[k] = corners[local[k]];
+        f.edge[k] = topo.tet_edges[tet][kTetLocalEdge[local[kFaceEdgeOwners[k][0]]][local[kFaceEdgeOwners[k][1]]]];
+    }
+    return f;
 }
 
 }  // namespace mudcrack

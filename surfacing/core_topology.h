@@ -88,6 +88,15 @@ struct CoreTopology {
 /// than two tets, or `boundary` not being exactly the outward single-tet faces.
 CoreTopology build_core_topology(const TetMesh& mesh);
 
+/// The owners of the face of tet `tet` opposite local corner `l`, sorted by particle id (the
+/// order of the face weld tables), and the ids of the edges between them: edge[k] joins the
+/// owners kFaceEdgeOwners[k] (weld_classes.h).
+struct FaceOwners {
+    std::array<int32_t, 3> owner;
+    std::array<int32_t, 3> edge;
+};
+FaceOwners face_owners(const CoreTopology& topo, int32_t tet, int l);
+
 /// The planar UV projection used where no UVs exist (crack faces, boundaries without UVs):
 /// rest position projected along the dominant axis of the rest normal n0 (x: (z, y),
 /// y: (x, z), z: (x, y)), times uv_per_meter. Textures therefore stay put on the soil.

@@ -170,18 +170,12 @@ public:
                 break;
             case RestPointKind::FaceCentroid: {
                 const auto [tet, l] = m_face_tet[point];
-                const Tet& corners = m_topo.tets[tet];
-                std::array<int, 3> local{};
-                for (int k = 0, j = 0; k < 4; ++k)
-                    if (k != l) local[j++] = k;
-                std::sort(local.begin(), local.end(), [&](int a, int b) { return corners[a] < corners[b]; });
+                const FaceOwners f = face_owners(m_topo, tet, l);
                 unsigned mask = 0;
-                for (int k = 0; k < 3; ++k) {
-                    const auto& pair = kFaceEdgeOwners[k];
-                    if (cut[m_topo.tet_edges[tet][kTetLocalEdge[local[pair[0]]][local[pair[1]]]]]) mask |= 1u << k;
-                }
+                for (int k = 0; k < 3; ++k)
+                    if (cut[f.edge[k]]) mask |= 1u << k;
                 n = 3;
-                owner = {corners[local[0]], corners[local[1]], corners[local[2]], 0};
+                owner = {f.owner[0], f.owner[1], f.owner[2], 0};
                 reps = face_weld_reps(mask);
                 break;
             }
