@@ -26,6 +26,7 @@ struct PointOwners {
     WeldReps rep{};                  // class representative of each owner slot
     Vec3 y0 = Vec3::Zero();          // rest position [m]
     RestPointKind kind = RestPointKind::Particle;
+    int32_t point = 0;               // the rest point's particle, edge, face or tet id
     int n_edges = 0;                 // edges between owners: 0, 1 (edge), 3 (face), 6 (tet)
     std::array<int32_t, 6> edge{};   // their ids, in the order of the weld tables' mask bits
 
@@ -49,6 +50,9 @@ struct PointOwners {
 /// What the plates mode adds to a frame's cores (docs/physics.md §5.7).
 struct PlateCores {
     const WallRestPositions* walls = nullptr;   // smoothed rest points of the crack walls
+    const WallGraph* wall_graph = nullptr;       // the shot's walls, smoothed where they are
+    const WallDeformation* wall_motion = nullptr; // smoothed motion of the particles along them
+    int wall_steps = 0;                          // Taubin steps over wall_graph
     const std::vector<int32_t>* piece = nullptr; // piece of each particle (kDebris: none)
     Real close_gap = 0;                          // [m] sides closer than this meet
     const std::vector<int32_t>* cut_frame = nullptr; // the frame each edge is cut from (ShotFracture)
@@ -56,12 +60,14 @@ struct PlateCores {
 };
 
 /// [particle spacings per frame] A fresh crack whose sides were welded apart from each other
-/// parts this fast beyond its particles' motion (FrameCores::opening): 0.4 spacings, 0.2 cells in
-/// a lattice of two particles per cell, under the quarter cell a viewer sees as a pop.
-constexpr Real kOpenSpeed = 0.4;
-/// Frames after a cut over which its sides may still be parting: a move of up to
-/// kOpeningFrames * kOpenSpeed spacings, beyond any a shot's band holds before it breaks.
-constexpr int kOpeningFrames = 24;
+/// parts this fast beyond its particles' motion (FrameCores::opening): 0.2 spacings, 0.1 cells in
+/// a lattice of two particles per cell, well under the quarter cell a viewer sees as a pop with
+/// room for the walls' smoothing to follow its neighbours.
+constexpr Real kOpenSpeed = 0.2;
+/// Frames after a cut over which its sides may still be parting; its share of the way fades
+/// out by then, so a side whose particles moved far apart before the cut parts faster than
+/// kOpenSpeed only beyond kOpeningFrames kOpenSpeed = 9.6 spacings.
+constexpr int kOpeningFrames = 48;
 
 /// smoothstep from 0 at a to 1 at b.
 Real smoothstep(Real a, Real b, Real x) {
@@ -85,9 +91,13 @@ public:
             const Mat3 R = has_fe ? core_rotation(frame.Fe[p].cast<Real>()) : Mat3::Identity();
             m_A[p] = has_jw ? Real(std::cbrt(Real(frame.Jw[p]))) * R : R;
         });
+        if (plates.wall_motion) smooth_wall_motion(topo, *plates.wall_motion, frame, m_x, m_A);
+        if (plates.wall_graph && !plates.wall_graph->empty()) smooth_walls_where_they_are();
     }
 
     bool has_saturation() const { return !m_frame.saturation.empty(); }
+    /// Plates mode: the wall through cut edge e reaches no surface and is not meshed (WallGraph).
+    bool hides_wall(int32_t e) const { return m_plates.wall_graph && m_plates.wall_graph->hides(e); }
     bool has_alpha() const { return !m_frame.alpha.empty(); }
 
     PointOwners particle_point(int32_t p) const {
@@ -96,6 +106,7 @@ public:
         o.owner[0] = p;
         o.rep = {0, 1, 2, 3};
         o.y0 = m_topo.X[p];
+        o.point = p;
         return o;
     }
     PointOwners edge_point(int32_t e) const {
@@ -105,6 +116,7 @@ public:
         o.rep = {0, int8_t(m_broken[e] ? 1 : 0), 2, 3};
         o.y0 = rest(RestPointKind::EdgeMidpoint, e, (m_topo.X[o.owner[0]] + m_topo.X[o.owner[1]]) / 2);
         o.kind = RestPointKind::EdgeMidpoint;
+        o.point = e;
         o.n_edges = 1;
         o.edge[0] = e;
         return o;
@@ -117,6 +129,7 @@ public:
         for (int k = 0; k < 3; ++k)
             if (m_broken[f.edge[k]]) mask |= 1u << k;
         o.kind = RestPointKind::FaceCentroid;
+        o.point = m_topo.tet_faces[t][l];
         o.n_edges = 3;
         o.n = 3;
         o.owner = {f.owner[0], f.owner[1], f.owner[2], 0};
@@ -133,6 +146,7 @@ public:
             if (m_broken[m_topo.tet_edges[t][k]]) mask |= 1u << k;
         PointOwners o;
         o.kind = RestPointKind::TetCentroid;
+        o.point = t;
         o.n_edges = 6;
         for (int k = 0; k < 6; ++k) o.edge[k] = m_topo.tet_edges[t][k];
         o.n = 4;
@@ -150,14 +164,15 @@ public:
         Vec3 position = Vec3::Zero();
         Real saturation = 0, alpha = 0;
     };
-    /// The welded vertex of class `rep`: the average of its members' extrapolated copies.
+    /// The welded vertex of class `rep`: the average of its members' copies (copy()); in the
+    /// plates mode, parted at a bounded speed and closed.
     Welded welded(const PointOwners& o, int rep) const {
         Welded w;
         int members = 0;
         for (int j = 0; j < o.n; ++j) {
             if (o.rep[j] != rep) continue;
             const int32_t p = o.owner[j];
-            w.position += extrapolate(p, o.y0);
+            w.position += copy(o, j);
             if (has_saturation()) w.saturation += m_frame.saturation[p];
             if (has_alpha()) w.alpha += m_frame.alpha[p];
             ++members;
@@ -171,25 +186,69 @@ public:
     }
 
 private:
+    /// The copy of point o's owner slot j: Eq. 13's extrapolation; on the shot's walls in the
+    /// plates mode, the smoothed node of its class under the last frame's cuts (WallGraph).
+    Vec3 copy(const PointOwners& o, int j) const {
+        // a particle's own vertex stays on the particle: the skin does not drift off its soil
+        if (o.kind == RestPointKind::Particle) return m_frame.P[o.owner[0]].cast<Real>();
+        const int32_t point = m_wall_node.empty() ? -1 : m_plates.wall_graph->find(o.kind, o.point);
+        if (point < 0) return extrapolate(o.owner[j], o.y0);
+        const WallGraph::Point& w = m_plates.wall_graph->points[point];
+        return m_wall_node[w.first_node + w.reps[j]];
+    }
+
+    /// The shot's walls smoothed where they are (plates mode): each node starts at the mean of the
+    /// copies of its class's owners, then wall_steps Taubin steps over the fixed graph.
+    void smooth_walls_where_they_are() {
+        const WallGraph& graph = *m_plates.wall_graph;
+        m_wall_node.assign(graph.n_nodes, Vec3::Zero());
+        parallel_for(static_cast<int64_t>(graph.points.size()), [&](int64_t i) {
+            const WallGraph::Point& w = graph.points[i];
+            const PointOwners o = w.kind == RestPointKind::EdgeMidpoint ? edge_point(w.id)
+                                  : w.kind == RestPointKind::FaceCentroid ? face_point(w.tet, w.corner)
+                                                                          : tet_point(w.id);
+            std::array<int, 4> members{};
+            for (int j = 0; j < o.n; ++j) {
+                m_wall_node[w.first_node + w.reps[j]] += extrapolate(o.owner[j], o.y0);
+                ++members[w.reps[j]];
+            }
+            for (int r = 0; r < o.n; ++r)
+                if (members[r] > 0) m_wall_node[w.first_node + r] /= members[r];
+        });
+        smooth_wall_nodes(graph, m_plates.wall_steps, m_wall_node);
+    }
+
     Vec3 rest(RestPointKind kind, int32_t id, const Vec3& y0) const {
         return m_plates.walls ? m_plates.walls->of(kind, id, y0) : y0;
     }
-    /// A fresh crack parts at a bounded speed (plates mode). Where the cuts of a recent frame
-    /// split this point's class, its side moved from where the class was welded before to where it
-    /// is welded now, by d: the side keeps max(0, |d| - age * open_speed) of that move undone, age
-    /// being the frames since that cut (1 on its frame), measured with today's particles. An edge
-    /// cut when its particles had already moved apart (a band the simulation stretched before it
-    /// broke, or a particle that tore loose) so parts its sides by open_speed per frame instead
-    /// of all at once; a crack cut as it opens, the common case, shows at once.
+    /// A fresh crack parts at a bounded speed (plates mode). The cuts of the last kOpeningFrames
+    /// frames split this point's class step by step: c_0 is where today's class is, c_a where
+    /// the class it had a frames ago is (both from today's copies). The side travels from the old
+    /// classes toward c_0 along the polyline c_0, c_a1, c_a2, ... (the ages at which a cut split
+    /// it) and sits at arc length l = max_a min(L_a - a open_speed, L_a (K - a) / K) from c_0, with
+    /// L_a the polyline's length from c_0 to c_a and K = kOpeningFrames: a cut a frames ago has
+    /// had a frames to cover the way at open_speed, and its share of the way is gone by age K.
+    /// So an edge cut when its particles had already moved apart (a band the simulation
+    /// stretched before it broke, a particle that tore loose) parts its sides by open_speed a
+    /// frame (faster only when its way is longer than K open_speed), however many cuts split
+    /// the point, and never leaves the copies of its old class; a crack cut as it opens, the
+    /// common case, shows at once.
     void opening(const PointOwners& o, int rep, Vec3& side) const {
         const std::vector<int32_t>& cut_frame = *m_plates.cut_frame;
         const int now = m_frame.frame;
-        bool fresh = false;
-        for (int k = 0; k < o.n_edges; ++k)
-            fresh |= cut_frame[o.edge[k]] > now - kOpeningFrames && cut_frame[o.edge[k]] <= now;
-        if (!fresh) return;
-        std::array<Vec3, 4> copy;
-        for (int j = 0; j < o.n; ++j) copy[j] = extrapolate(o.owner[j], o.y0);
+        // the ages at which the class changes: a cut at frame f splits it from age now - f + 1
+        std::array<int, 6> ages{};
+        int n_ages = 0;
+        for (int k = 0; k < o.n_edges; ++k) {
+            const int age = now - cut_frame[o.edge[k]] + 1;
+            if (age >= 1 && age < kOpeningFrames && std::find(ages.begin(), ages.begin() + n_ages, age) == ages.begin() + n_ages)
+                ages[n_ages++] = age;
+        }
+        if (n_ages == 0) return;
+        for (int i = 1; i < n_ages; ++i)  // ascending (at most 6)
+            for (int j = i; j > 0 && ages[j - 1] > ages[j]; --j) std::swap(ages[j - 1], ages[j]);
+        std::array<Vec3, 4> copies;
+        for (int j = 0; j < o.n; ++j) copies[j] = copy(o, j);
         auto welded_at_age = [&](int age) {
             unsigned mask = 0;
             for (int k = 0; k < o.n_edges; ++k)
@@ -199,26 +258,35 @@ private:
             int members = 0;
             for (int j = 0; j < o.n; ++j)
                 if (reps[j] == reps[rep]) {
-                    sum += copy[j];
+                    sum += copies[j];
                     ++members;
                 }
             return Vec3(sum / members);
         };
-        Vec3 newer = welded_at_age(0), undone = Vec3::Zero();
-        for (int age = 1; age < kOpeningFrames; ++age) {
-            const Vec3 older = welded_at_age(age);
-            const Vec3 d = older - newer;
-            const Real left = d.norm() - age * m_plates.open_speed;
-            if (left > 0) undone += left * d.normalized();
-            newer = older;
+        std::array<Vec3, 7> c;
+        c[0] = side;
+        Real length = 0, arc = 0;
+        for (int i = 0; i < n_ages; ++i) {
+            const Real a = Real(ages[i]);
+            c[i + 1] = welded_at_age(ages[i]);
+            length += (c[i + 1] - c[i]).norm();
+            arc = std::max(arc, std::min(length - a * m_plates.open_speed, length * (kOpeningFrames - a) / kOpeningFrames));
         }
-        side += undone;
+        for (int i = 0; i < n_ages && arc > 0; ++i) {
+            const Real segment = (c[i + 1] - c[i]).norm();
+            if (segment <= 0) continue;
+            const Real t = std::min(arc, segment);
+            side = c[i] + (t / segment) * (c[i + 1] - c[i]);
+            arc -= t;
+        }
     }
 
     /// Close gaps (plates mode): the copies of this point's owners in other pieces are the far
     /// side of a crack wall. Within close_gap of it, the side meets the far side half way, as the
-    /// far side does; it blends back to its own by 2 close_gap, so it never moves more than
-    /// close_gap for it. A crack inside one piece keeps its walls apart: two walls of one piece
+    /// far side does; it blends back to its own by 3 close_gap (smoothstep), so it never moves
+    /// more than close_gap for it, and as the gap opens the side moves at most as fast as the gap
+    /// grows (a blend to 2 close_gap moved it up to 1.4 times as fast: a pop while a fresh crack
+    /// parts). A crack inside one piece keeps its walls apart: two walls of one piece
     /// at the same place would make it non-manifold to a reader that joins by position.
     void close_gap(const PointOwners& o, int rep, Vec3& side) const {
         const std::vector<int32_t>& piece = *m_plates.piece;
@@ -230,14 +298,14 @@ private:
         for (int j = 0; j < o.n; ++j) {
             const int32_t p = o.owner[j];
             if (piece[p] == kDebris || piece[p] == mine) continue;
-            others += extrapolate(p, o.y0);
+            others += copy(o, j);
             ++n_others;
         }
         if (mine == kDebris || n_others == 0) return;
         const Vec3 far_side = others / n_others;
         const Real gap = (side - far_side).norm();
         const Vec3 middle = (side + far_side) / 2;
-        side = middle + smoothstep(m_plates.close_gap, 2 * m_plates.close_gap, gap) * (side - middle);
+        side = middle + smoothstep(m_plates.close_gap, 3 * m_plates.close_gap, gap) * (side - middle);
     }
 
     const CoreTopology& m_topo;
@@ -246,6 +314,7 @@ private:
     PlateCores m_plates;
     std::vector<Vec3> m_x;  // current positions [m], (n_particles)
     std::vector<Mat3> m_A;  // core transforms s_p R_p, (n_particles)
+    std::vector<Vec3> m_wall_node;  // plates mode: the smoothed wall nodes (WallGraph), (n_nodes)
 };
 
 /// A triangle under construction: output slots (vertex identity incl. UV split), weld slots
@@ -424,77 +493,12 @@ bool is_even_permutation(int i, int j, int k, int l) {
     return inversions % 2 == 0;
 }
 
-/// Taubin smoothing of the crack walls where they are (plates mode): each wall vertex moves toward
-/// the mean of its wall neighbours, the vertices where a wall meets the skin (its rim) held, so the
-/// rim stays on the skin and sharp. A wall smooth in the rest state still crumples where its
-/// particles moved unevenly; this takes out that crumpling at the scale of a few wall triangles.
-/// The two sides of a wall are mirror images with the same neighbours, so a closed crack's sides,
-/// equal before, stay equal.
-void smooth_walls_in_place(const Numbered& num, int64_t n_weld, const std::vector<uint64_t>& boundary_keys,
-                           const std::vector<uint64_t>& crack_keys, int steps, std::vector<Vec3>& position,
-                           TriMesh& mesh) {
-    // one position per weld slot (a slot's vertices differ only by UV), its neighbours and its rim flag
-    std::vector<int32_t> slot_vertex(n_weld, -1);
-    for (size_t v = 0; v < position.size(); ++v)
-        if (slot_vertex[num.vertex_weld[v]] < 0) slot_vertex[num.vertex_weld[v]] = int32_t(v);
-    std::vector<uint8_t> held(n_weld, 0);
-    {
-        std::vector<uint64_t> rim(boundary_keys);
-        std::sort(rim.begin(), rim.end());
-        for (size_t v = 0; v < position.size(); ++v)
-            if (std::binary_search(rim.begin(), rim.end(), crack_keys[v])) held[num.vertex_weld[v]] = 1;
-    }
-    // neighbours as CSR, each once: the other corners of the triangles around a slot
-    std::vector<int32_t> begin(n_weld + 1, 0), neighbour(6 * mesh.faces.size());
-    for (const Tri& t : mesh.faces)
-        for (int k = 0; k < 3; ++k) begin[num.vertex_weld[t[k]] + 1] += 2;
-    for (int64_t w = 0; w < n_weld; ++w) begin[w + 1] += begin[w];
-    {
-        std::vector<int32_t> fill(begin.begin(), begin.end() - 1);
-        for (const Tri& t : mesh.faces)
-            for (int k = 0; k < 3; ++k) {
-                const int32_t a = num.vertex_weld[t[k]];
-                neighbour[fill[a]++] = num.vertex_weld[t[(k + 1) % 3]];
-                neighbour[fill[a]++] = num.vertex_weld[t[(k + 2) % 3]];
-            }
-        // unique per slot, compacted in place
-        int32_t write = 0;
-        for (int64_t w = 0; w < n_weld; ++w) {
-            const int32_t from = begin[w], to = begin[w + 1];
-            std::sort(neighbour.begin() + from, neighbour.begin() + to);
-            begin[w] = write;
-            for (int32_t k = from; k < to; ++k)
-                if (k == from || neighbour[k] != neighbour[k - 1]) neighbour[write++] = neighbour[k];
-        }
-        begin[n_weld] = write;
-    }
-    std::vector<Vec3> y(n_weld, Vec3::Zero()), next(n_weld);
-    for (int64_t w = 0; w < n_weld; ++w)
-        if (slot_vertex[w] >= 0) y[w] = position[slot_vertex[w]];
-    constexpr Real kLambda = 0.5, kMu = -0.53;
-    for (int it = 0; it < 2 * steps; ++it) {
-        const Real step = it % 2 == 0 ? kLambda : kMu;
-        parallel_for(n_weld, [&](int64_t w) {
-            next[w] = y[w];
-            if (held[w] || begin[w] == begin[w + 1]) return;
-            Vec3 mean = Vec3::Zero();
-            for (int32_t k = begin[w]; k < begin[w + 1]; ++k) mean += y[neighbour[k]];
-            next[w] = y[w] + step * (mean / Real(begin[w + 1] - begin[w]) - y[w]);
-        });
-        std::swap(y, next);
-    }
-    for (size_t v = 0; v < position.size(); ++v) {
-        position[v] = y[num.vertex_weld[v]];
-        mesh.positions[v] = position[v].cast<float>();
-    }
-}
-
 void build_crack(const CoreTopology& topo, const FrameCores& cores, const Fragments& frag,
-                 const std::vector<uint8_t>& is_broken, int smoothing_steps, SurfacedFrame& out) {
+                 const std::vector<uint8_t>& is_broken, SurfacedFrame& out) {
     TriMesh& mesh = out.crack;
     std::vector<int32_t> broken;
     for (int32_t e = 0; e < topo.n_edges(); ++e)
-        if (is_broken[e]) broken.push_back(e);
+        if (is_broken[e] && !cores.hides_wall(e)) broken.push_back(e);
     const int64_t nbr = static_cast<int64_t>(broken.size());
 
     // faces and tets around broken edges get compact ranks, in order of first use
@@ -594,9 +598,7 @@ void build_crack(const CoreTopology& topo, const FrameCores& cores, const Fragme
         uv = triplanar_uv(o.y0, axis, topo.uv_per_meter);
         return cores.welded(o, rep);
     };
-    std::vector<Vec3> position = fill_vertices(cores, num, eval, mesh, out.crack_weld_key);
-    if (smoothing_steps > 0) smooth_walls_in_place(num, n_weld, out.boundary_weld_key, out.crack_weld_key,
-                                                   smoothing_steps, position, mesh);
+    const std::vector<Vec3> position = fill_vertices(cores, num, eval, mesh, out.crack_weld_key);
     compute_normals(position, num, n_weld, mesh);
 }
 
@@ -632,6 +634,9 @@ void surface_plates(const CoreTopology& topo, const ParticleFrame& frame, const 
     out.wall_points_smoothed = static_cast<int64_t>(fracture.walls.size());
     PlateCores plates;
     plates.walls = &fracture.walls;
+    plates.wall_graph = &fracture.wall_graph;
+    plates.wall_motion = &fracture.wall_motion;
+    plates.wall_steps = params.wall_smoothing;
     plates.piece = &pieces.id;
     plates.close_gap = params.close_gaps * spacing;
     if (in_sequence) {
@@ -641,8 +646,16 @@ void surface_plates(const CoreTopology& topo, const ParticleFrame& frame, const 
     const FrameCores cores(topo, frame, pieces.is_cut, params, plates);
     build_boundary(topo, cores, frag, out);
     if (params.cracks)
-        build_crack(topo, cores, frag, pieces.is_cut, params.wall_smoothing, out);
+        build_crack(topo, cores, frag, pieces.is_cut, out);
     out.particle_piece = std::move(pieces.id);
+    if (in_sequence) {
+        out.edge_settled.assign(topo.edges.size(), 0);
+        const int settled_by = frame.frame - kOpeningFrames + 1;
+        parallel_for(topo.n_edges(),
+                     [&](int64_t e) { out.edge_settled[e] = fracture.cut_frame[e] <= settled_by ? 1 : 0; });
+    } else {
+        out.edge_settled = pieces.is_cut;
+    }
     out.edge_cut = std::move(pieces.is_cut);
 }
 
@@ -679,7 +692,8 @@ SurfacedFrame surface_frame(const CoreTopology& topo, const ParticleFrame& frame
 
     const FrameCores cores(topo, frame, is_broken, params);
     build_boundary(topo, cores, frag, out);
-    if (params.cracks) build_crack(topo, cores, frag, is_broken, 0, out);
+    if (params.cracks) build_crack(topo, cores, frag, is_broken, out);
+    out.edge_settled = is_broken;
     out.edge_cut = std::move(is_broken);
     return out;
 }

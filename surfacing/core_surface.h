@@ -36,6 +36,10 @@ struct SurfacedFrame {
     std::vector<int32_t> particle_piece;    // piece of each particle (kDebris: none), (n_particles)
     std::vector<uint8_t> edge_cut;          // the edges the surface separates (broken, or in the
                                             // plates mode cut), which set the weld classes, (n_edges)
+    std::vector<uint8_t> edge_settled;      // the cut edges whose sides have finished parting: a
+                                            // vertex's position is made from the owners of its
+                                            // class under these (plates mode in a sequence: cut
+                                            // kOpeningFrames or more frames ago; else edge_cut)
 };
 
 /// Surfaces one frame. Deterministic: the result depends only on the arguments, never on the
@@ -47,13 +51,14 @@ struct SurfacedFrame {
 /// at the boundary's texture density (CoreTopology::uv_per_meter). Normals are area-weighted per
 /// welded vertex. Saturation and alpha are averaged over the owners of each welded vertex.
 /// In SurfaceMode::Plates the shot's fracture (shot_fracture.h) gives the frame its pieces and
-/// cuts: face_fragment holds each face's piece id, crack walls are placed smoothly in rest space
-/// (wall_smoothing.h) and then
-/// smoothed where they are, their rims held (params.wall_smoothing steps each), cores follow their
-/// particles' rotation without the Jw scaling (a crack is as wide as the particles moved apart),
-/// and a wall vertex closer than close_gaps spacings to its far side in another piece meets it
-/// half way, blending to its own position by 2 close_gaps, so a closed crack between pieces
-/// shows no gap and an opening one does not pop.
+/// cuts: face_fragment holds each face's piece id; crack walls are placed smoothly in rest space
+/// and smoothed where they are over the shot's wall graph, their rims held (wall_smoothing.h,
+/// params.wall_smoothing steps each); the particles along the walls move by their
+/// neighbourhood's fitted affine motion (wall_deformation.h); cores follow their particles'
+/// rotation without the Jw scaling (a crack is as wide as the particles moved apart); a wall
+/// vertex closer than close_gaps spacings to its far side in another piece meets it half way,
+/// blending to its own position by 3 close_gaps, so a closed crack between pieces shows no gap
+/// and an opening one does not pop; walls that reach no surface are not meshed.
 /// @note At a crack tip inside a tet, the two sides of an interface share welded vertices and
 ///       their normals cancel; such a vertex takes the normal of its first face.
 /// @param first_break first frame at which each edge broke (edge_breaks.h), (n_edges)

@@ -16,6 +16,7 @@
 #include "surfacing/core_topology.h"
 #include "surfacing/pieces.h"
 #include "surfacing/surface_params.h"
+#include "surfacing/wall_deformation.h"
 #include "surfacing/wall_smoothing.h"
 
 namespace mudcrack {
@@ -24,6 +25,8 @@ struct ShotFracture {
     Pieces last;                     // the pieces of the last frame (find_pieces)
     std::vector<int32_t> cut_frame;  // per edge: the first frame it is cut; kNeverBroken if never
     WallRestPositions walls;         // the last frame's walls, placed in the rest state
+    WallGraph wall_graph;            // and as a graph, to smooth them where they are
+    WallDeformation wall_motion;     // the smoothed motion of the particles along them
 };
 
 /// The fracture of a shot whose last frame is `last_frame`. `first_break` is the shot's break

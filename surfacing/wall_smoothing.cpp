@@ -14,6 +14,11 @@ namespace {
 /// particle, so every skin triangle keeps its orientation.
 constexpr Real kMinCrossing = 0.05, kMaxCrossing = 0.95;
 constexpr Real kLambda = 0.5, kMu = -0.53;  // Taubin's pair: smooths without shrinking
+/// The share of its own position a wall node keeps after smoothing where it is. Between two
+/// points where a crack's sides meet (its tips), Taubin steps pull a narrow strip of the two
+/// sides onto each other to the last bit, two vertices of one piece at one position; keeping a
+/// little of where its particles put it keeps the sides apart by as much of their true gap.
+constexpr Real kKeptInput = 0.05;
 constexpr int kFitSteps = 3;     // the fit's neighbourhood: cut edges within 3 face-steps
 constexpr Real kFitSigma = 1.5;  // its Gaussian weight's sigma, in mean edge lengths
 
@@ -148,7 +153,144 @@ Vec3 mass_point(const std::vector<Vec3>& crossing, const CutEdgeGraph& g, const 
     return n == 1 ? Vec3((sum + centroid) / 2) : Vec3(sum / n);
 }
 
+/// Finds the walls inside the soil: the parts of the graph with no rim node. They are hidden
+/// (a cavity left by a grain torn loose inside a piece, a hairline that reaches no surface): no
+/// camera sees them, and Taubin smoothing would shrink a small one to a point and weld its two
+/// sides into one. Their nodes are held and marked hidden.
+void find_hidden_walls(WallGraph& g) {
+    g.hidden.assign(g.n_nodes, 0);
+    std::vector<int32_t> part(g.n_nodes, -1), stack, members;
+    for (int32_t seed = 0; seed < g.n_nodes; ++seed) {
+        if (part[seed] >= 0) continue;
+        part[seed] = seed;
+        stack.assign(1, seed);
+        members.clear();
+        bool reaches_surface = false;
+        while (!stack.empty()) {
+            const int32_t a = stack.back();
+            stack.pop_back();
+            members.push_back(a);
+            reaches_surface |= g.held[a] != 0;
+            for (int32_t k = g.begin[a]; k < g.begin[a + 1]; ++k)
+                if (part[g.neighbour[k]] < 0) {
+                    part[g.neighbour[k]] = seed;
+                    stack.push_back(g.neighbour[k]);
+                }
+        }
+        if (!reaches_surface)
+            for (int32_t a : members) g.held[a] = g.hidden[a] = 1;
+    }
+}
+
 }  // namespace
+
+WallGraph plan_wall_graph(const CoreTopology& topo, const std::vector<uint8_t>& is_cut) {
+    WallGraph g;
+    g.point_of = {std::vector<int32_t>(topo.n_edges(), -1), std::vector<int32_t>(topo.n_faces, -1),
+                  std::vector<int32_t>(topo.n_tets(), -1)};
+    // the points, in order of first use: each cut edge's midpoint, then around it its tets'
+    // centroids and the centroids of the two faces of each that hold the edge
+    auto add_point = [&](RestPointKind kind, int32_t id, int32_t tet, int corner) {
+        int32_t& index = g.point_of[int(kind) - 1][id];
+        if (index >= 0) return index;
+        WallGraph::Point point;
+        point.kind = kind;
+        point.id = id;
+        point.tet = tet;
+        point.corner = int8_t(corner);
+        point.first_node = g.n_nodes;
+        unsigned mask = 0;
+        switch (kind) {
+            case RestPointKind::EdgeMidpoint:
+                point.reps = {0, 1, 2, 3};  // a cut edge's two owners are two classes
+                g.n_nodes += 2;
+                break;
+            case RestPointKind::FaceCentroid: {
+                const FaceOwners f = face_owners(topo, tet, corner);
+                for (int k = 0; k < 3; ++k)
+                    if (is_cut[f.edge[k]]) mask |= 1u << k;
+                point.reps = face_weld_reps(mask);
+                g.n_nodes += 3;
+                break;
+            }
+            default:
+                for (int k = 0; k < 6; ++k)
+                    if (is_cut[topo.tet_edges[tet][k]]) mask |= 1u << k;
+                point.reps = tet_weld_reps(mask);
+                g.n_nodes += 4;
+        }
+        index = static_cast<int32_t>(g.points.size());
+        g.points.push_back(point);
+        return index;
+    };
+    auto node = [&](int32_t point, int slot) { return g.points[point].first_node + g.points[point].reps[slot]; };
+    auto face_slot = [&](int32_t tet, int corner, int32_t particle) {
+        const FaceOwners f = face_owners(topo, tet, corner);
+        return int(std::find(f.owner.begin(), f.owner.end(), particle) - f.owner.begin());
+    };
+    // the last frame's wall triangles (as build_crack makes them), each joining its three nodes
+    std::vector<std::array<int32_t, 2>> links;
+    for (int32_t e = 0; e < topo.n_edges(); ++e) {
+        if (!is_cut[e]) continue;
+        const int32_t m = add_point(RestPointKind::EdgeMidpoint, e, 0, 0);
+        for (int32_t c = topo.edge_tet_begin[e]; c < topo.edge_tet_begin[e + 1]; ++c) {
+            const int32_t t = topo.edge_tet[c] / 6;
+            const int i = kTetEdgeCorners[topo.edge_tet[c] % 6][0], j = kTetEdgeCorners[topo.edge_tet[c] % 6][1];
+            int k = -1, l = -1;
+            for (int q = 0; q < 4; ++q)
+                if (q != i && q != j) (k < 0 ? k : l) = q;
+            const int32_t tet_point = add_point(RestPointKind::TetCentroid, t, t, 0);
+            const int32_t face_k = add_point(RestPointKind::FaceCentroid, topo.tet_faces[t][l], t, l);  // opposite l
+            const int32_t face_l = add_point(RestPointKind::FaceCentroid, topo.tet_faces[t][k], t, k);  // opposite k
+            for (int corner : {i, j}) {
+                const int32_t owner = topo.tets[t][corner];
+                const int32_t nm = node(m, owner == topo.edges[e][0] ? 0 : 1), ng = node(tet_point, corner);
+                const int32_t nk = node(face_k, face_slot(g.points[face_k].tet, g.points[face_k].corner, owner));
+                const int32_t nl = node(face_l, face_slot(g.points[face_l].tet, g.points[face_l].corner, owner));
+                for (const auto& [a, b] : {std::array<int32_t, 2>{nm, nk}, {nk, ng}, {ng, nm}, {nm, nl}, {nl, ng}})
+                    links.push_back({a, b}), links.push_back({b, a});
+            }
+        }
+    }
+    std::sort(links.begin(), links.end());
+    links.erase(std::unique(links.begin(), links.end()), links.end());
+    g.begin.assign(g.n_nodes + 1, 0);
+    for (const auto& [a, b] : links) ++g.begin[a + 1];
+    for (int32_t n = 0; n < g.n_nodes; ++n) g.begin[n + 1] += g.begin[n];
+    g.neighbour.resize(links.size());
+    for (size_t k = 0; k < links.size(); ++k) g.neighbour[k] = links[k][1];  // links are sorted by node
+    // the rim: nodes of points on the boundary (skin edges' midpoints, skin faces' centroids)
+    g.held.assign(g.n_nodes, 0);
+    auto hold = [&](RestPointKind kind, int32_t id) {
+        const int32_t point = g.find(kind, id);
+        if (point < 0) return;
+        const int n_owners = kind == RestPointKind::EdgeMidpoint ? 2 : 3;
+        std::fill_n(g.held.begin() + g.points[point].first_node, n_owners, uint8_t(1));
+    };
+    for (const SkinFace& sf : topo.skin_faces) {
+        hold(RestPointKind::FaceCentroid, sf.face);
+        for (int32_t e : sf.edge) hold(RestPointKind::EdgeMidpoint, e);
+    }
+    find_hidden_walls(g);
+    return g;
+}
+
+void smooth_wall_nodes(const WallGraph& g, int steps, std::vector<Vec3>& position) {
+    const std::vector<Vec3> start = position;
+    std::vector<Vec3> next(position.size());
+    for (int it = 0; it < 2 * steps; ++it) {
+        const Real step = it % 2 == 0 ? kLambda : kMu;
+        parallel_for(g.n_nodes, [&](int64_t n) {
+            next[n] = position[n];
+            if (g.held[n] || g.begin[n] == g.begin[n + 1]) return;
+            Vec3 mean = Vec3::Zero();
+            for (int32_t k = g.begin[n]; k < g.begin[n + 1]; ++k) mean += position[g.neighbour[k]];
+            next[n] = position[n] + step * (mean / Real(g.begin[n + 1] - g.begin[n]) - position[n]);
+        });
+        std::swap(position, next);
+    }
+    parallel_for(g.n_nodes, [&](int64_t n) { position[n] += kKeptInput * (start[n] - position[n]); });
+}
 
 WallRestPositions smooth_walls(const CoreTopology& topo, const std::vector<uint8_t>& is_cut, int iterations) {
     if (iterations <= 0) return WallRestPositions();

@@ -20,6 +20,7 @@
 
 #include "sim/core/types.h"
 #include "surfacing/core_topology.h"
+#include "surfacing/weld_classes.h"
 
 namespace mudcrack {
 
@@ -53,6 +54,53 @@ private:
     std::array<std::vector<int32_t>, 3> m_slot;  // edge, face, tet -> index into m_moved, or -1
     std::vector<Vec3> m_moved;
 };
+
+/// The walls through a shot's last cut edges as a graph, for smoothing them where they are. A wall
+/// smooth in the rest state still crumples where its particles moved unevenly; smoothing the
+/// frame's own wall mesh takes that out, but its vertices and their neighbours change as cracks
+/// grow, so the smoothing of a vertex changed with them and it popped. The graph is fixed for the
+/// shot: a node per weld class of each wall rest point under the last frame's cuts (a side of a
+/// wall), joined as the last frame's wall triangles join them. Each frame smooths the same graph
+/// (smooth_wall_nodes), and a vertex of that frame's walls, whose class holds one or more of
+/// these nodes, is made from their smoothed positions: a linear, fixed filter of the particles,
+/// as continuous in time as they are.
+struct WallGraph {
+    struct Point {
+        RestPointKind kind = RestPointKind::EdgeMidpoint;
+        int32_t id = 0;           // edge, face or tet id
+        int32_t tet = 0;          // a face: a tet holding it, and its corner opposite it
+        int8_t corner = 0;
+        WeldReps reps{};          // its owners' classes under the last frame's cuts
+        int32_t first_node = 0;   // node of owner slot j's class: first_node + reps[j]
+    };
+    std::vector<Point> points;                     // the rest points of the walls
+    std::array<std::vector<int32_t>, 3> point_of;  // edge, face, tet id -> index into points, or -1
+    std::vector<int32_t> begin, neighbour;         // CSR of each node's neighbours, (n_nodes + 1)
+    std::vector<uint8_t> held;                     // a node on the boundary (the rim, kept on the
+                                                   // skin) or hidden: not smoothed
+    std::vector<uint8_t> hidden;                   // a node of a wall that reaches no surface
+    int32_t n_nodes = 0;
+
+    bool empty() const { return points.empty(); }
+    /// Index into points of rest point (kind, id), or -1 when it is on no wall.
+    int32_t find(RestPointKind kind, int32_t id) const {
+        if (points.empty() || kind == RestPointKind::Particle) return -1;
+        return point_of[int(kind) - 1][id];
+    }
+    /// Whether the wall through cut edge e is hidden: both its sides reach no surface.
+    bool hides(int32_t e) const {
+        const int32_t point = find(RestPointKind::EdgeMidpoint, e);
+        return point >= 0 && hidden[points[point].first_node] && hidden[points[point].first_node + 1];
+    }
+};
+
+/// The graph of the walls through the edges with is_cut[e] != 0. Deterministic.
+WallGraph plan_wall_graph(const CoreTopology& topo, const std::vector<uint8_t>& is_cut);
+
+/// `steps` Taubin steps (lambda 0.5, mu -0.53) of the node positions over the graph, held nodes
+/// and nodes without neighbours kept; then each node keeps 5 % of where it started, so the two
+/// sides of a crack never become one. Deterministic whatever the thread count.
+void smooth_wall_nodes(const WallGraph& graph, int steps, std::vector<Vec3>& position);
 
 /// Places the walls through the edges with is_cut[e] != 0, with `iterations` Taubin steps
 /// (lambda 0.5, mu -0.53: a low-pass filter that does not shrink the wall) on the crossings.

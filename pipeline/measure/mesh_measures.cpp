@@ -4,10 +4,13 @@
 #include <array>
 #include <cmath>
 #include <cstring>
+#include <limits>
 #include <map>
 #include <set>
 #include <unordered_map>
 #include <unordered_set>
+
+#include <Eigen/LU>
 
 #include "surfacing/pieces.h"
 #include "surfacing/weld_classes.h"
@@ -146,15 +149,21 @@ MeshPieces measure_mesh_pieces(const TriMesh& boundary, const TriMesh& crack, Re
 namespace {
 
 /// The particles a vertex named by its weld key (core_surface.h) follows: the owners of its rest
-/// point in its weld class, as the frame's cut edges (SurfacedFrame::edge_cut) weld them.
+/// point in its weld class.
+struct ClassMembers {
+    int n = 0;
+    std::array<int32_t, 4> particle{};
+};
+
 class WeldClassOwners {
 public:
     explicit WeldClassOwners(const CoreTopology& t) : m_topo(t), m_face_tet(t.n_faces) {
         for (int32_t tet = 0; tet < t.n_tets(); ++tet)
             for (int l = 0; l < 4; ++l) m_face_tet[t.tet_faces[tet][l]] = {tet, l};
     }
-    /// The mean position in `frame` of the class's owners, with `cut` that frame's edge_cut.
-    Vec3 mean(uint64_t key, const std::vector<uint8_t>& cut, const ParticleFrame& frame) const {
+    /// The owners in the class that holds owner slot `rep` of weld key `key` under the cut edges
+    /// `cut` (a frame's edge_cut, or fewer cuts: its class then, which holds today's).
+    ClassMembers members(uint64_t key, const std::vector<uint8_t>& cut) const {
         const auto kind = RestPointKind(key >> 62);
         const int32_t point = int32_t((key >> 2) & 0xffffffffu);
         const int rep = int(key & 3u);
@@ -189,20 +198,41 @@ public:
                 break;
             }
         }
-        Vec3 sum = Vec3::Zero();
-        int members = 0;
+        ClassMembers out;
         for (int j = 0; j < n; ++j)
-            if (reps[j] == rep) {
-                sum += frame.P[owner[j]].cast<Real>();
-                ++members;
-            }
-        return sum / std::max(members, 1);
+            if (reps[j] == reps[rep]) out.particle[out.n++] = owner[j];
+        return out;
     }
 
 private:
     const CoreTopology& m_topo;
     std::vector<std::pair<int32_t, int>> m_face_tet;  // a tet holding each face, and the corner opposite it
 };
+
+/// The distance from `target` to the convex hull of points[0..n) (n <= 4): the least over the
+/// hull's faces (every subset) of the distance to the subset's affine hull, among the subsets
+/// whose nearest point has non-negative barycentric weights.
+Real distance_to_hull(const std::array<Vec3, 4>& points, int n, const Vec3& target) {
+    Real best = std::numeric_limits<Real>::infinity();
+    for (unsigned subset = 1; subset < (1u << n); ++subset) {
+        std::array<int, 4> idx{};
+        int k = 0;
+        for (int i = 0; i < n; ++i)
+            if (subset & (1u << i)) idx[k++] = i;
+        // nearest point origin + E mu of the subset's affine hull: (E^T E) mu = E^T (target - origin),
+        // the unused rows of the 3 x 3 system set to mu_i = 0
+        const Vec3& origin = points[idx[0]];
+        Mat3 E = Mat3::Zero(), gram = Mat3::Identity();
+        for (int i = 1; i < k; ++i) E.col(i - 1) = points[idx[i]] - origin;
+        gram.topLeftCorner(k - 1, k - 1) = (E.transpose() * E).topLeftCorner(k - 1, k - 1);
+        const Eigen::FullPivLU<Mat3> lu(gram);
+        if (!lu.isInvertible()) continue;
+        const Vec3 mu = lu.solve(Vec3(E.transpose() * (target - origin)));
+        if ((mu.array() < -1e-9).any() || mu.sum() > 1 + 1e-9) continue;
+        best = std::min(best, (origin + E * mu - target).norm());
+    }
+    return best;
+}
 
 struct KeyPiece {
     uint64_t key;
@@ -237,8 +267,15 @@ SurfaceMotion measure_surface_motion(const CoreTopology& topo, const SurfacedFra
         const auto it = in_a.find(kp);
         if (it == in_a.end()) continue;
         const Vec3 moved = (yb - it->second).cast<Real>();
-        const Vec3 owners_moved = owners.mean(kp.key, b.edge_cut, frame_b) - owners.mean(kp.key, b.edge_cut, frame_a);
-        jumps.push_back((moved - owners_moved).norm() / cell);
+        // its particles: the owners of its class under a's settled cuts, which hold its class
+        // under every later cut (cuts only grow)
+        const ClassMembers followed = owners.members(kp.key, a.edge_settled.empty() ? a.edge_cut : a.edge_settled);
+        std::array<Vec3, 4> particle_moved;
+        for (int j = 0; j < followed.n; ++j) {
+            const int32_t p = followed.particle[j];
+            particle_moved[j] = (frame_b.P[p] - frame_a.P[p]).cast<Real>();
+        }
+        jumps.push_back(distance_to_hull(particle_moved, followed.n, moved) / cell);
     }
     out.vertices_compared = static_cast<int64_t>(jumps.size());
     if (!jumps.empty()) {

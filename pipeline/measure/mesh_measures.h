@@ -36,18 +36,21 @@ MeshPieces measure_mesh_pieces(const TriMesh& boundary, const TriMesh& crack, Re
 
 struct SurfaceMotion {
     int64_t vertices_compared = 0;  // vertices with the same weld key and piece in both frames
-    double jump_max_cells = 0;      // largest move beyond its weld class's mean move, in cells of h
+    double jump_max_cells = 0;      // largest move beyond its particles' moves, in cells of h
     double jump_p99_cells = 0;      // its 99th percentile
     int64_t piece_changes = 0;      // particles that moved from one piece to another that both
                                     // exist in both frames (a stable piece keeps its particles)
 };
 
 /// How the surfacing of frame b moved from frame a (consecutive frames): each vertex present in
-/// both (same weld key, same piece) moves by its position's change less the change of the mean
-/// position of the particles it follows: its rest point's owners in its weld class in frame b
-/// (b's SurfacedFrame::edge_cut), in both frames. So a crack that opens as its particles part
-/// does not count; a vertex that snaps from where its class was welded before to where it is
-/// welded now, or that smoothing moves away from its particles, does.
+/// both (same weld key, same piece) jumps by how far its move lies from every blend of the moves
+/// of the particles it follows (the convex hull of their moves). Those are the owners of its rest
+/// point in its weld class under a's settled cuts (SurfacedFrame::edge_settled): its class, and
+/// while a fresh crack parts, the class it had before the cut. So a crack that opens as its
+/// particles part does not count, nor a side that parts from the middle of its old class at the
+/// plates mode's bounded speed while its particles tear apart faster; a vertex that snaps from
+/// where its class was welded before to where it is welded now, or that smoothing moves away from
+/// its particles, does.
 /// @param piece_a, piece_b the piece of each particle in a and b (SurfacedFrame::particle_piece)
 SurfaceMotion measure_surface_motion(const CoreTopology& topo, const SurfacedFrame& a, const ParticleFrame& frame_a,
                                      const SurfacedFrame& b, const ParticleFrame& frame_b, Real cell);

@@ -1,0 +1,134 @@
+#include "surfacing/wall_deformation.h"
+
+#include <Eigen/Eigenvalues>
+#include <algorithm>
+#include <cmath>
+
+#include "sim/core/parallel.h"
+#include "surfacing/pieces.h"
+
+namespace mudcrack {
+namespace {
+
+constexpr size_t kMinNeighbours = 6;  // an affine map in 3D needs 4; 6 keeps it from pivoting
+constexpr Real kMinFlatness = 0.02;   // least / largest principal rest variance to fit
+
+/// The edges at each particle: CSR over topo.edges.
+struct ParticleEdges {
+    std::vector<int32_t> begin, edge;
+    explicit ParticleEdges(const CoreTopology& topo) : begin(topo.n_particles + 1, 0), edge(2 * topo.edges.size()) {
+        for (const auto& pq : topo.edges)
+            for (int32_t p : pq) ++begin[p + 1];
+        for (int32_t p = 0; p < topo.n_particles; ++p) begin[p + 1] += begin[p];
+        std::vector<int32_t> fill(begin.begin(), begin.end() - 1);
+        for (int32_t e = 0; e < topo.n_edges(); ++e)
+            for (int32_t p : topo.edges[e]) edge[fill[p]++] = e;
+    }
+};
+
+/// The wall particles: the corners of every tet around a cut edge (the owners of its wall points).
+std::vector<int32_t> wall_particles(const CoreTopology& topo, const std::vector<uint8_t>& is_cut,
+                                    const std::vector<int32_t>& piece) {
+    std::vector<uint8_t> on_wall(topo.n_particles, 0);
+    for (int32_t e = 0; e < topo.n_edges(); ++e) {
+        if (!is_cut[e]) continue;
+        for (int32_t c = topo.edge_tet_begin[e]; c < topo.edge_tet_begin[e + 1]; ++c)
+            for (int32_t p : topo.tets[topo.edge_tet[c] / 6]) on_wall[p] = 1;
+    }
+    std::vector<int32_t> out;
+    for (int32_t p = 0; p < topo.n_particles; ++p)
+        if (on_wall[p] && piece[p] != kDebris) out.push_back(p);
+    return out;
+}
+
+/// The particles within `radius` of p in the rest state reached from it through uncut edges
+/// within its piece, ascending.
+std::vector<int32_t> neighbourhood(const CoreTopology& topo, const ParticleEdges& adjacency,
+                                   const std::vector<uint8_t>& is_cut, const std::vector<int32_t>& piece,
+                                   int32_t p, Real radius) {
+    std::vector<int32_t> near{p};
+    for (size_t k = 0; k < near.size(); ++k) {
+        const int32_t q = near[k];
+        for (int32_t c = adjacency.begin[q]; c < adjacency.begin[q + 1]; ++c) {
+            const int32_t e = adjacency.edge[c];
+            const int32_t r = topo.edges[e][0] == q ? topo.edges[e][1] : topo.edges[e][0];
+            if (is_cut[e] || piece[r] != piece[p] || (topo.X[r] - topo.X[p]).norm() > radius) continue;
+            if (std::find(near.begin(), near.end(), r) == near.end()) near.push_back(r);
+        }
+    }
+    std::sort(near.begin(), near.end());
+    return near;
+}
+
+}  // namespace
+
+size_t WallDeformation::memory_bytes() const {
+    return (particle.size() + begin.size() + neighbour.size()) * sizeof(int32_t) + weight.size() * sizeof(float) +
+           rest_centre.size() * sizeof(Vec3) + rest_inverse.size() * sizeof(Mat3);
+}
+
+WallDeformation plan_wall_deformation(const CoreTopology& topo, const std::vector<uint8_t>& is_cut,
+                                      const std::vector<int32_t>& piece, Real radius) {
+    WallDeformation d;
+    d.particle = wall_particles(topo, is_cut, piece);
+    const int64_t n = static_cast<int64_t>(d.particle.size());
+    const ParticleEdges adjacency(topo);
+    std::vector<std::vector<int32_t>> found(n);
+    parallel_for(n, [&](int64_t i) { found[i] = neighbourhood(topo, adjacency, is_cut, piece, d.particle[i], radius); });
+    d.begin.assign(n + 1, 0);
+    for (int64_t i = 0; i < n; ++i) d.begin[i + 1] = d.begin[i] + static_cast<int32_t>(found[i].size());
+    d.neighbour.resize(d.begin[n]);
+    d.weight.resize(d.begin[n]);
+    d.rest_centre.resize(n);
+    d.rest_inverse.resize(n);
+    const Real sigma = radius / 2;
+    parallel_for(n, [&](int64_t i) {
+        const int32_t p = d.particle[i];
+        Real total = 0;
+        Vec3 centre = Vec3::Zero();
+        for (size_t k = 0; k < found[i].size(); ++k) {
+            const int32_t q = found[i][k];
+            const float w = float(std::exp(-(topo.X[q] - topo.X[p]).squaredNorm() / (2 * sigma * sigma)));
+            d.neighbour[d.begin[i] + k] = q;
+            d.weight[d.begin[i] + k] = w;
+            total += w;
+            centre += Real(w) * topo.X[q];
+        }
+        centre /= total;
+        Mat3 cov = Mat3::Zero();
+        for (int32_t k = d.begin[i]; k < d.begin[i + 1]; ++k) {
+            const Vec3 r = topo.X[d.neighbour[k]] - centre;
+            cov += Real(d.weight[k]) * r * r.transpose();
+        }
+        d.rest_centre[i] = centre;
+        d.rest_inverse[i] = Mat3::Zero();
+        const Eigen::SelfAdjointEigenSolver<Mat3> eig(cov);
+        if (found[i].size() >= kMinNeighbours && eig.eigenvalues()[0] > kMinFlatness * eig.eigenvalues()[2])
+            d.rest_inverse[i] = cov.inverse();
+    });
+    return d;
+}
+
+void smooth_wall_motion(const CoreTopology& topo, const WallDeformation& d, const ParticleFrame& frame,
+                        std::vector<Vec3>& x, std::vector<Mat3>& A) {
+    parallel_for(static_cast<int64_t>(d.particle.size()), [&](int64_t i) {
+        if (d.rest_inverse[i].isZero()) return;
+        Real total = 0;
+        Vec3 centre = Vec3::Zero();
+        for (int32_t k = d.begin[i]; k < d.begin[i + 1]; ++k) {
+            total += Real(d.weight[k]);
+            centre += Real(d.weight[k]) * frame.P[d.neighbour[k]].cast<Real>();
+        }
+        centre /= total;
+        Mat3 cross = Mat3::Zero();
+        for (int32_t k = d.begin[i]; k < d.begin[i + 1]; ++k) {
+            const int32_t q = d.neighbour[k];
+            cross += Real(d.weight[k]) * (frame.P[q].cast<Real>() - centre) * (topo.X[q] - d.rest_centre[i]).transpose();
+        }
+        const int32_t p = d.particle[i];
+        A[p] = cross * d.rest_inverse[i];
+        x[p] = centre + A[p] * (topo.X[p] - d.rest_centre[i]);
+    });
+}
+
+}  // namespace mudcrack
