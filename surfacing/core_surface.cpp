@@ -189,8 +189,6 @@ private:
     /// The copy of point o's owner slot j: Eq. 13's extrapolation; on the shot's walls in the
     /// plates mode, the smoothed node of its class under the last frame's cuts (WallGraph).
     Vec3 copy(const PointOwners& o, int j) const {
-        // a particle's own vertex stays on the particle: the skin does not drift off its soil
-        if (o.kind == RestPointKind::Particle) return m_frame.P[o.owner[0]].cast<Real>();
         const int32_t point = m_wall_node.empty() ? -1 : m_plates.wall_graph->find(o.kind, o.point);
         if (point < 0) return extrapolate(o.owner[j], o.y0);
         const WallGraph::Point& w = m_plates.wall_graph->points[point];
