@@ -79,6 +79,7 @@ struct WallGraph {
     std::vector<uint8_t> held;                     // a node on the boundary (the rim, kept on the
                                                    // skin) or hidden: not smoothed
     std::vector<uint8_t> hidden;                   // a node of a wall that reaches no surface
+    std::vector<int32_t> free_nodes;               // the nodes smoothing moves: not held, with neighbours
     int32_t n_nodes = 0;
 
     bool empty() const { return points.empty(); }
