@@ -46,18 +46,20 @@ std::vector<int32_t> wall_particles(const CoreTopology& topo, const std::vector<
 std::vector<int32_t> neighbourhood(const CoreTopology& topo, const ParticleEdges& adjacency,
                                    const std::vector<uint8_t>& is_cut, const std::vector<int32_t>& piece,
                                    int32_t p, Real radius) {
-    // which particles this search has met: marked with p, unique to this search (one per particle)
-    thread_local std::vector<int32_t> met;
-    if (met.size() != size_t(topo.n_particles)) met.assign(topo.n_particles, -1);
+    // which particles this search has met: marked with a number of its own
+    thread_local std::vector<uint64_t> met;
+    thread_local uint64_t search = 0;
+    if (met.size() != size_t(topo.n_particles)) met.assign(topo.n_particles, 0);
+    const uint64_t mark = ++search;
     std::vector<int32_t> near{p};
-    met[p] = p;
+    met[p] = mark;
     for (size_t k = 0; k < near.size(); ++k) {
         const int32_t q = near[k];
         for (int32_t c = adjacency.begin[q]; c < adjacency.begin[q + 1]; ++c) {
             const int32_t e = adjacency.edge[c];
             const int32_t r = topo.edges[e][0] == q ? topo.edges[e][1] : topo.edges[e][0];
-            if (met[r] == p || is_cut[e] || piece[r] != piece[p] || (topo.X[r] - topo.X[p]).norm() > radius) continue;
-            met[r] = p;
+            if (met[r] == mark || is_cut[e] || piece[r] != piece[p] || (topo.X[r] - topo.X[p]).norm() > radius) continue;
+            met[r] = mark;
             near.push_back(r);
         }
     }
