@@ -41,7 +41,9 @@ namespace fs = std::filesystem;
 using nlohmann::json;
 
 // Run every stage on 2 threads: results are bitwise reproducible for a fixed thread count, so
-// the numbers below do not depend on the machine's core count.
+// the numbers below do not depend on the machine's core count. (ctest runs the two threads' shares
+// of the work one after the other on one core, OMP_THREAD_LIMIT=1: the same bits; see
+// tests/figures/CMakeLists.txt for why.)
 constexpr int kThreads = 2;
 
 // Shrinkage of the slab's top the eye reads on a 0.3 m slab: 4 mm (fig8_b sinks 7.9 mm).
