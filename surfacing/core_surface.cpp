@@ -324,7 +324,9 @@ struct SlotTri {
 };
 
 /// Numbers the output slots by first appearance in triangle order and fills faces, fragment
-/// ids and, per vertex, its slot and first face. Sequential, hence deterministic.
+/// ids and, per vertex, its slot and first face. Sequential, hence deterministic. Two passes, so
+/// every array is allocated once at its final size: at the peak of a frame's surfacing these are
+/// among the largest, and growing them by push_back held up to twice their size.
 struct Numbered {
     std::vector<int32_t> vertex_slot;   // out slot of each vertex
     std::vector<int32_t> vertex_weld;   // weld slot of each vertex
@@ -332,24 +334,35 @@ struct Numbered {
 };
 
 Numbered number_vertices(const std::vector<SlotTri>& tris, int64_t n_out_slots, const Fragments& frag, TriMesh& mesh) {
-    Numbered num;
     std::vector<int32_t> vertex_of(n_out_slots, -1);
+    int32_t nv = 0;
+    size_t nf = 0;
     for (const SlotTri& t : tris) {
         if (t.owner < 0) continue;
-        const int32_t f = static_cast<int32_t>(mesh.faces.size());
-        Tri face{};
+        ++nf;
+        for (int k = 0; k < 3; ++k)
+            if (vertex_of[t.out_slot[k]] < 0) vertex_of[t.out_slot[k]] = nv++;
+    }
+    Numbered num;
+    num.vertex_slot.resize(nv);
+    num.vertex_weld.resize(nv);
+    num.vertex_face.assign(nv, -1);
+    mesh.faces.resize(nf);
+    mesh.face_fragment.resize(nf);
+    int32_t f = 0;
+    for (const SlotTri& t : tris) {
+        if (t.owner < 0) continue;
+        Tri& face = mesh.faces[f];
         for (int k = 0; k < 3; ++k) {
-            int32_t& v = vertex_of[t.out_slot[k]];
-            if (v < 0) {
-                v = static_cast<int32_t>(num.vertex_slot.size());
-                num.vertex_slot.push_back(t.out_slot[k]);
-                num.vertex_weld.push_back(t.weld_slot[k]);
-                num.vertex_face.push_back(f);
+            const int32_t v = vertex_of[t.out_slot[k]];
+            if (num.vertex_face[v] < 0) {
+                num.vertex_slot[v] = t.out_slot[k];
+                num.vertex_weld[v] = t.weld_slot[k];
+                num.vertex_face[v] = f;
             }
             face[k] = v;
         }
-        mesh.faces.push_back(face);
-        mesh.face_fragment.push_back(frag.id[t.owner]);
+        mesh.face_fragment[f++] = frag.id[t.owner];
     }
     return num;
 }
@@ -376,22 +389,25 @@ void interpolate_skin_normals(const std::vector<SlotTri>& skin, std::vector<Vec3
 
 /// Area-weighted normals per weld slot, shared by all vertices of that slot (across UV seams);
 /// with `skin`, the skin's midpoints and centroids interpolate their corners' normals instead.
+/// A face's normal is computed where it is used rather than stored: one Vec3 per face was the
+/// largest array of a cracked frame's surfacing.
 void compute_normals(const std::vector<Vec3>& position, const Numbered& num, int64_t n_weld_slots, TriMesh& mesh,
                      const std::vector<SlotTri>* skin = nullptr) {
-    const size_t nf = mesh.faces.size();
-    std::vector<Vec3> face_normal(nf);
-    parallel_for(static_cast<int64_t>(nf), [&](int64_t f) {
+    auto face_normal = [&](size_t f) {
         const Tri& t = mesh.faces[f];
-        face_normal[f] = (position[t[1]] - position[t[0]]).cross(position[t[2]] - position[t[0]]);
-    });
+        return Vec3((position[t[1]] - position[t[0]]).cross(position[t[2]] - position[t[0]]));
+    };
     std::vector<Vec3> weld_normal(n_weld_slots, Vec3::Zero());
-    for (size_t f = 0; f < nf; ++f)
-        for (int k = 0; k < 3; ++k) weld_normal[num.vertex_weld[mesh.faces[f][k]]] += face_normal[f];
+    for (size_t f = 0; f < mesh.faces.size(); ++f) {
+        const Vec3 n = face_normal(f);
+        for (int k = 0; k < 3; ++k) weld_normal[num.vertex_weld[mesh.faces[f][k]]] += n;
+    }
     if (skin) interpolate_skin_normals(*skin, weld_normal);
     mesh.normals.resize(position.size());
     parallel_for(static_cast<int64_t>(position.size()), [&](int64_t v) {
         Vec3 n = weld_normal[num.vertex_weld[v]];
-        if (!(n.norm() > 1e-12 * face_normal[num.vertex_face[v]].norm())) n = face_normal[num.vertex_face[v]];
+        const Vec3 own = face_normal(num.vertex_face[v]);
+        if (!(n.norm() > 1e-12 * own.norm())) n = own;
         const Real len = n.norm();
         mesh.normals[v] = (len > 0 ? Vec3(n / len) : Vec3(0, 1, 0)).cast<float>();
     });
@@ -572,6 +588,10 @@ void build_crack(const CoreTopology& topo, const FrameCores& cores, const Fragme
         }
     });
     const Numbered num = number_vertices(tris, 3 * n_weld, frag, mesh);
+    // released before the vertices are made, which is the peak of a frame's surfacing
+    std::vector<SlotTri>().swap(tris);
+    std::vector<int32_t>().swap(face_rank);
+    std::vector<int32_t>().swap(tet_rank);
 
     auto eval = [&](int32_t slot, Vec2& uv, uint64_t& key) {
         const int64_t w = slot / 3;

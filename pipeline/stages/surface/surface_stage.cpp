@@ -229,13 +229,15 @@ int run_surface_stage(const StageOptions& options, const SurfaceStageOptions& su
     WallTimer timer;
     const fs::path tets_file = init_dir / "tets.vtu";
     RecordedChecksums(init_manifest, init_dir / "manifest.json").verify(tets_file);
-    const TetMesh mesh = read_tet_mesh_vtu(tets_file);
-    CoreTopology topo;
-    try {
-        topo = build_core_topology(mesh);
-    } catch (const InputError& e) {
-        throw InputError(tets_file.string() + ": " + e.what());
-    }
+    // the tet mesh lives only while its topology is built: the frames need only the topology
+    const CoreTopology topo = [&] {
+        const TetMesh mesh = read_tet_mesh_vtu(tets_file);
+        try {
+            return build_core_topology(mesh);
+        } catch (const InputError& e) {
+            throw InputError(tets_file.string() + ": " + e.what());
+        }
+    }();
     if (params.mode == SurfaceMode::Plates) check_piece_size(shot, params, topo);
     const double preprocessing_seconds = timer.seconds();
     log::info("particle cores: " + std::to_string(topo.n_particles) + " particles, " + std::to_string(topo.n_tets()) +
