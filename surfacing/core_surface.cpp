@@ -192,14 +192,14 @@ private:
         const int32_t point = m_wall_node.empty() ? -1 : m_plates.wall_graph->find(o.kind, o.point);
         if (point < 0) return extrapolate(o.owner[j], o.y0);
         const WallGraph::Point& w = m_plates.wall_graph->points[point];
-        return m_wall_node[w.first_node + w.reps[j]];
+        return m_wall_node[w.first_node + w.reps[j]].cast<Real>();
     }
 
     /// The shot's walls smoothed where they are (plates mode): each node starts at the mean of the
     /// copies of its class's owners, then wall_steps Taubin steps over the fixed graph.
     void smooth_walls_where_they_are() {
         const WallGraph& graph = *m_plates.wall_graph;
-        m_wall_node.assign(graph.n_nodes, Vec3::Zero());
+        std::vector<Vec3> node(graph.n_nodes, Vec3::Zero());
         parallel_for(static_cast<int64_t>(graph.points.size()), [&](int64_t i) {
             const WallGraph::Point& w = graph.points[i];
             const PointOwners o = w.kind == RestPointKind::EdgeMidpoint ? edge_point(w.id)
@@ -207,13 +207,16 @@ private:
                                                                           : tet_point(w.id);
             std::array<int, 4> members{};
             for (int j = 0; j < o.n; ++j) {
-                m_wall_node[w.first_node + w.reps[j]] += extrapolate(o.owner[j], o.y0);
+                node[w.first_node + w.reps[j]] += extrapolate(o.owner[j], o.y0);
                 ++members[w.reps[j]];
             }
             for (int r = 0; r < o.n; ++r)
-                if (members[r] > 0) m_wall_node[w.first_node + r] /= members[r];
+                if (members[r] > 0) node[w.first_node + r] /= members[r];
         });
-        smooth_wall_nodes(graph, m_plates.wall_steps, m_wall_node);
+        smooth_wall_nodes(graph, m_plates.wall_steps, node);
+        // kept in single precision, as the meshes are written: the largest array of a plates frame
+        m_wall_node.resize(graph.n_nodes);
+        parallel_for(graph.n_nodes, [&](int64_t n) { m_wall_node[n] = node[n].cast<float>(); });
     }
 
     Vec3 rest(RestPointKind kind, int32_t id, const Vec3& y0) const {
@@ -312,7 +315,7 @@ private:
     PlateCores m_plates;
     std::vector<Vec3> m_x;  // current positions [m], (n_particles)
     std::vector<Mat3> m_A;  // core transforms s_p R_p, (n_particles)
-    std::vector<Vec3> m_wall_node;  // plates mode: the smoothed wall nodes (WallGraph), (n_nodes)
+    std::vector<Vec3f> m_wall_node;  // plates mode: the smoothed wall nodes (WallGraph), (n_nodes)
 };
 
 /// A triangle under construction: output slots (vertex identity incl. UV split), weld slots
@@ -324,26 +327,34 @@ struct SlotTri {
 };
 
 /// Numbers the output slots by first appearance in triangle order and fills faces, fragment
-/// ids and, per vertex, its slot and first face. Sequential, hence deterministic. Two passes, so
-/// every array is allocated once at its final size: at the peak of a frame's surfacing these are
-/// among the largest, and growing them by push_back held up to twice their size.
+/// ids and, per vertex, its slot, weld and first face; the weld slots the faces use get compact
+/// ids in the same order, so the normals are summed over those alone (a tet's centroid has four
+/// weld slots and uses one or two). Sequential, hence deterministic. Two passes, so every array
+/// is allocated once at its final size: these are the largest of a cracked frame's surfacing.
 struct Numbered {
     std::vector<int32_t> vertex_slot;   // out slot of each vertex
-    std::vector<int32_t> vertex_weld;   // weld slot of each vertex
+    std::vector<int32_t> vertex_weld;   // compact weld id of each vertex
     std::vector<int32_t> vertex_face;   // first face using the vertex
+    std::vector<int32_t> weld_of_slot;  // compact weld id of each weld slot, -1 when unused
+    int32_t n_welds = 0;
 };
 
-Numbered number_vertices(const std::vector<SlotTri>& tris, int64_t n_out_slots, const Fragments& frag, TriMesh& mesh) {
+Numbered number_vertices(const std::vector<SlotTri>& tris, int64_t n_out_slots, int64_t n_weld_slots,
+                         const Fragments& frag, TriMesh& mesh) {
+    Numbered num;
     std::vector<int32_t> vertex_of(n_out_slots, -1);
+    num.weld_of_slot.assign(n_weld_slots, -1);
     int32_t nv = 0;
     size_t nf = 0;
     for (const SlotTri& t : tris) {
         if (t.owner < 0) continue;
         ++nf;
-        for (int k = 0; k < 3; ++k)
-            if (vertex_of[t.out_slot[k]] < 0) vertex_of[t.out_slot[k]] = nv++;
+        for (int k = 0; k < 3; ++k) {
+            if (vertex_of[t.out_slot[k]] >= 0) continue;
+            vertex_of[t.out_slot[k]] = nv++;
+            if (num.weld_of_slot[t.weld_slot[k]] < 0) num.weld_of_slot[t.weld_slot[k]] = num.n_welds++;
+        }
     }
-    Numbered num;
     num.vertex_slot.resize(nv);
     num.vertex_weld.resize(nv);
     num.vertex_face.assign(nv, -1);
@@ -357,7 +368,7 @@ Numbered number_vertices(const std::vector<SlotTri>& tris, int64_t n_out_slots, 
             const int32_t v = vertex_of[t.out_slot[k]];
             if (num.vertex_face[v] < 0) {
                 num.vertex_slot[v] = t.out_slot[k];
-                num.vertex_weld[v] = t.weld_slot[k];
+                num.vertex_weld[v] = num.weld_of_slot[t.weld_slot[k]];
                 num.vertex_face[v] = f;
             }
             face[k] = v;
@@ -374,35 +385,35 @@ Numbered number_vertices(const std::vector<SlotTri>& tris, int64_t n_out_slots, 
 /// of its own: the quilted tops a close-up showed at the particle spacing. Interpolated from the
 /// particles, the shading is as smooth as the soil. Only classes welded to the corner count, so a
 /// crack's rim stays sharp.
-void interpolate_skin_normals(const std::vector<SlotTri>& skin, std::vector<Vec3>& weld_normal) {
+void interpolate_skin_normals(const std::vector<SlotTri>& skin, const Numbered& num, std::vector<Vec3>& weld_normal) {
     std::vector<Vec3> from_corners(weld_normal.size(), Vec3::Zero());
     for (const SlotTri& t : skin) {
         if (t.owner < 0) continue;
-        const Vec3& corner = weld_normal[t.weld_slot[0]];
+        const Vec3& corner = weld_normal[num.weld_of_slot[t.weld_slot[0]]];
         const Real len = corner.norm();
         if (!(len > 0)) continue;
-        for (int c = 1; c < 3; ++c) from_corners[t.weld_slot[c]] += corner / len;
+        for (int c = 1; c < 3; ++c) from_corners[num.weld_of_slot[t.weld_slot[c]]] += corner / len;
     }
     for (size_t w = 0; w < weld_normal.size(); ++w)
         if (from_corners[w].norm() > 0) weld_normal[w] = from_corners[w];
 }
 
-/// Area-weighted normals per weld slot, shared by all vertices of that slot (across UV seams);
-/// with `skin`, the skin's midpoints and centroids interpolate their corners' normals instead.
-/// A face's normal is computed where it is used rather than stored: one Vec3 per face was the
+/// Area-weighted normals per weld, shared by all vertices of that weld (across UV seams); with
+/// `skin`, the skin's midpoints and centroids interpolate their corners' normals instead. A
+/// face's normal is computed where it is used rather than stored: one Vec3 per face was the
 /// largest array of a cracked frame's surfacing.
-void compute_normals(const std::vector<Vec3>& position, const Numbered& num, int64_t n_weld_slots, TriMesh& mesh,
+void compute_normals(const std::vector<Vec3>& position, const Numbered& num, TriMesh& mesh,
                      const std::vector<SlotTri>* skin = nullptr) {
     auto face_normal = [&](size_t f) {
         const Tri& t = mesh.faces[f];
         return Vec3((position[t[1]] - position[t[0]]).cross(position[t[2]] - position[t[0]]));
     };
-    std::vector<Vec3> weld_normal(n_weld_slots, Vec3::Zero());
+    std::vector<Vec3> weld_normal(num.n_welds, Vec3::Zero());
     for (size_t f = 0; f < mesh.faces.size(); ++f) {
         const Vec3 n = face_normal(f);
         for (int k = 0; k < 3; ++k) weld_normal[num.vertex_weld[mesh.faces[f][k]]] += n;
     }
-    if (skin) interpolate_skin_normals(*skin, weld_normal);
+    if (skin) interpolate_skin_normals(*skin, num, weld_normal);
     mesh.normals.resize(position.size());
     parallel_for(static_cast<int64_t>(position.size()), [&](int64_t v) {
         Vec3 n = weld_normal[num.vertex_weld[v]];
@@ -466,7 +477,7 @@ void build_boundary(const CoreTopology& topo, const FrameCores& cores, const Fra
             }
         }
     });
-    const Numbered num = number_vertices(tris, topo.n_skin_out_slots, frag, mesh);
+    const Numbered num = number_vertices(tris, topo.n_skin_out_slots, topo.n_skin_weld_slots, frag, mesh);
 
     // out slot -> (skin face, rest point j) of some triangle using it, to evaluate the vertex
     std::vector<std::array<int32_t, 2>> slot_source(topo.n_skin_out_slots, {-1, -1});
@@ -486,7 +497,7 @@ void build_boundary(const CoreTopology& topo, const FrameCores& cores, const Fra
         return cores.welded(skin_point(cores, sf, j), rep);
     };
     const std::vector<Vec3> position = fill_vertices(cores, num, eval, mesh, out.boundary_weld_key);
-    compute_normals(position, num, topo.n_skin_weld_slots, mesh, &tris);
+    compute_normals(position, num, mesh, &tris);
 }
 
 /// The smallest projection axis that gives rest point y0 the same UV as `axis`, so a vertex is
@@ -587,11 +598,12 @@ void build_crack(const CoreTopology& topo, const FrameCores& cores, const Fragme
             }
         }
     });
-    const Numbered num = number_vertices(tris, 3 * n_weld, frag, mesh);
+    Numbered num = number_vertices(tris, 3 * n_weld, n_weld, frag, mesh);
     // released before the vertices are made, which is the peak of a frame's surfacing
     std::vector<SlotTri>().swap(tris);
     std::vector<int32_t>().swap(face_rank);
     std::vector<int32_t>().swap(tet_rank);
+    std::vector<int32_t>().swap(num.weld_of_slot);  // the skin's corner normals need it, the walls not
 
     auto eval = [&](int32_t slot, Vec2& uv, uint64_t& key) {
         const int64_t w = slot / 3;
@@ -617,7 +629,7 @@ void build_crack(const CoreTopology& topo, const FrameCores& cores, const Fragme
         return cores.welded(o, rep);
     };
     const std::vector<Vec3> position = fill_vertices(cores, num, eval, mesh, out.crack_weld_key);
-    compute_normals(position, num, n_weld, mesh);
+    compute_normals(position, num, mesh);
 }
 
 /// The plates mode's debris (DebrisOutput::Points): the particles that tore loose.

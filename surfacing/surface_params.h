@@ -32,7 +32,7 @@ struct SurfaceParams {
     Real debris_gap = 0.5;          // [particle spacings] band particles that every path to a plate opens
                                     // more than this are debris
     Real close_gaps = 0.25;         // [particle spacings] walls closer than this meet (no hairline gaps)
-    int wall_smoothing = 50;        // Taubin steps of the crack walls, in rest space and where they are (0: off)
+    int wall_smoothing = 25;        // Taubin steps of the crack walls, in rest space and where they are (0: off)
     DebrisOutput debris = DebrisOutput::None;
     Real cell_size = 0;             // [m] the shot's /sim/h (set by load_shot): min_piece_size's unit
 };

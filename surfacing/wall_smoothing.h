@@ -40,6 +40,8 @@ public:
         return slot < 0 ? y0 : m_moved[slot];
     }
     size_t size() const { return m_moved.size(); }
+    /// Frees the slack push_back left in the moved positions, once they are all set.
+    void shrink_to_fit() { m_moved.shrink_to_fit(); }
     void set(RestPointKind kind, int32_t id, const Vec3& y) {
         int32_t& slot = m_slot[int(kind) - 1][id];
         if (slot < 0) {
@@ -98,13 +100,13 @@ struct WallGraph {
 /// The graph of the walls through the edges with is_cut[e] != 0. Deterministic.
 WallGraph plan_wall_graph(const CoreTopology& topo, const std::vector<uint8_t>& is_cut);
 
-/// `steps` Taubin steps (lambda 0.5, mu -0.53) of the node positions over the graph, held nodes
+/// `steps` Taubin steps (lambda 0.67, mu -0.72) of the node positions over the graph, held nodes
 /// and nodes without neighbours kept; then each node keeps 5 % of where it started, so the two
 /// sides of a crack never become one. Deterministic whatever the thread count.
 void smooth_wall_nodes(const WallGraph& graph, int steps, std::vector<Vec3>& position);
 
 /// Places the walls through the edges with is_cut[e] != 0, with `iterations` Taubin steps
-/// (lambda 0.5, mu -0.53: a low-pass filter that does not shrink the wall) on the crossings.
+/// (lambda 0.67, mu -0.72: a low-pass filter that does not shrink the wall) on the crossings.
 /// 0 iterations moves nothing (the dual-cell walls of the other modes). Deterministic.
 WallRestPositions smooth_walls(const CoreTopology& topo, const std::vector<uint8_t>& is_cut, int iterations);
 
