@@ -278,9 +278,25 @@ WallGraph plan_wall_graph(const CoreTopology& topo, const std::vector<uint8_t>& 
     find_hidden_walls(g);
     for (int32_t n = 0; n < g.n_nodes; ++n)
         if (!g.held[n] && g.begin[n] < g.begin[n + 1]) g.free_nodes.push_back(n);
+    // the rim: held for the wall's smoothing, which would pull it off the skin, but a curve of
+    // its own. Held where its particles put it, it showed every particle's own motion along a
+    // plate's edge: a scalloped rim, and flutes down the wall below it.
+    auto on_rim = [&](int32_t n) { return g.held[n] && !g.hidden[n]; };
+    for (int32_t n = 0; n < g.n_nodes; ++n) {
+        if (!on_rim(n)) continue;
+        std::array<int32_t, 2> along{};
+        int count = 0;
+        for (int32_t k = g.begin[n]; k < g.begin[n + 1]; ++k)
+            if (on_rim(g.neighbour[k]) && count++ < 2) along[count - 1] = g.neighbour[k];
+        if (count != 2) continue;
+        g.rim_nodes.push_back(n);
+        g.rim_neighbours.push_back(along);
+    }
     // kept for the whole shot: without the slack push_back left (up to half of each)
     g.points.shrink_to_fit();
     g.free_nodes.shrink_to_fit();
+    g.rim_nodes.shrink_to_fit();
+    g.rim_neighbours.shrink_to_fit();
     return g;
 }
 
@@ -290,6 +306,7 @@ void smooth_wall_nodes(const WallGraph& g, int steps, std::vector<Vec3>& positio
     parallel_for(g.n_nodes, [&](int64_t n) { y[n] = position[n].cast<float>(); });
     next = y;  // only the free nodes change; the held and unused ones are the same in both
     const int64_t n_free = static_cast<int64_t>(g.free_nodes.size());
+    const int64_t n_rim = static_cast<int64_t>(g.rim_nodes.size());
     for (int it = 0; it < 2 * steps; ++it) {
         const float step = float(it % 2 == 0 ? kLambda : kMu);
         parallel_for(n_free, [&](int64_t i) {
@@ -298,12 +315,16 @@ void smooth_wall_nodes(const WallGraph& g, int steps, std::vector<Vec3>& positio
             for (int32_t k = g.begin[n]; k < g.begin[n + 1]; ++k) mean += y[g.neighbour[k]];
             next[n] = y[n] + step * (mean / float(g.begin[n + 1] - g.begin[n]) - y[n]);
         });
+        parallel_for(n_rim, [&](int64_t i) {
+            const int32_t n = g.rim_nodes[i];
+            const auto [a, b] = g.rim_neighbours[i];
+            next[n] = y[n] + step * ((y[a] + y[b]) / 2 - y[n]);
+        });
         std::swap(y, next);
     }
-    parallel_for(n_free, [&](int64_t i) {
-        const int32_t n = g.free_nodes[i];
-        position[n] += (1 - kKeptInput) * (y[n].cast<Real>() - position[n]);
-    });
+    auto keep_input = [&](int32_t n) { position[n] += (1 - kKeptInput) * (y[n].cast<Real>() - position[n]); };
+    parallel_for(n_free, [&](int64_t i) { keep_input(g.free_nodes[i]); });
+    parallel_for(n_rim, [&](int64_t i) { keep_input(g.rim_nodes[i]); });
 }
 
 WallRestPositions smooth_walls(const CoreTopology& topo, const std::vector<uint8_t>& is_cut, int iterations) {

@@ -78,10 +78,15 @@ struct WallGraph {
     std::vector<Point> points;                     // the rest points of the walls
     std::array<std::vector<int32_t>, 3> point_of;  // edge, face, tet id -> index into points, or -1
     std::vector<int32_t> begin, neighbour;         // CSR of each node's neighbours, (n_nodes + 1)
-    std::vector<uint8_t> held;                     // a node on the boundary (the rim, kept on the
-                                                   // skin) or hidden: not smoothed
+    std::vector<uint8_t> held;                     // a node on the boundary (the rim) or hidden:
+                                                   // not smoothed over the wall
     std::vector<uint8_t> hidden;                   // a node of a wall that reaches no surface
     std::vector<int32_t> free_nodes;               // the nodes smoothing moves: not held, with neighbours
+    /// The rim nodes smoothed along the rim: each has exactly two neighbours on the rim, so the rim
+    /// is a curve through it (its ends, and where three cracks meet on the surface, stay put).
+    /// Both the wall and the skin use a rim node, so the skin follows it.
+    std::vector<int32_t> rim_nodes;
+    std::vector<std::array<int32_t, 2>> rim_neighbours;  // (rim_nodes)
     int32_t n_nodes = 0;
 
     bool empty() const { return points.empty(); }
@@ -100,9 +105,10 @@ struct WallGraph {
 /// The graph of the walls through the edges with is_cut[e] != 0. Deterministic.
 WallGraph plan_wall_graph(const CoreTopology& topo, const std::vector<uint8_t>& is_cut);
 
-/// `steps` Taubin steps (lambda 0.67, mu -0.72) of the node positions over the graph, held nodes
-/// and nodes without neighbours kept; then each node keeps 5 % of where it started, so the two
-/// sides of a crack never become one. Deterministic whatever the thread count.
+/// `steps` Taubin steps (lambda 0.67, mu -0.72) of the node positions over the graph, and of the
+/// rim nodes along the rim; held nodes and nodes without neighbours kept. Then each node keeps
+/// 5 % of where it started, so the two sides of a crack never become one. Deterministic whatever
+/// the thread count.
 void smooth_wall_nodes(const WallGraph& graph, int steps, std::vector<Vec3>& position);
 
 /// Places the walls through the edges with is_cut[e] != 0, with `iterations` Taubin steps
