@@ -1,10 +1,11 @@
 #!/usr/bin/env bash
-# The README's gallery: for each shot, a 640x360 still and its contact sheet copied from the shot's
-# render, next to one sentence of what the paper's figure shows, the `mc-measure` numbers that show
-# ours does the same, and each stage's wall time and peak memory read from its manifest. Each shot
-# becomes docs/gallery/<shot>.md (with <shot>.png and <shot>_contact.jpg); the README's block
-# between the "gallery begin/end" markers is then rebuilt from every fragment there, in the order of
-# kShotOrder below, so one shot can be redone without the others.
+# The gallery: for each shot, a 640x360 still and its contact sheet copied from the shot's render,
+# next to one sentence of what the paper's figure shows, the `mc-measure` numbers that show ours
+# does the same, and each stage's wall time and peak memory read from its manifest. Each shot
+# becomes docs/gallery/<shot>.md (with <shot>.png and <shot>_contact.jpg); the block between the
+# "gallery begin/end" markers of docs/gallery.md is then rebuilt from every fragment there, and the
+# README's block between the same markers becomes a grid of the stills linking to it, both in the
+# order of kShotOrder below, so one shot can be redone without the others.
 #
 #   tools/gallery.sh OUT SHOT[@FRAME]...     e.g. tools/gallery.sh out demo fig4_bunny@32
 #
@@ -20,6 +21,7 @@ BUILD=${BUILD:-$ROOT/build}
 THREADS=${THREADS:-2}
 DEST=$ROOT/docs/gallery
 README=$ROOT/README.md
+GALLERY=$ROOT/docs/gallery.md
 kShotOrder=(demo fig4_bunny fig5_riverbed fig6_eps_0.2 fig6_eps_0.5 fig6_eps_1.0 fig7_mossy_ground
             fig8_a fig8_b fig8_c fig9 fig10_ours fig10_wang2019)
 
@@ -31,8 +33,10 @@ for tool in jq ffmpeg; do command -v $tool >/dev/null || die "$tool not found (m
 for tool in mc-measure mc-shot; do
     [[ -x $BUILD/bin/$tool ]] || die "$BUILD/bin/$tool is not built: run make build"
 done
-grep -q '^<!-- gallery begin -->$' "$README" && grep -q '^<!-- gallery end -->$' "$README" ||
-    die "$README has no <!-- gallery begin --> / <!-- gallery end --> lines to fill"
+for page in "$README" "$GALLERY"; do
+    grep -q '^<!-- gallery begin -->$' "$page" && grep -q '^<!-- gallery end -->$' "$page" ||
+        die "$page has no <!-- gallery begin --> / <!-- gallery end --> lines to fill"
+done
 
 # What the paper's figure shows, one sentence per shot (Tu et al. 2023; the demo is ours).
 paper_says() {
@@ -70,7 +74,7 @@ stage_costs() {
     "$BUILD/bin/mc-shot" summary --json "$dir" | jq -r --arg shot "$shot" '[.stages[]
         | "\(.stage) \(.wall_seconds * 10 | round / 10) s, \(.peak_memory_bytes / 1048576 | round) MiB"
           + (if .resumed_from_frame then " (resumed from frame \(.resumed_from_frame): the frames after it only)" else "" end)
-          + ((.shot // $shot) | ltrimstr("shots/") | rtrimstr(".json") | if . == $shot then "" else " (\(.)'"'"'s, reused)" end)]
+          + ((.shot // $shot) | split("/") | last | rtrimstr(".json") | if . == $shot then "" else " (\(.)'"'"'s, reused)" end)]
         | join("; ")'
 }
 
@@ -146,28 +150,45 @@ for arg in "$@"; do
     {
         echo "### \`$shot\`"
         echo
-        echo "![$shot](docs/gallery/$shot.png)"
+        echo "![$shot](gallery/$shot.png)"
         echo
         echo "- The paper: $sentence"
         echo "- Ours, $label (\`mc-measure\`): $numbers.${growth:+ $growth.}"
-        echo "- [Contact sheet](docs/gallery/${shot}_contact.jpg) of every frame. Stages (\`mc-shot summary $OUT/$shot\`, $threads threads, $date): $costs."
+        echo "- [Contact sheet](gallery/${shot}_contact.jpg) of every frame. Stages (\`mc-shot summary $OUT/$shot\`, $threads threads, $date): $costs."
         echo
     } >"$DEST/.$shot.md.tmp"
     mv -f "$DEST/.$shot.md.tmp" "$DEST/$shot.md"
     echo "$DEST/$shot.md"
 done
 
-# Rebuild the README's block from every fragment, in figure order.
-block=$(mktemp)
-trap 'rm -f "$block"' EXIT
-missing=()
+# Rebuild docs/gallery.md's block from every fragment, in figure order, and the README's grid of
+# stills, three to a row, each linking to its shot's entry there.
+block=$(mktemp) grid=$(mktemp)
+trap 'rm -f "$block" "$grid"' EXIT
+missing=() shown=()
 for shot in "${kShotOrder[@]}"; do
-    if [[ -f $DEST/$shot.md ]]; then cat "$DEST/$shot.md" >>"$block"; else missing+=("$shot"); fi
+    if [[ -f $DEST/$shot.md ]]; then cat "$DEST/$shot.md" >>"$block"; shown+=("$shot"); else missing+=("$shot"); fi
 done
 [[ ${#missing[@]} -eq 0 ]] || printf 'Not in the gallery yet: %s.\n\n' "${missing[*]}" >>"$block"
-awk -v blockfile="$block" '
-    /^<!-- gallery begin -->$/ { print; while ((getline line < blockfile) > 0) print line; skipping = 1; next }
-    /^<!-- gallery end -->$/ { skipping = 0 }
-    !skipping' "$README" >"$README.tmp"
-mv -f "$README.tmp" "$README"
-echo "$README: gallery of $(( ${#kShotOrder[@]} - ${#missing[@]} )) shots"
+{
+    echo "| | | |"
+    echo "| --- | --- | --- |"
+    for ((i = 0; i < ${#shown[@]}; i += 3)); do
+        row="|"
+        for shot in "${shown[@]:i:3}"; do
+            row+=" [![$shot](docs/gallery/$shot.png)](docs/gallery.md#${shot//./}) \`$shot\` |"
+        done
+        echo "$row"
+    done
+    echo
+} >"$grid"
+fill() {  # fill PAGE's block between the markers with FILE
+    awk -v blockfile="$2" '
+        /^<!-- gallery begin -->$/ { print; while ((getline line < blockfile) > 0) print line; skipping = 1; next }
+        /^<!-- gallery end -->$/ { skipping = 0 }
+        !skipping' "$1" >"$1.tmp"
+    mv -f "$1.tmp" "$1"
+}
+fill "$GALLERY" "$block"
+fill "$README" "$grid"
+echo "$GALLERY: gallery of ${#shown[@]} shots; $README: their stills"
