@@ -8,7 +8,7 @@
 
 #include "sim/core/parallel.h"
 #include "sim/core/stats.h"
-#include "sim/mpm/bspline.h"
+#include "sim/grid/bspline.h"
 
 namespace mudcrack {
 

@@ -8,7 +8,7 @@
 #include "sim/material/nacc.h"
 #include "sim/material/neo_hookean.h"
 #include "sim/moisture/pore.h"
-#include "sim/mpm/bspline.h"
+#include "sim/grid/bspline.h"
 #include "sim/mpm/transfer.h"
 
 namespace mudcrack::mpm {

@@ -13,7 +13,7 @@
 #include "sim/core/parallel.h"
 #include "sim/moisture/moisture_solver.h"
 #include "sim/moisture/pore.h"
-#include "sim/mpm/bspline.h"
+#include "sim/grid/bspline.h"
 #include "sim/mpm/simulation.h"
 #include "sim/mpm/workspace.h"
 #include "tolerance.h"

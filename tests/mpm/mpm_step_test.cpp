@@ -11,7 +11,7 @@
 #include "sim/core/error.h"
 #include "sim/core/parallel.h"
 #include "sim/mpm/simulation.h"
-#include "sim/mpm/sparse_grid.h"
+#include "sim/grid/sparse_grid.h"
 #include "sim/mpm/workspace.h"
 #include "tolerance.h"
 
