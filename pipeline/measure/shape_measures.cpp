@@ -276,7 +276,6 @@ CrackDepth measure_crack_depth(const CoreTopology& topo, const std::vector<uint8
 
 namespace {
 
-constexpr Real kPi = 3.14159265358979323846;
 // crack points line up where their neighbourhood's covariance has one eigenvalue this many times
 // the other (a straight row of points: infinitely many; a filled disc: 1)
 constexpr Real kLineAnisotropy = 4;

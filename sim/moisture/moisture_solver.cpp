@@ -369,7 +369,6 @@ void apply_stiffness(const MoistureParams& mp, const SparseGrid& grid, const Moi
 Real particle_area(Real volume) {
     // pi R^2 = c V^(2/3) with c = pi (3 / (4 pi))^(2/3), and V^(2/3) as exp(2/3 log V): a few
     // ulps, at half the cost of glibc's cbrt (every boundary particle, every step)
-    constexpr Real kPi = 3.14159265358979323846;
     static const Real c = kPi * std::cbrt(9 / (16 * kPi * kPi));
     return c * std::exp(Real(2) / 3 * std::log(volume));
 }
