@@ -46,7 +46,7 @@ uint64_t break_source_hash(const json& sim_manifest, const SurfaceParams& params
     os.precision(17);
     os << params.zeta << "|" << params.length_consistent << "|" << topo.n_edges() << "|" << topo.n_tets();
     const std::string s = os.str();
-    return fnv1a64(s.data(), s.size());
+    return fnv1a64_of(s);
 }
 
 /// Loads one sim cache, verified against the checksum the sim manifest records, and checks that it
