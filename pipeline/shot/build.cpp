@@ -235,8 +235,9 @@ void build_moisture(json& tree, SimModel& model, Issues& issues) {
         issues.add("/moisture/implicit_robin", issues.value_of(tree, "/moisture/implicit_robin"),
                    "must be false with /moisture/evaporation = \"surface\" (the surface layer's decay is "
                    "exact; the implicit Robin term belongs to the grid evaporation)");
-    // particles start fully saturated unless told otherwise (paper Section 7.1)
-    m.theta_init = has(tree, "/moisture/theta_init") ? number(tree, "/moisture/theta_init") : m.eta;
+    // particles start fully saturated unless told otherwise (MoistureParams::initial_theta); the
+    // slice records the value they start at, unclamped so the range check below still sees it
+    m.theta_init = has(tree, "/moisture/theta_init") ? number(tree, "/moisture/theta_init") : m.initial_theta();
     tree["moisture"]["theta_init"] = m.theta_init;
     if (!issues.has("/moisture/eta")) {
         const std::string within = "must be in [0, /moisture/eta = " + g(m.eta) + "]";

@@ -170,7 +170,7 @@ SimState make_initial_state(const SimModel& model, const std::vector<Vec3>& X, c
     s.mass.resize(n);
     if (model.moisture) {
         const MoistureParams& mp = *model.moisture;
-        const Real theta = std::clamp(mp.theta_init < 0 ? mp.eta : mp.theta_init, Real(0), mp.eta);
+        const Real theta = mp.initial_theta();
         const Real sat = saturation_of(theta, mp.eta);
         s.theta.assign(n, theta);
         s.Jw.assign(n, pore_jw(sat, mp.eta));
