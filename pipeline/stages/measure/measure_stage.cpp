@@ -161,13 +161,8 @@ int run_measure_stage(const StageOptions& options, const MeasureStageOptions& me
     const json init_manifest = read_current_manifest(init_dir, shot.slice_hash(Stage::Init));
     const json sim_manifest = read_current_manifest(sim_dir, shot.slice_hash(Stage::Sim));
     const RecordedChecksums sim_files(sim_manifest, sim_dir / "manifest.json");
-    int first = 0, last = 0;
-    try {
-        first = sim_manifest.at("frames").at("first").get<int>();
-        last = sim_manifest.at("frames").at("last").get<int>();
-    } catch (const json::exception&) {
-        throw InputError((sim_dir / "manifest.json").string() + ": /frames/first and /frames/last: missing or not integers");
-    }
+    const ManifestFrames cached = manifest_frames(sim_manifest, sim_dir / "manifest.json");
+    int first = cached.first, last = cached.last;
     if (options.frame_range.is_set()) {
         if (options.frame_range.first < first || options.frame_range.last > last)
             throw InputError("--frames " + options.frames + ": outside the cached frames " + std::to_string(first) +

@@ -209,13 +209,8 @@ int run_surface_stage(const StageOptions& options, const SurfaceStageOptions& su
     const json init_manifest = read_current_manifest(init_dir, shot.slice_hash(Stage::Init));
     const json sim_manifest = read_current_manifest(sim_dir, shot.slice_hash(Stage::Sim));
     const RecordedChecksums sim_files(sim_manifest, sim_dir / "manifest.json");
-    int sim_first = 0, sim_last = -1;
-    try {
-        sim_first = sim_manifest.at("frames").at("first").get<int>();
-        sim_last = sim_manifest.at("frames").at("last").get<int>();
-    } catch (const json::exception&) {
-        throw InputError((sim_dir / "manifest.json").string() + ": /frames/first and /frames/last: missing or not integers");
-    }
+    const ManifestFrames sim_frames = manifest_frames(sim_manifest, sim_dir / "manifest.json");
+    const int sim_first = sim_frames.first, sim_last = sim_frames.last;
     int first = sim_first, last = sim_last;
     if (options.frame_range.is_set()) {
         first = options.frame_range.first;
