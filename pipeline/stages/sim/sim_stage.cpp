@@ -307,11 +307,7 @@ int run_sim_stage(const Shot& shot, const StageOptions& options, const SimStageO
             particles.frame = frame;
             particles.time = state.time;
             particles.substeps = frame_substeps;
-            PointCloud cloud = frame_to_points(particles);
-            cloud.meta_string["mudcrack:stage"] = "sim";
-            cloud.meta_int["mudcrack:frame"] = frame;
-            cloud.meta_int["mudcrack:substeps"] = frame_substeps;
-            cloud.meta_double["mudcrack:time"] = state.time;
+            const PointCloud cloud = frame_to_points(particles);  // with the cache's metadata
             try {
                 const fs::path cache = frame_path(sim_dir, "particles", frame, "vdb");
                 write_points(cache, cloud, model.h);
