@@ -8,6 +8,7 @@
 #include <map>
 #include <string>
 
+#include "pipeline/io/mesh_io.h"
 #include "sim/core/particle_attributes.h"
 #include "surfacing/surface_params.h"
 
@@ -204,9 +205,8 @@ std::vector<KeySpec> build_fixed_table() {
     Key("/surfacing/length_consistent", T::Bool).def(false).units("")
         .doc("threshold 0.5 (Jw_p^(1/3) + Jw_q^(1/3)) zeta (docs/physics.md §5.5)"),
     Key("/surfacing/cracks", T::Bool).def(true).units("").doc("mesh crack surfaces (false: boundary only)"),
-    Key("/surfacing/format", T::Enum).def("glb").choices({"glb", "obj", "ply", "dae"}).units("")
-        .refuse("fbx", "FBX is not offered: the binary FBX writer of assimp 5.2.5 (Debian 12) fails or writes "
-                       "corrupt files (upstream bug assimp/assimp#4686); use \"glb\" (or \"dae\") and convert in your DCC")
+    Key("/surfacing/format", T::Enum).def("glb").choices(mesh_format_names()).units("")
+        .refuse("fbx", kFbxRefusal)
         .doc("mesh file format (assimp exporter); not fbx (assimp/assimp#4686)"),
     Key("/surfacing/min_fragment_particles", T::Integer).def(1).ge(1).units("particles")
         .doc("fragments smaller than this are culled as debris"),
