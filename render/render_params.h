@@ -13,6 +13,11 @@ enum class ColorMode {
     Plain,     // albedo only
 };
 
+/// The image sides /render/resolution accepts (the shot spec's bounds) and the renderer's
+/// precondition [px].
+constexpr int kMinResolution = 16;
+constexpr int kMaxResolution = 16384;
+
 struct CameraParams {
     bool is_auto = true;           // frame the bounds automatically
     Vec3 position = Vec3(3, 2, 3); // [m]

@@ -30,7 +30,6 @@ double coverage_fraction(const RenderedImage& image) {
 namespace {
 
 constexpr int kShadowMapSize = 2048;
-constexpr int kMaxResolution = 16384;
 
 // light rig (linear RGB intensities), tuned for a mid-grey soil albedo under the ACES curve
 constexpr float kKeyColor[3] = {1.55f, 1.45f, 1.32f};
@@ -295,8 +294,8 @@ Renderer::Renderer(const RenderParams& params, const ShadingOptions& options)
     : m_impl(std::make_unique<Impl>()) {
     Impl& r = *m_impl;
     // the shot layer bounds /render/resolution (naming the file); here a bad size is a bug
-    MC_CHECK_GE(params.width, 1);
-    MC_CHECK_GE(params.height, 1);
+    MC_CHECK_GE(params.width, kMinResolution);
+    MC_CHECK_GE(params.height, kMinResolution);
     MC_CHECK_LE(params.width, kMaxResolution);
     MC_CHECK_LE(params.height, kMaxResolution);
     if (params.samples < 1)

@@ -9,6 +9,7 @@
 #include <string>
 
 #include "pipeline/io/mesh_io.h"
+#include "render/render_params.h"
 #include "sim/core/particle_attributes.h"
 #include "surfacing/surface_params.h"
 
@@ -223,7 +224,7 @@ std::vector<KeySpec> build_fixed_table() {
 
     // --- render: the headless preview
     Key("/render", T::Section).optional().doc("preview renderer (mc-render); omit for none"),
-    Key("/render/resolution", T::Vec2i).def(json::array({960, 540})).ge(16).le(16384).units("px").doc("[width, height]"),
+    Key("/render/resolution", T::Vec2i).def(json::array({960, 540})).ge(kMinResolution).le(kMaxResolution).units("px").doc("[width, height]"),
     Key("/render/color_mode", T::Enum).def("moisture").choices({"moisture", "hardening", "plain"}).units("")
         .doc("moisture: wetter is darker; hardening: alpha colormap (Fig. 9); plain: albedo"),
     Key("/render/camera", T::Section).optional().doc("fixed camera; omit to frame the bounds automatically"),

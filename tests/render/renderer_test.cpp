@@ -221,12 +221,12 @@ TEST(Render, GroundSitsUnderTheStage) {
 }
 
 TEST(RenderErrors, BadInputIsRefused) {
-    // a resolution out of 1..16384 is refused: the shot layer names the file and key, and below
-    // it a bad size is a bug the renderer's precondition check stops
+    // a resolution out of kMinResolution..kMaxResolution is refused: the shot layer names the
+    // file and key, and below it a bad size is a bug the renderer's precondition check stops
     RenderParams p = small_params(ColorMode::Plain);
     p.width = 0;
     ::testing::FLAGS_gtest_death_test_style = "threadsafe";
-    EXPECT_DEATH(Renderer{p}, "params.width >= 1");
+    EXPECT_DEATH(Renderer{p}, "params.width >= kMinResolution");
     p = small_params(ColorMode::Plain);
     p.height = 16385;
     EXPECT_DEATH(Renderer{p}, "params.height <= kMaxResolution");
