@@ -84,7 +84,7 @@ struct Program {
     std::unordered_map<std::string, GLint> locations;
 
     void build(const char* name, const char* vertex, const char* fragment, bool needs_shading) {
-        const std::string head = "#version 330 core\n";
+        const std::string head = "#version 330 core\n" + color_mode_glsl_defines();
         const std::string chunk = needs_shading ? shaders::kShadingChunk : "";
         const GLuint vs = compile(GL_VERTEX_SHADER, head + vertex, name);
         const GLuint fs = compile(GL_FRAGMENT_SHADER, head + chunk + fragment, name);
@@ -431,9 +431,7 @@ void Renderer::Impl::draw_shadow_pass(const Eigen::Matrix4f& light_view, const E
 void Renderer::Impl::set_shading_uniforms(Program& p, const Camera& camera,
                                           const Eigen::Matrix4f& light_view_proj, const Vec3f& key,
                                           const Vec3f& fill, const Vec3f& rim) {
-    p.set("u_mode", params.color_mode == ColorMode::Moisture    ? 0
-                    : params.color_mode == ColorMode::Hardening ? 1
-                                                                : 2);
+    p.set("u_mode", static_cast<int>(params.color_mode));  // the shaders' MC_COLOR_MODE_*
     p.set("u_albedo", params.albedo.cast<float>().eval());
     p.set("u_moisture_darkening", kMoistureDarkening);
     p.set("u_alpha0", options.alpha0);

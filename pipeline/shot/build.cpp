@@ -143,12 +143,6 @@ ColliderMode collider_mode(const std::string& name) {
     return ColliderMode::Sticky;
 }
 
-ColorMode color_mode(const std::string& name) {
-    if (name == "hardening") return ColorMode::Hardening;
-    if (name == "plain") return ColorMode::Plain;
-    return ColorMode::Moisture;
-}
-
 void build_mesh(json& tree, const std::string& shot_path, MeshSource& mesh, Issues& issues) {
     if (has(tree, "/source/mesh/path"))
         mesh.path = resolve_existing(tree, "/source/mesh/path", shot_path, issues);
@@ -375,7 +369,7 @@ std::optional<RenderParams> build_render(const json& tree) {
     const json& resolution = tree.at(json::json_pointer("/render/resolution"));
     r.width = static_cast<int>(resolution[0].get<std::int64_t>());
     r.height = static_cast<int>(resolution[1].get<std::int64_t>());
-    r.color_mode = color_mode(text(tree, "/render/color_mode"));
+    r.color_mode = parse_color_mode(text(tree, "/render/color_mode")).value_or(ColorMode::Moisture);
     r.camera.is_auto = !has(tree, "/render/camera");
     if (!r.camera.is_auto) {
         using C = CameraParams;

@@ -225,7 +225,7 @@ std::vector<KeySpec> build_fixed_table() {
     // --- render: the headless preview
     Key("/render", T::Section).optional().doc("preview renderer (mc-render); omit for none"),
     Key("/render/resolution", T::Vec2i).def(json::array({960, 540})).ge(kMinResolution).le(kMaxResolution).units("px").doc("[width, height]"),
-    Key("/render/color_mode", T::Enum).def("moisture").choices({"moisture", "hardening", "plain"}).units("")
+    Key("/render/color_mode", T::Enum).def("moisture").choices(color_mode_names()).units("")
         .doc("moisture: wetter is darker; hardening: alpha colormap (Fig. 9); plain: albedo"),
     Key("/render/camera", T::Section).optional().doc("fixed camera; omit to frame the bounds automatically"),
     Key("/render/camera/position", T::Vec3).def(vec(3, 2, 3)).units("m").doc("eye position"),
