@@ -357,7 +357,7 @@ std::optional<SurfaceParams> build_surface(const json& tree, Issues& issues) {
                     {"min_piece_size", &S::min_piece_size}, {"debris_gap", &S::debris_gap},
                     {"close_gaps", &S::close_gaps}, {"wall_smoothing", &S::wall_smoothing}});
     s.debris = text(tree, "/surfacing/debris") == "points" ? DebrisOutput::Points : DebrisOutput::None;
-    if (s.debris != DebrisOutput::None && s.mode != SurfaceMode::Plates)
+    if (debris_needs_plates(s))
         issues.add("/surfacing/debris", issues.value_of(tree, "/surfacing/debris"),
                    "needs /surfacing/mode = \"plates\" (only the plates mode tells debris from the pieces)");
     return s;

@@ -197,7 +197,7 @@ int run_surface_stage(const StageOptions& options, const SurfaceStageOptions& su
         const std::optional<SurfaceMode> mode = parse_surface_mode(mode_flag);
         if (!mode) throw InputError("--mode " + mode_flag + ": not a surfacing mode");
         params.mode = *mode;
-        if (params.debris != DebrisOutput::None && params.mode != SurfaceMode::Plates)
+        if (debris_needs_plates(params))
             throw InputError("--mode " + mode_flag + ": " + shot.path +
                              " asks for /surfacing/debris, which only the plates mode writes");
     }
