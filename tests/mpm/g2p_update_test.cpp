@@ -27,8 +27,6 @@ namespace {
 using test::make_lattice;
 using test::plain_model;
 
-const bool kOneThread = (set_thread_count(1), true);
-
 // a soil with pores and NACC whose particles start at rest, unstressed (Fe = I) and hardened far
 // inside the yield surface (alpha0 = -2: p0 = 3.6 kappa), so the return map leaves them alone and
 // only the pore update moves Fe and alpha. No diffusion and no evaporation: theta stays put.

@@ -21,10 +21,6 @@ namespace {
 using test::make_lattice;
 using test::plain_model;
 
-// the tests run on one thread unless they say otherwise (the machine is shared; determinism
-// across thread counts has its own test)
-const bool kOneThread = (set_thread_count(1), true);
-
 // a block of 8x8x8 particles, 2 per cell, h = 0.1, away from every wall
 SimState block_state(const SimModel& model, Vec3 lo = Vec3(0, 0, 0), Vec3i n = Vec3i(8, 8, 8)) {
     const test::Lattice l = make_lattice(lo, n, model.h / 2);

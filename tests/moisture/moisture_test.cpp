@@ -9,7 +9,7 @@
 #include <map>
 #include <random>
 
-#include "mpm_test_util.h"
+#include "mpm/mpm_test_util.h"
 #include "sim/core/parallel.h"
 #include "sim/moisture/moisture_solver.h"
 #include "sim/moisture/pore.h"
@@ -23,8 +23,6 @@ namespace {
 
 using test::make_lattice;
 using test::plain_model;
-
-const bool kOneThread = (set_thread_count(1), true);
 
 // tolerance of the 1 % volume check of a fully dried block
 constexpr Real kDriedVolumeTolerance = 0.01;
