@@ -220,6 +220,7 @@ TEST(InitColumnLattice, SteepColumnsStayPositive) {
     std::vector<Real> top(5 * 5);
     for (size_t c = 0; c < top.size(); ++c) top[c] = (c % 3 == 0) ? 1.0 : 0.02;
     const TetMesh m = make_column_lattice_tets(0, 0, 1, 1, 4, 3, 4, top);
+    ASSERT_EQ(m.tets.size(), size_t(6 * 4 * 3 * 4)) << "6 Kuhn tets per cell of the 4 x 3 x 4 lattice";
     test::expect_all_tets_positive(m);
 }
 
