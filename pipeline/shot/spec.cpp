@@ -62,6 +62,7 @@ using T = KeyType;
 
 json vec(double a, double b, double c) { return json::array({a, b, c}); }
 
+// @note A data table, one row per shot key (docs/architecture.md §4), so longer than a page.
 std::vector<KeySpec> build_fixed_table() {
     // clang-format off
     return {
