@@ -1,4 +1,4 @@
-# Debian 12 packages only (see shared/docs/debian-deps.md); the Makefile installs them.
+# Debian 12 packages only; the Makefile installs them (APT_PACKAGES, `make deps`).
 find_package(Eigen3 3.4 REQUIRED NO_MODULE)       # Eigen3::Eigen
 find_package(OpenMP REQUIRED)                     # OpenMP::OpenMP_CXX
 find_package(TBB CONFIG REQUIRED)                 # TBB::tbb (oneTBB's own config)

@@ -9,8 +9,8 @@
 namespace mudcrack {
 
 namespace {
-constexpr float kPi = 3.14159265358979f;
-float radians(float deg) { return deg * kPi / 180.0f; }
+constexpr float kPiF = float(kPi);  // the renderer works in float
+float radians(float deg) { return deg * kPiF / 180.0f; }
 }  // namespace
 
 Eigen::Matrix4f look_at(const Vec3f& eye, const Vec3f& target, const Vec3f& up_hint) {
@@ -107,10 +107,10 @@ Camera auto_frame_orbit(const Bounds& bounds, float fov_deg, float aspect, float
     constexpr int kSides = 96;
     const Vec3f c = bounds.center();
     const float r = 0.5f * std::hypot(bounds.max.x() - bounds.min.x(), bounds.max.z() - bounds.min.z()) /
-                    std::cos(kPi / kSides);
+                    std::cos(kPiF / kSides);
     std::vector<Vec3f> rims;
     for (int k = 0; k < kSides; ++k) {
-        const float a = 2 * kPi * k / kSides;
+        const float a = 2 * kPiF * k / kSides;
         for (const float y : {bounds.min.y(), bounds.max.y()})
             rims.emplace_back(c.x() + r * std::cos(a), y, c.z() + r * std::sin(a));
     }
@@ -138,7 +138,7 @@ Camera orbit(const Camera& camera, float angle_rad) {
 }
 
 Camera turntable_camera(const Camera& base, int view, int views) {
-    return orbit(base, 2.0f * kPi * float(view) / float(std::max(views, 1)));
+    return orbit(base, 2.0f * kPiF * float(view) / float(std::max(views, 1)));
 }
 
 }  // namespace mudcrack

@@ -2,16 +2,25 @@
 /// Settings of the headless preview renderer.
 #include <optional>
 #include <string>
+#include <vector>
 
 #include "sim/core/types.h"
 
 namespace mudcrack {
 
+/// The colour modes. Their names (/render/color_mode, manifests) and the shader's constants
+/// (MC_COLOR_MODE_<NAME>, the enum's values) both come from one table, kColorModes
+/// (render_params.cpp).
 enum class ColorMode {
-    Moisture,  // wetter is darker (the paper's convention), from per-vertex saturation
-    Hardening, // alpha through a diverging colormap (the paper's Fig. 9)
-    Plain,     // albedo only
+    Moisture = 0,  // wetter is darker (the paper's convention), from per-vertex saturation
+    Hardening = 1, // alpha through a diverging colormap (the paper's Fig. 9)
+    Plain = 2,     // albedo only
 };
+
+/// The image sides /render/resolution accepts (the shot spec's bounds) and the renderer's
+/// precondition [px].
+constexpr int kMinResolution = 16;
+constexpr int kMaxResolution = 16384;
 
 struct CameraParams {
     bool is_auto = true;           // frame the bounds automatically
@@ -39,4 +48,11 @@ struct RenderParams {
 namespace mudcrack {
 /// "moisture" | "hardening" | "plain".
 const char* color_mode_name(ColorMode mode);
+/// The mode of a name, or nullopt for another string.
+std::optional<ColorMode> parse_color_mode(const std::string& name);
+/// Every mode's name, in the enum's order (the shot spec's choices).
+std::vector<std::string> color_mode_names();
+/// GLSL lines "#define MC_COLOR_MODE_MOISTURE 0" ..., one per mode: what the shaders compare
+/// their u_mode uniform (the enum's value) with.
+std::string color_mode_glsl_defines();
 }  // namespace mudcrack

@@ -30,7 +30,6 @@ double coverage_fraction(const RenderedImage& image) {
 namespace {
 
 constexpr int kShadowMapSize = 2048;
-constexpr int kMaxResolution = 16384;
 
 // light rig (linear RGB intensities), tuned for a mid-grey soil albedo under the ACES curve
 constexpr float kKeyColor[3] = {1.55f, 1.45f, 1.32f};
@@ -85,7 +84,7 @@ struct Program {
     std::unordered_map<std::string, GLint> locations;
 
     void build(const char* name, const char* vertex, const char* fragment, bool needs_shading) {
-        const std::string head = "#version 330 core\n";
+        const std::string head = "#version 330 core\n" + color_mode_glsl_defines();
         const std::string chunk = needs_shading ? shaders::kShadingChunk : "";
         const GLuint vs = compile(GL_VERTEX_SHADER, head + vertex, name);
         const GLuint fs = compile(GL_FRAGMENT_SHADER, head + chunk + fragment, name);
@@ -196,6 +195,15 @@ struct Renderer::Impl {
     void draw_shadow_pass(const Eigen::Matrix4f& light_view, const Eigen::Matrix4f& light_proj);
     void set_shading_uniforms(Program& p, const Camera& camera, const Eigen::Matrix4f& light_view_proj,
                               const Vec3f& key, const Vec3f& fill, const Vec3f& rim);
+    /// The particles as sphere impostors (when there are any).
+    void draw_sprites(const Camera& camera, const Eigen::Matrix4f& view, const Eigen::Matrix4f& proj,
+                      const Eigen::Matrix4f& light_view_proj, const Vec3f& key, const Vec3f& fill, const Vec3f& rim);
+    /// The ground plane under the stage, blended into the background.
+    void draw_ground(const Camera& camera, const Eigen::Matrix4f& view_proj, const Eigen::Matrix4f& light_view_proj,
+                     const Vec3f& key, const Vec3f& fill, const Vec3f& rim, const Vec3f& center, float radius,
+                     float ground_radius);
+    /// Resolves the multisampled buffers and reads the image back, top row first.
+    RenderedImage read_back(int w, int h);
 };
 
 void Renderer::Impl::create_context() {
@@ -295,8 +303,8 @@ Renderer::Renderer(const RenderParams& params, const ShadingOptions& options)
     : m_impl(std::make_unique<Impl>()) {
     Impl& r = *m_impl;
     // the shot layer bounds /render/resolution (naming the file); here a bad size is a bug
-    MC_CHECK_GE(params.width, 1);
-    MC_CHECK_GE(params.height, 1);
+    MC_CHECK_GE(params.width, kMinResolution);
+    MC_CHECK_GE(params.height, kMinResolution);
     MC_CHECK_LE(params.width, kMaxResolution);
     MC_CHECK_LE(params.height, kMaxResolution);
     if (params.samples < 1)
@@ -432,9 +440,7 @@ void Renderer::Impl::draw_shadow_pass(const Eigen::Matrix4f& light_view, const E
 void Renderer::Impl::set_shading_uniforms(Program& p, const Camera& camera,
                                           const Eigen::Matrix4f& light_view_proj, const Vec3f& key,
                                           const Vec3f& fill, const Vec3f& rim) {
-    p.set("u_mode", params.color_mode == ColorMode::Moisture    ? 0
-                    : params.color_mode == ColorMode::Hardening ? 1
-                                                                : 2);
+    p.set("u_mode", static_cast<int>(params.color_mode));  // the shaders' MC_COLOR_MODE_*
     p.set("u_albedo", params.albedo.cast<float>().eval());
     p.set("u_moisture_darkening", kMoistureDarkening);
     p.set("u_alpha0", options.alpha0);
@@ -529,46 +535,59 @@ RenderedImage Renderer::render(const Camera& camera) {
         glDrawElements(GL_TRIANGLES, g.index_count, GL_UNSIGNED_INT, nullptr);
     }
 
-    // particles as ray-cast sphere impostors, silhouettes anti-aliased by alpha-to-coverage
-    if (r.sprite_count > 0) {
-        glUseProgram(r.sprite.id);
-        r.set_shading_uniforms(r.sprite, camera, light_view_proj, key, fill, rim);
-        r.sprite.set("u_view", view);
-        r.sprite.set("u_proj", proj);
-        r.sprite.set("u_world_from_view", Eigen::Matrix4f(view.inverse()));
-        r.sprite.set("u_radius", r.sprite_radius);
-        const float pixel_angle = 2.0f * std::tan(0.5f * camera.fov_deg * 3.14159265f / 180.0f) / float(h);
-        r.sprite.set("u_pixel_angle", pixel_angle);
-        glBindVertexArray(r.sprite_vao);
-        if (!r.sprite_has_saturation) glVertexAttrib1f(1, 0.0f);
-        if (!r.sprite_has_alpha) glVertexAttrib1f(2, r.options.alpha0);
-        if (r.samples > 1) glEnable(GL_SAMPLE_ALPHA_TO_COVERAGE);
-        glDrawArraysInstanced(GL_TRIANGLE_STRIP, 0, 4, GLsizei(r.sprite_count));
-        glDisable(GL_SAMPLE_ALPHA_TO_COVERAGE);
-    }
+    // particles as ray-cast sphere impostors, the ground plane, then the image
+    r.draw_sprites(camera, view, proj, light_view_proj, key, fill, rim);
+    if (r.options.has_ground && has_stage)
+        r.draw_ground(camera, view_proj, light_view_proj, key, fill, rim, center, radius, ground_radius);
+    return r.read_back(w, h);
+}
 
-    // ground plane at the stage's lowest point, blended into the background, no coverage
-    if (r.options.has_ground && has_stage) {
-        glUseProgram(r.ground.id);
-        r.set_shading_uniforms(r.ground, camera, light_view_proj, key, fill, rim);
-        r.ground.set("u_view_proj", view_proj);
-        // a hair below the lowest point so a flat bottom does not z-fight with the floor
-        r.ground.set("u_ground_center", Vec3f(center.x(), stage.min.y() - 1e-4f * radius, center.z()));
-        r.ground.set("u_ground_radius", ground_radius);
-        r.ground.set("u_ground_color", kGroundColor);
-        r.ground.set("u_grid_step", std::pow(10.0f, std::round(std::log10(radius * 0.3f))));
-        glEnable(GL_BLEND);
-        glBlendFunc(GL_SRC_ALPHA, GL_ONE_MINUS_SRC_ALPHA);
-        glColorMaski(1, GL_FALSE, GL_FALSE, GL_FALSE, GL_FALSE);
-        glBindVertexArray(r.empty_vao);
-        glDrawArrays(GL_TRIANGLE_STRIP, 0, 4);
-        glColorMaski(1, GL_TRUE, GL_TRUE, GL_TRUE, GL_TRUE);
-        glDisable(GL_BLEND);
-    }
+// particles as ray-cast sphere impostors, silhouettes anti-aliased by alpha-to-coverage
+void Renderer::Impl::draw_sprites(const Camera& camera, const Eigen::Matrix4f& view, const Eigen::Matrix4f& proj,
+                                  const Eigen::Matrix4f& light_view_proj, const Vec3f& key, const Vec3f& fill,
+                                  const Vec3f& rim) {
+    if (sprite_count == 0) return;
+    glUseProgram(sprite.id);
+    set_shading_uniforms(sprite, camera, light_view_proj, key, fill, rim);
+    sprite.set("u_view", view);
+    sprite.set("u_proj", proj);
+    sprite.set("u_world_from_view", Eigen::Matrix4f(view.inverse()));
+    sprite.set("u_radius", sprite_radius);
+    const float pixel_angle = 2.0f * std::tan(0.5f * camera.fov_deg * float(kPi) / 180.0f) / float(params.height);
+    sprite.set("u_pixel_angle", pixel_angle);
+    glBindVertexArray(sprite_vao);
+    if (!sprite_has_saturation) glVertexAttrib1f(1, 0.0f);
+    if (!sprite_has_alpha) glVertexAttrib1f(2, options.alpha0);
+    if (samples > 1) glEnable(GL_SAMPLE_ALPHA_TO_COVERAGE);
+    glDrawArraysInstanced(GL_TRIANGLE_STRIP, 0, 4, GLsizei(sprite_count));
+    glDisable(GL_SAMPLE_ALPHA_TO_COVERAGE);
+}
 
+// ground plane at the stage's lowest point, blended into the background, no coverage
+void Renderer::Impl::draw_ground(const Camera& camera, const Eigen::Matrix4f& view_proj,
+                                 const Eigen::Matrix4f& light_view_proj, const Vec3f& key, const Vec3f& fill,
+                                 const Vec3f& rim, const Vec3f& center, float radius, float ground_radius) {
+    glUseProgram(ground.id);
+    set_shading_uniforms(ground, camera, light_view_proj, key, fill, rim);
+    ground.set("u_view_proj", view_proj);
+    // a hair below the lowest point so a flat bottom does not z-fight with the floor
+    ground.set("u_ground_center", Vec3f(center.x(), stage.min.y() - 1e-4f * radius, center.z()));
+    ground.set("u_ground_radius", ground_radius);
+    ground.set("u_ground_color", kGroundColor);
+    ground.set("u_grid_step", std::pow(10.0f, std::round(std::log10(radius * 0.3f))));
+    glEnable(GL_BLEND);
+    glBlendFunc(GL_SRC_ALPHA, GL_ONE_MINUS_SRC_ALPHA);
+    glColorMaski(1, GL_FALSE, GL_FALSE, GL_FALSE, GL_FALSE);
+    glBindVertexArray(empty_vao);
+    glDrawArrays(GL_TRIANGLE_STRIP, 0, 4);
+    glColorMaski(1, GL_TRUE, GL_TRUE, GL_TRUE, GL_TRUE);
+    glDisable(GL_BLEND);
+}
+
+RenderedImage Renderer::Impl::read_back(int w, int h) {
     // resolve MSAA: color, then the coverage mask
-    glBindFramebuffer(GL_READ_FRAMEBUFFER, r.msaa_fbo);
-    glBindFramebuffer(GL_DRAW_FRAMEBUFFER, r.resolve_fbo);
+    glBindFramebuffer(GL_READ_FRAMEBUFFER, msaa_fbo);
+    glBindFramebuffer(GL_DRAW_FRAMEBUFFER, resolve_fbo);
     for (int a = 0; a < 2; ++a) {
         const GLenum attachment = GLenum(GL_COLOR_ATTACHMENT0 + a);
         const GLenum draw[2] = {a == 0 ? attachment : GLenum(GL_NONE), a == 1 ? attachment : GLenum(GL_NONE)};
@@ -582,7 +601,7 @@ RenderedImage Renderer::render(const Camera& camera) {
     img.width = w;
     img.height = h;
     std::vector<uint8_t> rgba(size_t(w) * h * 4), cov(size_t(w) * h);
-    glBindFramebuffer(GL_READ_FRAMEBUFFER, r.resolve_fbo);
+    glBindFramebuffer(GL_READ_FRAMEBUFFER, resolve_fbo);
     glPixelStorei(GL_PACK_ALIGNMENT, 1);
     glReadBuffer(GL_COLOR_ATTACHMENT0);
     glReadPixels(0, 0, w, h, GL_RGBA, GL_UNSIGNED_BYTE, rgba.data());

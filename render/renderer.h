@@ -36,7 +36,9 @@ struct ShadingOptions {
 class Renderer {
 public:
     /// Creates the OSMesa GL 3.3 core context and the framebuffers. Throws InputError for a
-    /// resolution or sample count out of range, RuntimeError if OSMesa or GL setup fails.
+    /// sample count below 1 or an alpha_range <= 0, RuntimeError if OSMesa or GL setup fails.
+    /// @note A side outside [kMinResolution, kMaxResolution] is a bug, stopped by a precondition
+    /// check: the shot spec refuses such a /render/resolution, naming the file and key.
     /// llvmpipe's thread count is fixed by LP_NUM_THREADS when the first context is made.
     explicit Renderer(const RenderParams& params, const ShadingOptions& options = {});
     ~Renderer();

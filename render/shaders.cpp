@@ -5,7 +5,7 @@ namespace mudcrack::shaders {
 // Every program that shades a surface is "#version 330 core" + kShadingChunk + its own main().
 const char* const kShadingChunk = R"GLSL(
 // color modes (render/colormap.h holds the same conventions for the CPU side)
-uniform int u_mode;                 // 0 moisture, 1 hardening, 2 plain
+uniform int u_mode;                 // a MC_COLOR_MODE_* (render_params.h: color_mode_glsl_defines)
 uniform vec3 u_albedo;              // dry soil, linear RGB
 uniform float u_moisture_darkening; // color = albedo (1 - k s)
 uniform float u_alpha0;             // hardening colormap center
@@ -44,15 +44,15 @@ vec3 colormap(float t) {
 // linear base color of a surface point in the current color mode
 vec3 base_color(float s, float a, bool is_crack) {
     vec3 c;
-    if (u_mode == 1) {
+    if (u_mode == MC_COLOR_MODE_HARDENING) {
         c = srgb_to_linear(colormap(0.5 + 0.5 * (a - u_alpha0) / u_alpha_range));
-    } else if (u_mode == 0) {
+    } else if (u_mode == MC_COLOR_MODE_MOISTURE) {
         c = u_albedo * (1.0 - u_moisture_darkening * clamp(s, 0.0, 1.0));
     } else {
         c = u_albedo;
     }
     // hardening keeps its colormap readable inside cracks; the others show darker, warmer soil
-    if (is_crack && u_mode != 1) c *= u_crack_tint;
+    if (is_crack && u_mode != MC_COLOR_MODE_HARDENING) c *= u_crack_tint;
     return c;
 }
 
@@ -164,7 +164,7 @@ void main() {
     bool is_crack = u_is_crack == 1;
     vec3 base = base_color(v_saturation, v_alpha, is_crack);
     float ao = is_crack ? crack_occlusion(v_position) : 1.0;
-    float wetness = u_mode == 0 ? clamp(v_saturation, 0.0, 1.0) : 0.0;
+    float wetness = u_mode == MC_COLOR_MODE_MOISTURE ? clamp(v_saturation, 0.0, 1.0) : 0.0;
     o_color = vec4(shade(v_position, N, base, ao, wetness), 1.0);
     o_coverage = vec4(1.0);
 }
@@ -233,7 +233,7 @@ void main() {
     vec3 P = (u_world_from_view * vec4(hit, 1.0)).xyz;
     vec3 N = normalize(mat3(u_world_from_view) * n_view);
     vec3 base = base_color(v_saturation, v_alpha, false);
-    float wetness = u_mode == 0 ? clamp(v_saturation, 0.0, 1.0) : 0.0;
+    float wetness = u_mode == MC_COLOR_MODE_MOISTURE ? clamp(v_saturation, 0.0, 1.0) : 0.0;
     o_color = vec4(shade(P, N, base, 1.0, wetness), edge);
     o_coverage = vec4(1.0, 0.0, 0.0, edge);
 }

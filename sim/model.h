@@ -2,6 +2,7 @@
 /// The immutable simulation model (MuJoCo's mjModel): everything mc-sim needs from the shot,
 /// already validated, in SI units. Built by pipeline/shot; the sim never sees JSON. A section the
 /// shot leaves out is std::nullopt here and is never computed or allocated.
+#include <algorithm>
 #include <optional>
 #include <string>
 
@@ -58,6 +59,10 @@ struct MoistureParams {
     enum class Evaporation { Grid, Surface } evaporation = Evaporation::Grid;
     int interval = 1;            // solve moisture every k MPM steps with dt_m = k dt
     Real max_log_jw_step = 1e-3; // cap on |log(Jw^n/Jw^{n+1})| per step (docs/physics.md §3.2)
+    /// The particles' starting moisture: theta_init, or eta (fully saturated, paper Section 7.1)
+    /// when theta_init < 0; clamped to [0, eta] (min, then max: no precondition on eta, which the
+    /// shot loader reads before it reports a bad one).
+    Real initial_theta() const { return std::max(Real(0), std::min(theta_init < 0 ? eta : theta_init, eta)); }
 };
 
 enum class ColliderMode { Sticky, Slip, Separate };

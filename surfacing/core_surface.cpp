@@ -518,19 +518,26 @@ bool is_even_permutation(int i, int j, int k, int l) {
     return inversions % 2 == 0;
 }
 
-void build_crack(const CoreTopology& topo, const FrameCores& cores, const Fragments& frag,
-                 const std::vector<uint8_t>& is_broken, SurfacedFrame& out) {
-    TriMesh& mesh = out.crack;
-    std::vector<int32_t> broken;
-    for (int32_t e = 0; e < topo.n_edges(); ++e)
-        if (is_broken[e] && !cores.hides_wall(e)) broken.push_back(e);
-    const int64_t nbr = static_cast<int64_t>(broken.size());
+/// Compact ranks of the faces and tets around the broken edges, in order of first use, and each
+/// broken edge's first interface triangle (4 per incident tet).
+struct CrackRanks {
+    std::vector<int32_t> face_rank, tet_rank;         // -1: not around a broken edge
+    std::vector<std::array<int32_t, 2>> active_face;  // (tet, opposite corner) by rank
+    std::vector<int32_t> active_tet;                  // by rank
+    std::vector<int64_t> tri_begin;                   // (broken edges + 1)
+};
 
-    // faces and tets around broken edges get compact ranks, in order of first use
-    std::vector<int32_t> face_rank(topo.n_faces, -1), tet_rank(topo.n_tets(), -1);
-    std::vector<std::array<int32_t, 2>> active_face;  // (tet, opposite corner)
-    std::vector<int32_t> active_tet;
-    std::vector<int64_t> tri_begin(nbr + 1, 0);
+CrackRanks rank_crack_elements(const CoreTopology& topo, const std::vector<int32_t>& broken) {
+    const int64_t nbr = static_cast<int64_t>(broken.size());
+    CrackRanks ranks;
+    std::vector<int32_t>& face_rank = ranks.face_rank;
+    std::vector<int32_t>& tet_rank = ranks.tet_rank;
+    std::vector<std::array<int32_t, 2>>& active_face = ranks.active_face;
+    std::vector<int32_t>& active_tet = ranks.active_tet;
+    std::vector<int64_t>& tri_begin = ranks.tri_begin;
+    face_rank.assign(topo.n_faces, -1);
+    tet_rank.assign(topo.n_tets(), -1);
+    tri_begin.assign(nbr + 1, 0);
     for (int64_t r = 0; r < nbr; ++r) {
         const int32_t e = broken[r];
         const int32_t b = topo.edge_tet_begin[e], end = topo.edge_tet_begin[e + 1];
@@ -550,6 +557,24 @@ void build_crack(const CoreTopology& topo, const FrameCores& cores, const Fragme
             }
         }
     }
+    return ranks;
+}
+
+void build_crack(const CoreTopology& topo, const FrameCores& cores, const Fragments& frag,
+                 const std::vector<uint8_t>& is_broken, SurfacedFrame& out) {
+    TriMesh& mesh = out.crack;
+    std::vector<int32_t> broken;
+    for (int32_t e = 0; e < topo.n_edges(); ++e)
+        if (is_broken[e] && !cores.hides_wall(e)) broken.push_back(e);
+    const int64_t nbr = static_cast<int64_t>(broken.size());
+
+    // faces and tets around broken edges get compact ranks, in order of first use
+    CrackRanks ranks = rank_crack_elements(topo, broken);
+    std::vector<int32_t>& face_rank = ranks.face_rank;
+    std::vector<int32_t>& tet_rank = ranks.tet_rank;
+    const std::vector<std::array<int32_t, 2>>& active_face = ranks.active_face;
+    const std::vector<int32_t>& active_tet = ranks.active_tet;
+    const std::vector<int64_t>& tri_begin = ranks.tri_begin;
     // weld slots: 2 per broken-edge midpoint, 3 per active face centroid, 4 per active tet
     // centroid; out slot = 3 * weld slot + projection axis
     const int64_t face0 = 2 * nbr, tet0 = face0 + 3 * int64_t(active_face.size());

@@ -176,8 +176,8 @@ FaceBuckets build_faces(const TetMesh& mesh, CoreTopology& topo) {
     return fb;
 }
 
-/// Matches TetMesh::boundary to the single-tet faces and lays out the skin's UV vertices.
-void build_skin(const TetMesh& mesh, const FaceBuckets& fb, CoreTopology& topo) {
+/// Matches TetMesh::boundary to the single-tet faces: topo.skin_faces, checked and oriented.
+void match_skin_faces(const TetMesh& mesh, const FaceBuckets& fb, CoreTopology& topo) {
     const size_t nb = mesh.boundary.size();
     topo.skin_faces.resize(nb);
     std::vector<uint8_t> matched(topo.n_faces, 0);
@@ -221,8 +221,11 @@ void build_skin(const TetMesh& mesh, const FaceBuckets& fb, CoreTopology& topo) 
     if (static_cast<int64_t>(nb) != n_single)
         fail("boundary lists " + std::to_string(nb) + " faces but the tets have " + std::to_string(n_single) +
              " faces with a single tet; expected the boundary to be exactly those faces");
+}
 
-    // texture density of the given UVs (uv length per rest length); else 1 per bounding-box extent
+/// The texture density of the given UVs (uv length per rest length); else 1 per bounding-box extent.
+void set_uv_density(const TetMesh& mesh, CoreTopology& topo) {
+    const size_t nb = mesh.boundary.size();
     Real uv_len = 0, x_len = 0;
     if (!mesh.boundary_uv.empty())
         for (size_t i = 0; i < nb; ++i)
@@ -242,7 +245,12 @@ void build_skin(const TetMesh& mesh, const FaceBuckets& fb, CoreTopology& topo) 
         const Real extent = (hi - lo).maxCoeff();
         topo.uv_per_meter = extent > 0 ? 1 / extent : 1;
     }
+}
 
+/// The skin's UV vertices: one per (rest point, uv), split at UV seams, with their weld and output
+/// slots.
+void layout_skin_uv_vertices(const TetMesh& mesh, CoreTopology& topo) {
+    const size_t nb = mesh.boundary.size();
     // one record per (boundary face, rest point); sort by (rest point, uv) to split at seams
     struct Record {
         RestPointKind kind;
@@ -291,6 +299,13 @@ void build_skin(const TetMesh& mesh, const FaceBuckets& fb, CoreTopology& topo) 
     if (!rec.empty()) weld_slot += 1 + static_cast<int>(rec.back().kind);
     topo.n_skin_weld_slots = weld_slot;
     topo.n_skin_out_slots = out_slot;
+}
+
+/// Matches TetMesh::boundary to the single-tet faces and lays out the skin's UV vertices.
+void build_skin(const TetMesh& mesh, const FaceBuckets& fb, CoreTopology& topo) {
+    match_skin_faces(mesh, fb, topo);
+    set_uv_density(mesh, topo);
+    layout_skin_uv_vertices(mesh, topo);
 }
 
 }  // namespace

@@ -23,6 +23,10 @@ std::optional<SurfaceMode> parse_surface_mode(const std::string& name) {
     return std::nullopt;
 }
 
+bool debris_needs_plates(const SurfaceParams& params) {
+    return params.debris != DebrisOutput::None && params.mode != SurfaceMode::Plates;
+}
+
 std::vector<std::string> surface_mode_names() {
     std::vector<std::string> names;
     for (const auto& entry : kModeNames) names.emplace_back(entry.second);

@@ -20,6 +20,11 @@ enum class DebrisOutput {
     Points,  // debris.####.ply per frame: position, velocity, radius, id, piece
 };
 
+struct SurfaceParams;
+/// True when the params ask for debris outside the plates mode, the only mode that tells debris
+/// from the pieces (the shot loader and mc-surface --mode refuse it, each naming its input).
+bool debris_needs_plates(const SurfaceParams& params);
+
 struct SurfaceParams {
     SurfaceMode mode = SurfaceMode::Ours;
     Real zeta = 2;                  // edge-stretch threshold of Eq. 14 [-]

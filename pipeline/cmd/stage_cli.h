@@ -11,6 +11,7 @@
 #include <CLI/CLI.hpp>
 
 #include "pipeline/io/stage_lock.h"
+#include "pipeline/stages/stage_options.h"
 
 namespace mudcrack {
 
@@ -19,25 +20,6 @@ constexpr int kExitUsage = 2;    // bad usage: the parser's errors and every fla
 /// --threads above this many per hardware thread is refused: beyond a few, threads only contend
 /// (1000 threads took 15 s on a 0.3 s shot) and libgomp fails to start 100,000.
 constexpr int kMaxThreadsPerHardwareThread = 4;
-
-struct FrameRange {
-    int first = 0;  // 0 = from the shot
-    int last = 0;   // 0 = from the shot
-    bool is_set() const { return first > 0; }
-};
-
-struct StageOptions {
-    std::string program;       // e.g. "mc-sim"
-    std::string shot;          // --shot
-    std::string out;           // --out: the shot's output root (stages write DIR/<stage>/)
-    std::string frames;        // --frames A-B or N (as given)
-    FrameRange frame_range;    // parsed --frames
-    int threads = 0;           // --threads (0 = all cores)
-    unsigned seed = 0;         // --seed (0 = the shot's)
-    bool quiet = false;        // --quiet: errors and warnings only
-    bool keep_partial = false; // --keep-partial: keep .partial/ folders of a failed run
-    std::string log_level = "info";
-};
 
 /// Parses "A-B" or "N" (1-based, A <= B). Throws UsageError naming the flag otherwise.
 FrameRange parse_frame_range(const std::string& text);

@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # A one-node Slurm cluster in one directory (munge + slurmctld + slurmd), for tests and for trying
-# the farm path on a workstation. Recipe and config: shared/docs/slurm.md (measured on Debian 12,
-# Slurm 22.05). Nothing is installed or started system-wide: state, sockets, logs and the config
+# the farm path on a workstation. The recipe and the config are this script (measured on Debian
+# 12, Slurm 22.05). Nothing is installed or started system-wide: state, sockets, logs and the config
 # all live under DIR, and `stop` ends exactly the daemons `start` launched (by their pid files).
 #
 #   slurm_local_cluster.sh start DIR   write DIR/slurm.conf, start the daemons, wait for the node

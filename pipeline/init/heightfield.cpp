@@ -12,7 +12,7 @@
 namespace mudcrack {
 namespace {
 
-constexpr Real kTwoPi = 2 * M_PI;
+constexpr Real kTwoPi = 2 * kPi;
 
 /// A grayscale image sampled bilinearly over the slab's footprint, in [0, 1].
 class GrayImage {

@@ -88,7 +88,7 @@ std::array<Real, 6> dihedral_angles_deg(const Vec3& a, const Vec3& b, const Vec3
     std::array<Real, 6> angle;
     for (int e = 0; e < 6; ++e) {
         const Real cosine = std::clamp(n[kEdgeFaces[e][0]].dot(n[kEdgeFaces[e][1]]), Real(-1), Real(1));
-        angle[e] = Real(180) - std::acos(cosine) * Real(180) / Real(M_PI);
+        angle[e] = Real(180) - std::acos(cosine) * Real(180) / kPi;
     }
     return angle;
 }

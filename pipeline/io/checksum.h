@@ -28,6 +28,9 @@ inline uint64_t fnv1a64(const void* data, size_t size, uint64_t hash = kFnv1a64O
     return hash;
 }
 
+/// The FNV-1a 64 hash of a string's bytes (the shot slices' hash).
+inline uint64_t fnv1a64_of(const std::string& text) { return fnv1a64(text.data(), text.size()); }
+
 /// Continues a CRC-32 (zlib's crc32: start with 0) over `size` bytes, with the processor's
 /// carry-less multiply where it has one (x86-64 since 2010), else zlib's tables.
 uint32_t crc32_update(uint32_t crc, const void* data, size_t size);

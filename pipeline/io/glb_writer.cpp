@@ -65,23 +65,15 @@ void write_stream(std::ostream& os, const Stream& s) {
     }
 }
 
-}  // namespace
-
-void write_glb(const fs::path& path, const std::vector<TriMesh>& meshes) {
-    static_assert(sizeof(float) == 4 && std::numeric_limits<float>::is_iec559, "glb floats are IEEE 754 binary32");
-    static_assert(__BYTE_ORDER__ == __ORDER_LITTLE_ENDIAN__, "glb arrays are little-endian, written as in memory");
-    for (const TriMesh& m : meshes) check_tri_mesh(path, m);
-
-    std::vector<FragmentSplit> splits;
-    splits.reserve(meshes.size());
-    for (const TriMesh& m : meshes) splits.emplace_back(m);
-
+// the glTF document's arrays and the binary chunk's streams, filled mesh by mesh
+struct GlbBuilder {
     json accessors = json::array(), views = json::array(), gltf_meshes = json::array(), materials = json::array();
     json nodes = json::array({{{"name", "root"}, {"children", json::array()}}});
     std::vector<Stream> streams;
-    int64_t offset = 0;
+    int64_t offset = 0;  // the binary chunk's size so far
+
     // one accessor over one tightly packed buffer view per array
-    auto add_array = [&](Stream s, int component, int target, json extra = json::object()) {
+    size_t add_array(Stream s, int component, int target, json extra = json::object()) {
         static const char* const kType[] = {"", "SCALAR", "VEC2", "VEC3", "VEC4"};
         json view = {{"buffer", 0}, {"byteOffset", offset}, {"byteLength", s.bytes()}, {"target", target}};
         json accessor = {{"bufferView", views.size()}, {"componentType", component}, {"count", s.count}, {"type", kType[s.width]}};
@@ -91,16 +83,16 @@ void write_glb(const fs::path& path, const std::vector<TriMesh>& meshes) {
         accessors.push_back(accessor);
         streams.push_back(std::move(s));
         return accessors.size() - 1;
-    };
+    }
 
-    for (size_t k = 0; k < meshes.size(); ++k) {
-        const TriMesh& m = meshes[k];
-        const FragmentSplit& split = splits[k];
+    // a node named as the mesh, with its primitive unless it has no faces; the streams read `m`
+    // and `split` when written, so both outlive the builder
+    void add_mesh(const TriMesh& m, const FragmentSplit& split) {
         json node = {{"name", m.name}};
         nodes[0]["children"].push_back(nodes.size());
         if (m.faces.empty()) {  // glTF has no empty mesh: the node alone keeps the name
             nodes.push_back(node);
-            continue;
+            return;
         }
         const int64_t n = split.vertex_count();
         json attributes;
@@ -153,19 +145,40 @@ void write_glb(const fs::path& path, const std::vector<TriMesh>& meshes) {
         nodes.push_back(node);
     }
 
-    json gltf = {{"asset", {{"version", "2.0"}, {"generator", "mudcrack"}}},
-                 {"scene", 0},
-                 {"scenes", json::array({{{"nodes", {0}}}})},
-                 {"nodes", nodes}};
-    if (!gltf_meshes.empty()) {
-        gltf["meshes"] = gltf_meshes;
-        gltf["materials"] = materials;
-        gltf["accessors"] = accessors;
-        gltf["bufferViews"] = views;
-        gltf["buffers"] = json::array({{{"byteLength", offset}}});
+    // the JSON chunk's text, padded with spaces to 4 bytes
+    std::string json_chunk() const {
+        json gltf = {{"asset", {{"version", "2.0"}, {"generator", "mudcrack"}}},
+                     {"scene", 0},
+                     {"scenes", json::array({{{"nodes", {0}}}})},
+                     {"nodes", nodes}};
+        if (!gltf_meshes.empty()) {
+            gltf["meshes"] = gltf_meshes;
+            gltf["materials"] = materials;
+            gltf["accessors"] = accessors;
+            gltf["bufferViews"] = views;
+            gltf["buffers"] = json::array({{{"byteLength", offset}}});
+        }
+        std::string text = gltf.dump();
+        text.append((4 - text.size() % 4) % 4, ' ');  // chunks are 4-byte aligned: JSON pads with spaces
+        return text;
     }
-    std::string text = gltf.dump();
-    text.append((4 - text.size() % 4) % 4, ' ');  // chunks are 4-byte aligned: JSON pads with spaces
+};
+
+}  // namespace
+
+void write_glb(const fs::path& path, const std::vector<TriMesh>& meshes) {
+    static_assert(sizeof(float) == 4 && std::numeric_limits<float>::is_iec559, "glb floats are IEEE 754 binary32");
+    static_assert(__BYTE_ORDER__ == __ORDER_LITTLE_ENDIAN__, "glb arrays are little-endian, written as in memory");
+    for (const TriMesh& m : meshes) check_tri_mesh(path, m);
+
+    std::vector<FragmentSplit> splits;
+    splits.reserve(meshes.size());
+    for (const TriMesh& m : meshes) splits.emplace_back(m);
+    GlbBuilder glb;
+    for (size_t k = 0; k < meshes.size(); ++k) glb.add_mesh(meshes[k], splits[k]);
+
+    const std::string text = glb.json_chunk();
+    const int64_t offset = glb.offset;
     const uint64_t total = 12 + 8 + text.size() + (offset > 0 ? 8 + uint64_t(offset) : 0);
     if (total > std::numeric_limits<uint32_t>::max())
         throw RuntimeError(path.string() + ": " + std::to_string(total) +
@@ -184,7 +197,7 @@ void write_glb(const fs::path& path, const std::vector<TriMesh>& meshes) {
         if (offset > 0) {
             put_u32(os, uint32_t(offset));  // every array is 4-byte components: no padding
             put_u32(os, kChunkBin);
-            for (const Stream& s : streams) write_stream(os, s);
+            for (const Stream& s : glb.streams) write_stream(os, s);
         }
         os.close();  // the last buffer reaches the disk here: a full disk shows up at close
         if (!os) throw RuntimeError(tmp.string() + ": cannot write: " + write_error_reason());

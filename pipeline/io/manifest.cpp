@@ -101,6 +101,14 @@ nlohmann::json read_current_manifest(const fs::path& dir, const std::string& exp
     return manifest;
 }
 
+ManifestFrames manifest_frames(const json& manifest, const fs::path& manifest_file) {
+    try {
+        return {manifest.at("frames").at("first").get<int>(), manifest.at("frames").at("last").get<int>()};
+    } catch (const json::exception&) {
+        throw InputError(manifest_file.string() + ": /frames/first and /frames/last: missing or not integers");
+    }
+}
+
 json file_record(const fs::path& file) { return {{"file", file.filename().string()}, {"crc32", file_crc32(file)}}; }
 
 RecordedChecksums::RecordedChecksums(const json& manifest, const fs::path& manifest_file) {

@@ -487,12 +487,15 @@ std::string post_process(const std::string& format, std::string bytes) {
 
 bool is_supported_mesh_format(const std::string& format) { return find_format(format) != nullptr; }
 
+std::vector<std::string> mesh_format_names() {
+    std::vector<std::string> names;
+    for (const MeshFormat& f : kMeshFormats) names.emplace_back(f.name);
+    return names;
+}
+
 std::string mesh_format_refusal(const std::string& format) {
     if (is_supported_mesh_format(format)) return "";
-    if (format == "fbx") {
-        return "fbx is not supported: assimp 5.2.5 (Debian 12) writes binary FBX that no reader accepts, "
-               "not even assimp itself (upstream bug assimp/assimp#4686, fixed after 5.2.5); use glb, obj, ply or dae";
-    }
+    if (format == "fbx") return std::string("fbx is not supported: ") + kFbxRefusal;
     return "unknown mesh format '" + format + "': expected glb, obj, ply or dae";
 }
 

@@ -23,9 +23,15 @@ struct InputSurface {
 /// position (zero area after welding) are dropped; vertices used by no kept triangle are left out.
 InputSurface load_input_surface(const std::filesystem::path& path);
 
-/// The export formats: "glb", "obj", "ply", "dae". "fbx" is refused (assimp 5.2.5 writes binary
-/// FBX that no reader accepts: upstream bug assimp/assimp#4686).
+/// Why "fbx" is refused, for export_meshes and the shot's /surfacing/format alike.
+constexpr const char* kFbxRefusal =
+    "assimp 5.2.5 (Debian 12) writes binary FBX that no reader accepts, not even assimp itself "
+    "(upstream bug assimp/assimp#4686, fixed after 5.2.5); use glb, obj, ply or dae";
+
+/// The export formats: "glb", "obj", "ply", "dae". "fbx" is refused (kFbxRefusal).
 bool is_supported_mesh_format(const std::string& format);
+/// The export formats' names, in the order the shot spec lists them.
+std::vector<std::string> mesh_format_names();
 /// Why a format is not supported (empty when it is).
 std::string mesh_format_refusal(const std::string& format);
 

@@ -139,7 +139,7 @@ MeshPieces measure_mesh_pieces(const TriMesh& boundary, const TriMesh& crack, Re
         }
     }
     out.open_pieces = static_cast<int32_t>(open_pieces.size());
-    out.crack_roughness_deg = weight_sum > 0 ? angle_sum / weight_sum * 180 / M_PI : 0.0;
+    out.crack_roughness_deg = weight_sum > 0 ? angle_sum / weight_sum * 180 / kPi : 0.0;
     for (const auto& f : w.faces)
         if (f.is_crack) out.crack_area += f.area_normal.norm() / 2;
     out.crack_area_per_metre = out.top_crack_length > 0 ? out.crack_area / out.top_crack_length : 0.0;

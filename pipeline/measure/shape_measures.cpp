@@ -276,7 +276,6 @@ CrackDepth measure_crack_depth(const CoreTopology& topo, const std::vector<uint8
 
 namespace {
 
-constexpr Real kPi = 3.14159265358979323846;
 // crack points line up where their neighbourhood's covariance has one eigenvalue this many times
 // the other (a straight row of points: infinitely many; a filled disc: 1)
 constexpr Real kLineAnisotropy = 4;
@@ -318,59 +317,42 @@ Real line_angle_deg(const Vec2& d) {
     return a >= 180 ? a - 180 : a;
 }
 
-}  // namespace
+using ColumnCells = std::set<std::pair<int64_t, int64_t>>;
 
-CrackNetwork measure_crack_network(const CoreTopology& topo, const std::vector<uint8_t>& is_broken,
-                                   const RestColumns& columns, int min_particles) {
-    const std::vector<int32_t> label = top_polygon_labels(topo, is_broken, columns, min_particles);
-    // crack points: rest midpoints (x, z) of broken edges between two polygon particles, with the
-    // polygon pair (equal for a crack that has not yet cut its polygon in two)
-    std::vector<Vec2> point;
-    std::vector<std::pair<int32_t, int32_t>> pair;
-    for (int32_t e = 0; e < topo.n_edges(); ++e) {
-        if (!is_broken[e]) continue;
-        const auto [p, q] = topo.edges[e];
-        const int32_t a = label[p], b = label[q];
-        if (a < 0 || b < 0) continue;
-        const Vec3 m = (topo.X[p] + topo.X[q]) / 2;
-        point.emplace_back(m.x(), m.z());
-        pair.emplace_back(std::min(a, b), std::max(a, b));
-    }
-    CrackNetwork net;
-    net.crack_points = static_cast<int32_t>(point.size());
-    if (point.empty()) return net;
-    const Real w = columns.width;
-    const Real direction_radius = 4 * w, junction_radius = 2 * w, branch_radius = 4 * w;
-    const PointGrid grid(point, branch_radius);
-
-    // the footprint's column cells (rest x-z bins of one width), to leave out the rim: cracks
-    // along the slab's own edges follow its outline, not the grid, and a box's outline runs
-    // along the grid axes
-    std::set<std::pair<int64_t, int64_t>> footprint;
+// the footprint's column cells (rest x-z bins of one width w)
+ColumnCells footprint_cells(const CoreTopology& topo, const RestColumns& columns, Real w) {
+    ColumnCells footprint;
     for (int32_t c = 0; c < columns.n_columns(); ++c) {
         const Vec3& r = topo.X[columns.particle[columns.begin[c]]];
         footprint.insert({static_cast<int64_t>(std::floor(r.x() / w)), static_cast<int64_t>(std::floor(r.z() / w))});
     }
-    auto is_inland = [&](const Vec2& at) {
-        const int64_t cx = static_cast<int64_t>(std::floor(at.x() / w)), cz = static_cast<int64_t>(std::floor(at.y() / w));
-        for (int64_t dx = -kRimColumns; dx <= kRimColumns; ++dx)
-            for (int64_t dz = -kRimColumns; dz <= kRimColumns; ++dz)
-                if (!footprint.count({cx + dx, cz + dz})) return false;
-        return true;
-    };
+    return footprint;
+}
 
-    // local direction: the principal axis of the crack points around each, where they line up
-    // (an isotropic cloud, the rubble of a wide crack band or a junction, has no direction: an
-    // eigen solver would hand back a coordinate axis for it)
+// a point kRimColumns or more columns inside the footprint: not on the rim
+bool is_inland(const ColumnCells& footprint, const Vec2& at, Real w) {
+    const int64_t cx = static_cast<int64_t>(std::floor(at.x() / w)), cz = static_cast<int64_t>(std::floor(at.y() / w));
+    for (int64_t dx = -kRimColumns; dx <= kRimColumns; ++dx)
+        for (int64_t dz = -kRimColumns; dz <= kRimColumns; ++dz)
+            if (!footprint.count({cx + dx, cz + dz})) return false;
+    return true;
+}
+
+// local direction: the principal axis of the crack points around each inland one, where they
+// line up (an isotropic cloud, the rubble of a wide crack band or a junction, has no direction:
+// an eigen solver would hand back a coordinate axis for it); sets oriented_points and
+// axis_aligned_fraction
+void measure_crack_directions(const std::vector<Vec2>& point, const PointGrid& grid, Real radius,
+                              const ColumnCells& footprint, Real w, CrackNetwork& net) {
     int32_t aligned = 0, oriented = 0;
     for (const Vec2& at : point) {
-        if (!is_inland(at)) continue;
+        if (!is_inland(footprint, at, w)) continue;
         Vec2 mean = Vec2::Zero();
         int n = 0;
-        grid.near(at, direction_radius, [&](int32_t j) { mean += point[j], ++n; });
+        grid.near(at, radius, [&](int32_t j) { mean += point[j], ++n; });
         mean /= n;
         Eigen::Matrix2d cov = Eigen::Matrix2d::Zero();
-        grid.near(at, direction_radius, [&](int32_t j) {
+        grid.near(at, radius, [&](int32_t j) {
             const Vec2 d = point[j] - mean;
             cov += d * d.transpose();
         });
@@ -383,9 +365,13 @@ CrackNetwork measure_crack_network(const CoreTopology& topo, const std::vector<u
     }
     net.oriented_points = oriented;
     if (oriented > 0) net.axis_aligned_fraction = Real(aligned) / oriented;
+}
 
-    // junction candidates: crack points with three or more polygons among their neighbours'
-    // pairs; clustered greedily in index order (deterministic)
+// junctions: clusters of crack points with three or more polygons among their neighbours'
+// pairs, each a T or a Y by its branches' widest gap; sets junctions, t_fraction and y_fraction
+void classify_junctions(const std::vector<Vec2>& point, const std::vector<std::pair<int32_t, int32_t>>& pair,
+                        const PointGrid& grid, Real junction_radius, Real branch_radius, Real w, CrackNetwork& net) {
+    // junction candidates, clustered greedily in index order (deterministic)
     std::vector<uint8_t> is_candidate(point.size(), 0);
     for (size_t i = 0; i < point.size(); ++i) {
         std::vector<int32_t> polygons;
@@ -442,6 +428,36 @@ CrackNetwork measure_crack_network(const CoreTopology& topo, const std::vector<u
         net.t_fraction = Real(t_count) / branched;
         net.y_fraction = Real(y_count) / branched;
     }
+}
+
+}  // namespace
+
+CrackNetwork measure_crack_network(const CoreTopology& topo, const std::vector<uint8_t>& is_broken,
+                                   const RestColumns& columns, int min_particles) {
+    const std::vector<int32_t> label = top_polygon_labels(topo, is_broken, columns, min_particles);
+    // crack points: rest midpoints (x, z) of broken edges between two polygon particles, with the
+    // polygon pair (equal for a crack that has not yet cut its polygon in two)
+    std::vector<Vec2> point;
+    std::vector<std::pair<int32_t, int32_t>> pair;
+    for (int32_t e = 0; e < topo.n_edges(); ++e) {
+        if (!is_broken[e]) continue;
+        const auto [p, q] = topo.edges[e];
+        const int32_t a = label[p], b = label[q];
+        if (a < 0 || b < 0) continue;
+        const Vec3 m = (topo.X[p] + topo.X[q]) / 2;
+        point.emplace_back(m.x(), m.z());
+        pair.emplace_back(std::min(a, b), std::max(a, b));
+    }
+    CrackNetwork net;
+    net.crack_points = static_cast<int32_t>(point.size());
+    if (point.empty()) return net;
+    const Real w = columns.width;
+    const Real direction_radius = 4 * w, junction_radius = 2 * w, branch_radius = 4 * w;
+    const PointGrid grid(point, branch_radius);
+    // the rim is left out of the directions: cracks along the slab's own edges follow its
+    // outline, not the grid, and a box's outline runs along the grid axes
+    measure_crack_directions(point, grid, direction_radius, footprint_cells(topo, columns, w), w, net);
+    classify_junctions(point, pair, grid, junction_radius, branch_radius, w, net);
     return net;
 }
 

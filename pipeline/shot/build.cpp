@@ -143,12 +143,6 @@ ColliderMode collider_mode(const std::string& name) {
     return ColliderMode::Sticky;
 }
 
-ColorMode color_mode(const std::string& name) {
-    if (name == "hardening") return ColorMode::Hardening;
-    if (name == "plain") return ColorMode::Plain;
-    return ColorMode::Moisture;
-}
-
 void build_mesh(json& tree, const std::string& shot_path, MeshSource& mesh, Issues& issues) {
     if (has(tree, "/source/mesh/path"))
         mesh.path = resolve_existing(tree, "/source/mesh/path", shot_path, issues);
@@ -235,8 +229,9 @@ void build_moisture(json& tree, SimModel& model, Issues& issues) {
         issues.add("/moisture/implicit_robin", issues.value_of(tree, "/moisture/implicit_robin"),
                    "must be false with /moisture/evaporation = \"surface\" (the surface layer's decay is "
                    "exact; the implicit Robin term belongs to the grid evaporation)");
-    // particles start fully saturated unless told otherwise (paper Section 7.1)
-    m.theta_init = has(tree, "/moisture/theta_init") ? number(tree, "/moisture/theta_init") : m.eta;
+    // particles start fully saturated unless told otherwise (MoistureParams::initial_theta); the
+    // slice records the value they start at, unclamped so the range check below still sees it
+    m.theta_init = has(tree, "/moisture/theta_init") ? number(tree, "/moisture/theta_init") : m.initial_theta();
     tree["moisture"]["theta_init"] = m.theta_init;
     if (!issues.has("/moisture/eta")) {
         const std::string within = "must be in [0, /moisture/eta = " + g(m.eta) + "]";
@@ -362,7 +357,7 @@ std::optional<SurfaceParams> build_surface(const json& tree, Issues& issues) {
                     {"min_piece_size", &S::min_piece_size}, {"debris_gap", &S::debris_gap},
                     {"close_gaps", &S::close_gaps}, {"wall_smoothing", &S::wall_smoothing}});
     s.debris = text(tree, "/surfacing/debris") == "points" ? DebrisOutput::Points : DebrisOutput::None;
-    if (s.debris != DebrisOutput::None && s.mode != SurfaceMode::Plates)
+    if (debris_needs_plates(s))
         issues.add("/surfacing/debris", issues.value_of(tree, "/surfacing/debris"),
                    "needs /surfacing/mode = \"plates\" (only the plates mode tells debris from the pieces)");
     return s;
@@ -374,7 +369,7 @@ std::optional<RenderParams> build_render(const json& tree) {
     const json& resolution = tree.at(json::json_pointer("/render/resolution"));
     r.width = static_cast<int>(resolution[0].get<std::int64_t>());
     r.height = static_cast<int>(resolution[1].get<std::int64_t>());
-    r.color_mode = color_mode(text(tree, "/render/color_mode"));
+    r.color_mode = parse_color_mode(text(tree, "/render/color_mode")).value_or(ColorMode::Moisture);
     r.camera.is_auto = !has(tree, "/render/camera");
     if (!r.camera.is_auto) {
         using C = CameraParams;

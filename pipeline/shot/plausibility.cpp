@@ -18,7 +18,7 @@ using nlohmann::json;
 // OpenVDB's transforms refuse a voxel whose volume is within 1e-15 of zero ("ArithmeticError"):
 // h = 1e-5 m is one; caches are written with voxels of h, the surfacing's grids finer still
 constexpr Real kMinCellSize = 1e-4;  // [m]
-// the MPM grid keys its 4^3-node blocks with 32 bits (sim/mpm/sparse_grid.h)
+// the MPM grid keys its 4^3-node blocks with 32 bits (sim/grid/sparse_grid.h)
 constexpr double kMaxGridBlocks = 4.0e9;
 // memory per particle of a step: the state, the workspace with its grid, the retry path's copy of
 // the state (README, "Measured on this machine": 550 to 645 bytes), with room for the caches

@@ -10,6 +10,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include "pipeline/io/checksum.h"
 #include "pipeline/shot/build.h"
 #include "pipeline/shot/shot.h"
 #include "pipeline/shot/shot_json.h"
@@ -66,16 +67,6 @@ json cache_json(const CacheAttributes& c) {
     return out;
 }
 
-// 64-bit FNV-1a: tiny, dependency-free and stable across platforms (not cryptographic)
-std::uint64_t fnv1a64(const std::string& text) {
-    std::uint64_t hash = 14695981039346656037ull;
-    for (unsigned char c : text) {
-        hash ^= c;
-        hash *= 1099511628211ull;
-    }
-    return hash;
-}
-
 }  // namespace
 
 const std::string& Shot::slice(Stage stage) const {
@@ -90,7 +81,7 @@ const std::string& Shot::slice(Stage stage) const {
 
 std::string Shot::slice_hash(Stage stage) const {
     char hex[17];
-    std::snprintf(hex, sizeof hex, "%016" PRIx64, fnv1a64(slice(stage)));
+    std::snprintf(hex, sizeof hex, "%016" PRIx64, fnv1a64_of(slice(stage)));
     return hex;
 }
 

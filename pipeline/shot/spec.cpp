@@ -8,6 +8,8 @@
 #include <map>
 #include <string>
 
+#include "pipeline/io/mesh_io.h"
+#include "render/render_params.h"
 #include "sim/core/particle_attributes.h"
 #include "surfacing/surface_params.h"
 
@@ -60,6 +62,7 @@ using T = KeyType;
 
 json vec(double a, double b, double c) { return json::array({a, b, c}); }
 
+// @note A data table, one row per shot key (docs/architecture.md §4), so longer than a page.
 std::vector<KeySpec> build_fixed_table() {
     // clang-format off
     return {
@@ -204,9 +207,8 @@ std::vector<KeySpec> build_fixed_table() {
     Key("/surfacing/length_consistent", T::Bool).def(false).units("")
         .doc("threshold 0.5 (Jw_p^(1/3) + Jw_q^(1/3)) zeta (docs/physics.md §5.5)"),
     Key("/surfacing/cracks", T::Bool).def(true).units("").doc("mesh crack surfaces (false: boundary only)"),
-    Key("/surfacing/format", T::Enum).def("glb").choices({"glb", "obj", "ply", "dae"}).units("")
-        .refuse("fbx", "FBX is not offered: the binary FBX writer of assimp 5.2.5 (Debian 12) fails or writes "
-                       "corrupt files (upstream bug assimp/assimp#4686); use \"glb\" (or \"dae\") and convert in your DCC")
+    Key("/surfacing/format", T::Enum).def("glb").choices(mesh_format_names()).units("")
+        .refuse("fbx", kFbxRefusal)
         .doc("mesh file format (assimp exporter); not fbx (assimp/assimp#4686)"),
     Key("/surfacing/min_fragment_particles", T::Integer).def(1).ge(1).units("particles")
         .doc("fragments smaller than this are culled as debris"),
@@ -216,15 +218,15 @@ std::vector<KeySpec> build_fixed_table() {
         .doc("plates mode: a torn particle whose every path to a plate opened more than this (in particle spacings) is debris"),
     Key("/surfacing/close_gaps", T::Number).def(0.25).ge(0).le(1).units("spacings")
         .doc("plates mode: crack walls whose sides are closer than this (in particle spacings) meet: no hairline gaps"),
-    Key("/surfacing/wall_smoothing", T::Integer).def(25).ge(0).le(100).units("iterations")
+    Key("/surfacing/wall_smoothing", T::Integer).def(SurfaceParams{}.wall_smoothing).ge(0).le(100).units("iterations")
         .doc("plates mode: Taubin steps that smooth the crack walls, in rest space and where they are (0: the dual-cell walls)"),
     Key("/surfacing/debris", T::Enum).def("none").choices({"none", "points"}).units("")
         .doc("plates mode: none, or debris.####.ply per frame (position, velocity, radius, id, piece) to instance on"),
 
     // --- render: the headless preview
     Key("/render", T::Section).optional().doc("preview renderer (mc-render); omit for none"),
-    Key("/render/resolution", T::Vec2i).def(json::array({960, 540})).ge(16).le(16384).units("px").doc("[width, height]"),
-    Key("/render/color_mode", T::Enum).def("moisture").choices({"moisture", "hardening", "plain"}).units("")
+    Key("/render/resolution", T::Vec2i).def(json::array({960, 540})).ge(kMinResolution).le(kMaxResolution).units("px").doc("[width, height]"),
+    Key("/render/color_mode", T::Enum).def("moisture").choices(color_mode_names()).units("")
         .doc("moisture: wetter is darker; hardening: alpha colormap (Fig. 9); plain: albedo"),
     Key("/render/camera", T::Section).optional().doc("fixed camera; omit to frame the bounds automatically"),
     Key("/render/camera/position", T::Vec3).def(vec(3, 2, 3)).units("m").doc("eye position"),

@@ -32,5 +32,6 @@ using Tet = std::array<int32_t, 4>;  // particle ids of a tetrahedron's corners
 using Tri = std::array<int32_t, 3>;  // vertex ids of a triangle
 
 constexpr int kDim = 3;
+constexpr Real kPi = 3.14159265358979323846;  // pi, the one definition
 
 }  // namespace mudcrack

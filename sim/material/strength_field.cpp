@@ -10,8 +10,6 @@ namespace mudcrack {
 
 namespace {
 
-constexpr Real kPi = 3.14159265358979323846;
-
 // uniform in (0, 1) from 53 random bits of the generator: mt19937_64's output is specified
 // bit for bit by the standard, std::uniform_real_distribution's and std::normal_distribution's
 // algorithms are not, so the field is the same with any standard library

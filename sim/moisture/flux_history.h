@@ -15,7 +15,7 @@
 #include <vector>
 
 #include "sim/core/types.h"
-#include "sim/mpm/sparse_grid.h"
+#include "sim/grid/sparse_grid.h"
 
 namespace mudcrack {
 

@@ -8,7 +8,7 @@
 
 #include "sim/core/parallel.h"
 #include "sim/core/stats.h"
-#include "sim/mpm/bspline.h"
+#include "sim/grid/bspline.h"
 
 namespace mudcrack {
 
@@ -369,7 +369,6 @@ void apply_stiffness(const MoistureParams& mp, const SparseGrid& grid, const Moi
 Real particle_area(Real volume) {
     // pi R^2 = c V^(2/3) with c = pi (3 / (4 pi))^(2/3), and V^(2/3) as exp(2/3 log V): a few
     // ulps, at half the cost of glibc's cbrt (every boundary particle, every step)
-    constexpr Real kPi = 3.14159265358979323846;
     static const Real c = kPi * std::cbrt(9 / (16 * kPi * kPi));
     return c * std::exp(Real(2) / 3 * std::log(volume));
 }
@@ -387,6 +386,52 @@ void begin_moisture_p2g(MoistureGrid& mg, const SparseGrid& grid) {
     resize_zero(mg.theta, n);
     resize_zero(mg.diag, n);
 }
+
+namespace {
+
+// Jacobi-preconditioned conjugate gradients on (M + L [+ R]) x = b, from the x, r and p that
+// solve_moisture set up (mg.diag holds the inverse Jacobi diagonal); b2 = |b|^2, rz0 = r.p,
+// r2 = |r|^2 of that start
+MoistureSolveStats conjugate_gradients(const MoistureParams& mp, const SparseGrid& grid, const MoistureParticles& pp,
+                                       Real dt, MoistureGrid& mg, std::vector<std::vector<Real>>& windows, Real b2,
+                                       Real rz0, Real r2) {
+    const int64_t n_nodes = node_count(grid);
+    const Real inv_dt = 1 / dt;
+    const std::vector<Real>& inv_diag = mg.diag;
+    MoistureSolveStats stats;
+    const Real b_norm = std::sqrt(b2);
+    if (b_norm > 0) {
+        Real rz = rz0;
+        Real r_norm = std::sqrt(r2);
+        const Real target = mp.cg_tolerance * b_norm;
+        while (r_norm > target && stats.iterations < mp.cg_max_iterations) {
+            // Ap = (M + L [+ R]) p
+            apply_stiffness(mp, grid, pp, mg, mg.p.data(), mg.Ap.data(), windows);
+            ++stats.iterations;
+            const Real pAp = block_sums<1>(grid, mg.block_partial, [&](int64_t i, std::array<Real, 1>& sum) {
+                mg.Ap[i] += mg.W[i] * inv_dt * mg.p[i];
+                sum[0] += mg.p[i] * mg.Ap[i];
+            })[0];
+            if (!(pAp > 0)) break;  // converged to round-off (or lost positivity): keep x
+            const Real step = rz / pAp;
+            // x += step p, r -= step Ap, and the new |r|^2 and r.D^-1 r
+            const std::array<Real, 2> next = block_sums<2>(grid, mg.block_partial, [&](int64_t i, std::array<Real, 2>& sum) {
+                mg.x[i] += step * mg.p[i];
+                mg.r[i] -= step * mg.Ap[i];
+                sum[0] += mg.r[i] * mg.r[i];
+                sum[1] += mg.r[i] * mg.r[i] * inv_diag[i];
+            });
+            r_norm = std::sqrt(next[0]);
+            const Real beta = next[1] / rz;
+            rz = next[1];
+            parallel_for(n_nodes, [&](int64_t i) { mg.p[i] = mg.r[i] * inv_diag[i] + beta * mg.p[i]; });
+        }
+        stats.residual = r_norm / b_norm;
+    }
+    return stats;
+}
+
+}  // namespace
 
 MoistureSolveStats solve_moisture(const MoistureParams& mp, const MoistureSeal& seal, const SparseGrid& grid,
                                   const MoistureParticles& pp, Real dt, MoistureGrid& mg,
@@ -461,36 +506,8 @@ MoistureSolveStats solve_moisture(const MoistureParams& mp, const MoistureSeal& 
     });
 
     // Jacobi-preconditioned conjugate gradients
-    MoistureSolveStats stats;
-    const Real b_norm = std::sqrt(initial[kB2]);
-    if (b_norm > 0) {
-        Real rz = initial[kRZ];
-        Real r_norm = std::sqrt(initial[kR2]);
-        const Real target = mp.cg_tolerance * b_norm;
-        while (r_norm > target && stats.iterations < mp.cg_max_iterations) {
-            // Ap = (M + L [+ R]) p
-            apply_stiffness(mp, grid, pp, mg, mg.p.data(), mg.Ap.data(), windows);
-            ++stats.iterations;
-            const Real pAp = block_sums<1>(grid, mg.block_partial, [&](int64_t i, std::array<Real, 1>& sum) {
-                mg.Ap[i] += mg.W[i] * inv_dt * mg.p[i];
-                sum[0] += mg.p[i] * mg.Ap[i];
-            })[0];
-            if (!(pAp > 0)) break;  // converged to round-off (or lost positivity): keep x
-            const Real step = rz / pAp;
-            // x += step p, r -= step Ap, and the new |r|^2 and r.D^-1 r
-            const std::array<Real, 2> next = block_sums<2>(grid, mg.block_partial, [&](int64_t i, std::array<Real, 2>& sum) {
-                mg.x[i] += step * mg.p[i];
-                mg.r[i] -= step * mg.Ap[i];
-                sum[0] += mg.r[i] * mg.r[i];
-                sum[1] += mg.r[i] * mg.r[i] * inv_diag[i];
-            });
-            r_norm = std::sqrt(next[0]);
-            const Real beta = next[1] / rz;
-            rz = next[1];
-            parallel_for(n_nodes, [&](int64_t i) { mg.p[i] = mg.r[i] * inv_diag[i] + beta * mg.p[i]; });
-        }
-        stats.residual = r_norm / b_norm;
-    }
+    const MoistureSolveStats stats = conjugate_gradients(mp, grid, pp, dt, mg, windows, initial[kB2], initial[kRZ],
+                                                         initial[kR2]);
 
     // increment theta^{n+1} - theta^n for the FLIP G2P; the history records its part beyond the
     // evaporation's Jacobi step as a flux, (W / dt)(increment - r / diag), in the free Ap

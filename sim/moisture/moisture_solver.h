@@ -13,7 +13,7 @@
 #include "sim/core/types.h"
 #include "sim/moisture/flux_history.h"
 #include "sim/model.h"
-#include "sim/mpm/sparse_grid.h"
+#include "sim/grid/sparse_grid.h"
 
 namespace mudcrack {
 

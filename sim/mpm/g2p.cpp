@@ -8,7 +8,7 @@
 #include "sim/material/nacc.h"
 #include "sim/material/neo_hookean.h"
 #include "sim/moisture/pore.h"
-#include "sim/mpm/bspline.h"
+#include "sim/grid/bspline.h"
 #include "sim/mpm/transfer.h"
 
 namespace mudcrack::mpm {
@@ -103,6 +103,10 @@ inline void gather_velocity(const Real* win, int o0, int o1, int o2, const AxisW
 #endif
 }
 
+// @note Longer than a page on purpose: its body is the step's per-particle hot loop (the G2P
+// share of mpm_bench's particle-steps/s), each particle's phases (gather, kinematics, pores,
+// plasticity, advection, checks) sharing locals in one pass; the kernels it calls are the
+// small, tested functions.
 template <bool kTheta, bool kPore, bool kNacc>
 G2PResult g2p_impl(const SimModel& model, SimState& state, const SparseGrid& grid, const MoistureUpdate& moisture,
                    Real dt, std::vector<std::vector<Real>>& windows, SymMat3* tau) {

@@ -8,7 +8,7 @@
 
 #include "sim/core/parallel.h"
 #include "sim/material/neo_hookean.h"
-#include "sim/mpm/bspline.h"
+#include "sim/grid/bspline.h"
 #include "sim/mpm/transfer.h"
 
 namespace mudcrack::mpm {

@@ -118,10 +118,9 @@ std::string find_non_finite(const SimState& s, int64_t substep) {
     return best < s.size() ? describe_non_finite(s, best, substep) : std::string();
 }
 
-}  // namespace
-
-SimState make_initial_state(const SimModel& model, const std::vector<Vec3>& X, const std::vector<Real>& V0,
-                            const std::vector<Real>& strength) {
+// the initial particles' checks: sizes agree, positions and volumes finite, strengths > 0
+void check_initial_particles(const SimModel& model, const std::vector<Vec3>& X, const std::vector<Real>& V0,
+                             const std::vector<Real>& strength) {
     const size_t n = X.size();
     if (n == 0) throw InputError("initial particles: the particle set is empty: need at least one particle");
     if (V0.size() != n) {
@@ -154,32 +153,10 @@ SimState make_initial_state(const SimModel& model, const std::vector<Vec3>& X, c
             throw InputError(os.str());
         }
     }
+}
 
-    SimState s;
-    s.id.resize(n);
-    for (size_t p = 0; p < n; ++p) s.id[p] = static_cast<int32_t>(p);
-    s.x = X;
-    s.v.assign(n, model.initial_velocity);
-    s.C.assign(n, Mat3::Zero());
-    s.Fe.assign(n, Mat3::Identity());
-    s.J.assign(n, 1);
-    if (model.nacc) s.alpha.assign(n, model.nacc->alpha0);
-    s.strength = strength;
-    if (model.nacc && model.nacc->damage_strain > 0) s.damage.assign(n, 0);
-    s.V0 = V0;
-    s.mass.resize(n);
-    if (model.moisture) {
-        const MoistureParams& mp = *model.moisture;
-        const Real theta = std::clamp(mp.theta_init < 0 ? mp.eta : mp.theta_init, Real(0), mp.eta);
-        const Real sat = saturation_of(theta, mp.eta);
-        s.theta.assign(n, theta);
-        s.Jw.assign(n, pore_jw(sat, mp.eta));
-        for (size_t p = 0; p < n; ++p) s.mass[p] = moist_mass(V0[p], model.elastic.density, sat, mp);
-    } else {
-        for (size_t p = 0; p < n; ++p) s.mass[p] = V0[p] * model.elastic.density;
-    }
-
-    // the simulation box: given, or derived once from the particle bounds
+// the simulation box: given, or derived once from the particle bounds X
+void set_domain(const SimModel& model, const std::vector<Vec3>& X, SimState& s) {
     Vec3 lo = X[0], hi = X[0];
     for (const Vec3& x : X) {
         lo = lo.cwiseMin(x);
@@ -219,6 +196,40 @@ SimState make_initial_state(const SimModel& model, const std::vector<Vec3>& X, c
             throw InputError(os.str());
         }
     }
+}
+
+}  // namespace
+
+SimState make_initial_state(const SimModel& model, const std::vector<Vec3>& X, const std::vector<Real>& V0,
+                            const std::vector<Real>& strength) {
+    check_initial_particles(model, X, V0, strength);
+    const size_t n = X.size();
+
+    SimState s;
+    s.id.resize(n);
+    for (size_t p = 0; p < n; ++p) s.id[p] = static_cast<int32_t>(p);
+    s.x = X;
+    s.v.assign(n, model.initial_velocity);
+    s.C.assign(n, Mat3::Zero());
+    s.Fe.assign(n, Mat3::Identity());
+    s.J.assign(n, 1);
+    if (model.nacc) s.alpha.assign(n, model.nacc->alpha0);
+    s.strength = strength;
+    if (model.nacc && model.nacc->damage_strain > 0) s.damage.assign(n, 0);
+    s.V0 = V0;
+    s.mass.resize(n);
+    if (model.moisture) {
+        const MoistureParams& mp = *model.moisture;
+        const Real theta = mp.initial_theta();
+        const Real sat = saturation_of(theta, mp.eta);
+        s.theta.assign(n, theta);
+        s.Jw.assign(n, pore_jw(sat, mp.eta));
+        for (size_t p = 0; p < n; ++p) s.mass[p] = moist_mass(V0[p], model.elastic.density, sat, mp);
+    } else {
+        for (size_t p = 0; p < n; ++p) s.mass[p] = V0[p] * model.elastic.density;
+    }
+
+    set_domain(model, X, s);
 
     // arrays sorted by grid block from the start
     SimWorkspace& ws = ensure_workspace(model, s);

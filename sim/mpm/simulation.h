@@ -16,13 +16,9 @@ namespace mudcrack {
 
 struct SimWorkspace;  // grid and scratch, rebuilt every step; carries nothing from step to step
 
-/// Mutable simulation state. Particle arrays are SoA, (n_particles), periodically reordered by
-/// grid block for memory coherence; `id` maps a slot to its particle id (ids are 0..n-1). The
-/// step processes particles in (grid block, id) order whatever the slot order, so a state saved
-/// and restored in any slot order (e.g. by id) continues bit for bit. Moisture arrays are empty
-/// when the model has no moisture section; alpha is empty without plasticity.
 // SimState's per-particle arrays, (n_particles) each, listed once: the list drives their
-// declaration, slot reordering, memory accounting and the checkpoint's save and load.
+// declaration, slot reordering, memory accounting and the checkpoint's save and load (a new
+// array changes what a checkpoint holds: bump kSimCheckpointVersion, sim_checkpoint.cpp).
 // X(element type, name, presence, doc); presence Always: n elements, Optional: n or none.
 #define MC_SIM_STATE_ARRAYS(X)                                                                    \
     X(int32_t, id, Always, "particle id per slot")                                                \

@@ -8,7 +8,7 @@
 #include "sim/core/types.h"
 #include "sim/model.h"
 #include "sim/mpm/simulation.h"
-#include "sim/mpm/sparse_grid.h"
+#include "sim/grid/sparse_grid.h"
 #include "sim/moisture/moisture_solver.h"
 
 namespace mudcrack::mpm {

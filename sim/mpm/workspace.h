@@ -8,7 +8,7 @@
 
 #include "sim/core/stats.h"
 #include "sim/moisture/moisture_solver.h"
-#include "sim/mpm/sparse_grid.h"
+#include "sim/grid/sparse_grid.h"
 
 namespace mudcrack {
 

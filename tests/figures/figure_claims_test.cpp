@@ -78,7 +78,7 @@ constexpr double kDemoWallRoughnessDeg = 15;
 constexpr int kFig7Polygons = 20;
 constexpr double kFig7EffectivePlates = 3.5;
 constexpr double kFig7Curl = 0.008;
-// "The same statistics" for two seeds (issue 13): polygon counts within a factor 1.5, and shares
+// "The same statistics" for two seeds: polygon counts within a factor 1.5, and shares
 // of the crack length along the grid axes within 10 points.
 constexpr double kSameStatisticsFactor = 1.5;
 constexpr double kSameAxisShare = 0.10;

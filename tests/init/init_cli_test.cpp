@@ -21,6 +21,10 @@
 namespace mudcrack {
 namespace {
 
+// tolerances, named by what they bound
+constexpr double kManifestExact = 1e-15;   // a manifest number that is an exact lattice volume [m^3]
+constexpr double kMeshedVolumeAbs = 1e-6;  // Mesh_3's volume of a cube [m^3]
+
 namespace fs = std::filesystem;
 
 /// A per-test scratch folder, removed at the end.
@@ -106,7 +110,7 @@ TEST_F(InitCli, TinyBoxShotProducesParticlesTetsAndManifest) {
     EXPECT_EQ(m.at("source"), "box");
     EXPECT_EQ(m.at("counts").at("particles"), 5 * 3 * 5);
     EXPECT_EQ(m.at("counts").at("tets"), 6 * 4 * 2 * 4);
-    EXPECT_NEAR(m.at("quality").at("tet_volume").get<double>(), 0.004, 1e-15);
+    EXPECT_NEAR(m.at("quality").at("tet_volume").get<double>(), 0.004, kManifestExact);
     EXPECT_FALSE(m.at("shot_slice_hash").get<std::string>().empty());
     EXPECT_GT(m.at("peak_memory_bytes").get<double>(), 0);
 
@@ -246,8 +250,8 @@ TEST_F(InitCli, ClosedMeshShotIsTetrahedralized) {
     EXPECT_EQ(m.at("source"), "mesh");
     EXPECT_GT(m.at("counts").at("particles").get<int>(), 27);
     // sharp features are protected, so the cube keeps its volume
-    EXPECT_NEAR(m.at("quality").at("tet_volume").get<double>(), 0.125, 1e-6);
-    EXPECT_NEAR(m.at("quality").at("surface_volume").get<double>(), 0.125, 1e-12);
+    EXPECT_NEAR(m.at("quality").at("tet_volume").get<double>(), 0.125, kMeshedVolumeAbs);
+    EXPECT_NEAR(m.at("quality").at("surface_volume").get<double>(), 0.125, tol::kRoundoff);
     const TetMesh mesh = read_tet_mesh_vtu(out / "init" / "tets.vtu");
     EXPECT_EQ(static_cast<int>(mesh.X.size()), m.at("counts").at("particles").get<int>());
 }

@@ -18,6 +18,7 @@ namespace mudcrack::test {
 
 /// Every tet is positively oriented (signed volume > 0).
 inline void expect_all_tets_positive(const TetMesh& mesh) {
+    EXPECT_FALSE(mesh.tets.empty()) << "no tets: nothing was checked";
     int64_t bad = 0;
     for (const Tet& t : mesh.tets)
         bad += !(signed_tet_volume(mesh.X[t[0]], mesh.X[t[1]], mesh.X[t[2]], mesh.X[t[3]]) > 0);

@@ -20,6 +20,11 @@
 namespace mudcrack {
 namespace {
 
+// tolerances, named by what they bound
+constexpr double kAngleDeg = 1e-9;          // dihedral angles of exact lattice tets [deg]
+constexpr double kHeightfieldVolumeRel = 5e-3;  // column tets' volume vs the heightfield's integral
+constexpr double kLatticeExact = 1e-12;     // volumes and bounds a regular lattice gives exactly
+
 InitParams box_params(Vec3 min, Vec3 max, Real spacing, Lattice lattice) {
     InitParams p;
     p.type = SourceType::Box;
@@ -53,8 +58,8 @@ TEST(InitBoxSource, RegularLatticeHasExactCountsAndVolume) {
     EXPECT_NEAR(r.quality.bbox_min.x(), -0.2, tol::kRoundoff);
     EXPECT_NEAR(r.quality.bbox_max.z(), 0.15, tol::kRoundoff);
     // Kuhn tets: right angles (90) and 45/60-degree wedges, nothing worse
-    EXPECT_NEAR(r.quality.min_dihedral_deg, 45.0, 1e-9);
-    EXPECT_NEAR(r.quality.max_dihedral_deg, 90.0, 1e-9);
+    EXPECT_NEAR(r.quality.min_dihedral_deg, 45.0, kAngleDeg);
+    EXPECT_NEAR(r.quality.max_dihedral_deg, 90.0, kAngleDeg);
     test::expect_all_tets_positive(r.mesh);
     test::expect_volume_conserved(r.mesh, r.volume0);
     test::expect_closed_outward_boundary(r.mesh);
@@ -151,7 +156,7 @@ TEST(InitHeightfield, RiverbedHasAFlatBottomACarvedChannelAndConservesVolume) {
     for (int k = 0; k < n; ++k)
         for (int i = 0; i < n; ++i)
             integral += riverbed_height(p.heightfield, -1 + 2 * (i + 0.5) / n, -1 + 2 * (k + 0.5) / n) * (4.0 / (n * n));
-    EXPECT_NEAR(r.quality.tet_volume / integral, 1.0, 5e-3);
+    EXPECT_NEAR(r.quality.tet_volume / integral, 1.0, kHeightfieldVolumeRel);
 }
 
 TEST(InitHeightfield, ChannelThroughTheFloorIsAnInputError) {
@@ -194,9 +199,9 @@ TEST(InitHeightfield, PngGradientGivesALinearSlopeAndExactVolume) {
     test::expect_all_tets_positive(r.mesh);
     test::expect_volume_conserved(r.mesh, r.volume0);
     test::expect_closed_outward_boundary(r.mesh);
-    EXPECT_NEAR(r.quality.tet_volume, 0.18, 1e-12);
+    EXPECT_NEAR(r.quality.tet_volume, 0.18, kLatticeExact);
     for (const Vec3& x : r.mesh.X) EXPECT_LE(x.y(), 0.3 * (0.2 + 0.8 * (x.x() + 0.5)) + 1e-12);
-    EXPECT_NEAR(r.quality.bbox_max.y(), 0.3, 1e-12);
+    EXPECT_NEAR(r.quality.bbox_max.y(), 0.3, kLatticeExact);
     EXPECT_EQ(r.quality.particles, 11 * 11 * 4);  // ceil(0.3 / 0.1) = 3 layers
 }
 
@@ -209,7 +214,7 @@ TEST(InitHeightfield, BlackPngKeepsAThinFloorAndWarns) {
     log::reset_warnings();
     const InitResult r = build_init(p, 0.05);
     std::filesystem::remove(p.heightfield.image);
-    EXPECT_NEAR(r.quality.tet_volume, 0.25 * 0.1, 1e-12);
+    EXPECT_NEAR(r.quality.tet_volume, 0.25 * 0.1, kLatticeExact);
     EXPECT_EQ(log::warning_count(), 1);
     log::reset_warnings();
     test::expect_all_tets_positive(r.mesh);
@@ -220,6 +225,7 @@ TEST(InitColumnLattice, SteepColumnsStayPositive) {
     std::vector<Real> top(5 * 5);
     for (size_t c = 0; c < top.size(); ++c) top[c] = (c % 3 == 0) ? 1.0 : 0.02;
     const TetMesh m = make_column_lattice_tets(0, 0, 1, 1, 4, 3, 4, top);
+    ASSERT_EQ(m.tets.size(), size_t(6 * 4 * 3 * 4)) << "6 Kuhn tets per cell of the 4 x 3 x 4 lattice";
     test::expect_all_tets_positive(m);
 }
 
@@ -258,13 +264,13 @@ TEST(InitTetMeshOps, DropUnusedVerticesRenumbersContiguously) {
 TEST(InitTetMeshOps, DihedralAnglesOfTheRegularTetAreArccosOneThird) {
     const Vec3 a(1, 1, 1), b(1, -1, -1), c(-1, 1, -1), d(-1, -1, 1);
     const Real expected = std::acos(1.0 / 3) * 180 / M_PI;  // 70.53 degrees
-    for (Real angle : dihedral_angles_deg(a, b, c, d)) EXPECT_NEAR(angle, expected, 1e-9);
+    for (Real angle : dihedral_angles_deg(a, b, c, d)) EXPECT_NEAR(angle, expected, kAngleDeg);
     // the corner tet of a cube: 90 degrees at the three edges through the corner, and
     // acos(1/sqrt(3)) = 54.74 degrees where the slanted face x+y+z=1 meets the others
     const auto corner = dihedral_angles_deg(Vec3(0, 0, 0), Vec3(1, 0, 0), Vec3(0, 1, 0), Vec3(0, 0, 1));
     const Real slanted = std::acos(1 / std::sqrt(3.0)) * 180 / M_PI;
-    for (int e : {0, 1, 2}) EXPECT_NEAR(corner[e], 90, 1e-9) << "edge " << e;  // edges (0,1), (0,2), (0,3)
-    for (int e : {3, 4, 5}) EXPECT_NEAR(corner[e], slanted, 1e-9) << "edge " << e;
+    for (int e : {0, 1, 2}) EXPECT_NEAR(corner[e], 90, kAngleDeg) << "edge " << e;  // edges (0,1), (0,2), (0,3)
+    for (int e : {3, 4, 5}) EXPECT_NEAR(corner[e], slanted, kAngleDeg) << "edge " << e;
 }
 
 TEST(InitDefaultEdgeLength, IsSixTenthsOfTheGridSpacing) {

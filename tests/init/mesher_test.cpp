@@ -17,6 +17,15 @@
 namespace mudcrack {
 namespace {
 
+// tolerances, named by what they bound
+constexpr double kMeshedVolumeRel = 0.03;    // Mesh_3's volume of a curved surface vs the enclosed volume
+constexpr double kOnSphereAbs = 0.01;        // a surface vertex's distance from the sphere [m]
+constexpr double kEdgeLengthRel = 0.25;      // mean edge length vs the asked edge length
+constexpr double kCubeVolumeAbs = 1e-6;      // a meshed unit cube's volume [m^3]
+constexpr double kBoxExactAbs = 1e-9;        // bounds and volumes a box gives exactly, summed round-off
+constexpr double kFittedVolumeRel = 0.02;    // the tets' volume vs the input surface's
+constexpr double kGroundFitAbs = 0.01;       // fit_to_ground's lowest point vs y = 0 [m]
+
 namespace fs = std::filesystem;
 
 /// Expects check_input_surface to refuse `s`, with a message containing every needle.
@@ -98,11 +107,11 @@ TEST(InitMesher, SphereIsFilledWithPositiveTetsAndAClosedBoundary) {
     test::expect_closed_outward_boundary(r.mesh);
     test::expect_finite_boundary_uvs(r.mesh);
     EXPECT_EQ(r.uv_method, "box projection");
-    EXPECT_NEAR(r.quality.tet_volume / enclosed_volume(sphere), 1.0, 0.03);
+    EXPECT_NEAR(r.quality.tet_volume / enclosed_volume(sphere), 1.0, kMeshedVolumeRel);
     // the boundary vertices lie on the input sphere (within the facet distance)
     for (const Tri& f : r.mesh.boundary)
-        for (int32_t v : f) EXPECT_NEAR(r.mesh.X[v].norm(), 0.5, 0.01);
-    EXPECT_NEAR(r.quality.mean_edge_length / o.edge_length, 1.0, 0.25);
+        for (int32_t v : f) EXPECT_NEAR(r.mesh.X[v].norm(), 0.5, kOnSphereAbs);
+    EXPECT_NEAR(r.quality.mean_edge_length / o.edge_length, 1.0, kEdgeLengthRel);
 }
 
 TEST(InitMesher, SameSeedGivesTheSameMesh) {
@@ -118,9 +127,9 @@ TEST(InitMesher, CubeKeepsItsSharpCornersAndVolume) {
     MesherOptions o;
     o.edge_length = 0.2;
     const InitResult r = finish_tet_mesh(tetrahedralize_surface(test::unit_cube(), o), nullptr);
-    EXPECT_NEAR(r.quality.tet_volume, 1.0, 1e-6);
-    EXPECT_NEAR(r.quality.bbox_min.norm(), 0.0, 1e-9);
-    EXPECT_NEAR((r.quality.bbox_max - Vec3(1, 1, 1)).norm(), 0.0, 1e-9);
+    EXPECT_NEAR(r.quality.tet_volume, 1.0, kCubeVolumeAbs);
+    EXPECT_NEAR(r.quality.bbox_min.norm(), 0.0, kBoxExactAbs);
+    EXPECT_NEAR((r.quality.bbox_max - Vec3(1, 1, 1)).norm(), 0.0, kBoxExactAbs);
     test::expect_closed_outward_boundary(r.mesh);
 }
 
@@ -183,7 +192,7 @@ TEST(InitMeshSource, LoadedSurfaceIsScaledTranslatedAndSetOnTheGround) {
     for (const Vec3& p : s.positions) lo = lo.cwiseMin(p), hi = hi.cwiseMax(p);
     EXPECT_NEAR((lo - Vec3(1, 0, 0)).norm(), 0, tol::kRoundoff);
     EXPECT_NEAR((hi - Vec3(3, 2, 2)).norm(), 0, tol::kRoundoff);
-    EXPECT_NEAR(check_input_surface(s, src.path), 8.0, 1e-9);
+    EXPECT_NEAR(check_input_surface(s, src.path), 8.0, kBoxExactAbs);
 }
 
 TEST(InitMeshSource, BunnyAtDefaultSizingKeepsItsVolumeWithinTwoPercent) {
@@ -199,13 +208,13 @@ TEST(InitMeshSource, BunnyAtDefaultSizingKeepsItsVolumeWithinTwoPercent) {
     const InitResult r = build_init(p, h);
     EXPECT_DOUBLE_EQ(r.edge_length, default_edge_length(h));
     ASSERT_GT(r.surface_volume, 0);
-    EXPECT_NEAR(r.quality.tet_volume / r.surface_volume, 1.0, 0.02)
+    EXPECT_NEAR(r.quality.tet_volume / r.surface_volume, 1.0, kFittedVolumeRel)
         << "tet volume " << r.quality.tet_volume << " vs surface " << r.surface_volume;
     test::expect_all_tets_positive(r.mesh);
     test::expect_volume_conserved(r.mesh, r.volume0);
     test::expect_closed_outward_boundary(r.mesh);
     test::expect_finite_boundary_uvs(r.mesh);
-    EXPECT_NEAR(r.quality.bbox_min.y(), 0.0, 0.01) << "fit_to_ground";
+    EXPECT_NEAR(r.quality.bbox_min.y(), 0.0, kGroundFitAbs) << "fit_to_ground";
     EXPECT_GT(r.quality.min_dihedral_deg, 0.0);
 }
 

@@ -13,6 +13,10 @@
 namespace mudcrack {
 namespace {
 
+// tolerances, named by what they bound
+constexpr double kStoredFloat = 1e-6;   // a float value written and read back by a mesh format
+constexpr double kColourMapped = 1e-5;  // a value through the vertex colour's mapping (logistic alpha, normals)
+
 using test::ScratchDir;
 
 // two disjoint tetrahedra-shaped fragments (ids 3 and 8) with every attribute
@@ -65,11 +69,11 @@ void expect_same_corners(const TriMesh& a, const TriMesh& b, const std::string& 
     const auto ca = corners(a), cb = corners(b);
     ASSERT_EQ(ca.size(), cb.size()) << what;
     for (size_t i = 0; i < ca.size(); ++i) {
-        EXPECT_NEAR(std::get<0>(ca[i]), std::get<0>(cb[i]), 1e-6) << what;
-        EXPECT_NEAR(std::get<1>(ca[i]), std::get<1>(cb[i]), 1e-6) << what;
-        EXPECT_NEAR(std::get<2>(ca[i]), std::get<2>(cb[i]), 1e-6) << what;
-        EXPECT_NEAR(std::get<3>(ca[i]), std::get<3>(cb[i]), 1e-6) << what << " u";
-        EXPECT_NEAR(std::get<4>(ca[i]), std::get<4>(cb[i]), 1e-6) << what << " v";
+        EXPECT_NEAR(std::get<0>(ca[i]), std::get<0>(cb[i]), kStoredFloat) << what;
+        EXPECT_NEAR(std::get<1>(ca[i]), std::get<1>(cb[i]), kStoredFloat) << what;
+        EXPECT_NEAR(std::get<2>(ca[i]), std::get<2>(cb[i]), kStoredFloat) << what;
+        EXPECT_NEAR(std::get<3>(ca[i]), std::get<3>(cb[i]), kStoredFloat) << what << " u";
+        EXPECT_NEAR(std::get<4>(ca[i]), std::get<4>(cb[i]), kStoredFloat) << what << " v";
     }
 }
 
@@ -119,9 +123,9 @@ TEST(MeshExport, GlbAndDaeCarryNormalsColorsAndFragments) {
             size_t j = 0;
             while (j < b.positions.size() && (b.positions[j] - a.positions[i]).norm() > 1e-6f) ++j;
             ASSERT_LT(j, b.positions.size());
-            EXPECT_NEAR(b.saturation[j], a.saturation[i], 1e-6) << format;
-            EXPECT_NEAR(b.alpha[j], a.alpha[i], 1e-5) << format << " (logistic colour mapping)";
-            EXPECT_NEAR((b.normals[j] - a.normals[i]).norm(), 0.f, 1e-5) << format;
+            EXPECT_NEAR(b.saturation[j], a.saturation[i], kStoredFloat) << format;
+            EXPECT_NEAR(b.alpha[j], a.alpha[i], kColourMapped) << format << " (logistic colour mapping)";
+            EXPECT_NEAR((b.normals[j] - a.normals[i]).norm(), 0.f, kColourMapped) << format;
         }
         std::vector<int32_t> fragments = b.face_fragment;
         std::sort(fragments.begin(), fragments.end());

@@ -160,7 +160,7 @@ TEST(PointsIo, FrameRoundTrip) {
     EXPECT_EQ(g.Jw, f.Jw);
     EXPECT_EQ(g.v, f.v);
     EXPECT_EQ(g.Fe, f.Fe);
-    for (int i = 0; i < 50; ++i) EXPECT_NEAR((g.P[i] - f.P[i]).norm(), 0.0, 1e-6);
+    for (int i = 0; i < 50; ++i) EXPECT_NEAR((g.P[i] - f.P[i]).norm(), 0.0, tol::kFloat * 0.1);  // float positions of order 1, written and read back
 }
 
 TEST(PointsIo, PointsToFrameRejectsBadIds) {

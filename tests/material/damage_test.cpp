@@ -9,6 +9,7 @@
 #include <random>
 
 #include "sim/material/nacc.h"
+#include "tolerance.h"
 
 namespace mudcrack {
 namespace {
@@ -31,7 +32,7 @@ TEST(Damage, NeverDecreasesAndSaturatesAtOne) {
 }
 
 TEST(Damage, GrowsBySofteningOverTheDamageStrain) {
-    EXPECT_NEAR(damage_after_return(0.1, -0.3, -0.28, 0.05), 0.1 + 0.02 / 0.05, 1e-14);
+    EXPECT_NEAR(damage_after_return(0.1, -0.3, -0.28, 0.05), 0.1 + 0.02 / 0.05, tol::kRoundoffKernel);
     EXPECT_EQ(damage_after_return(0.2, -0.3, -0.35, 0.05), 0.2);
     EXPECT_EQ(damage_after_return(0.9, 0.0, 1.0, 0.05), 1.0);
     EXPECT_DOUBLE_EQ(damaged_cohesion(0.8, 0.25), 0.6);
@@ -47,7 +48,7 @@ TEST(Damage, FullyDamagedSoilCarriesNoTensionWhateverItsHardening) {
         const Real beta = damaged_cohesion(1.0, 1.0);
         const NaccPrincipalReturn r = nacc_return_principal(stretched, alpha, beta, nacc, kLame);
         EXPECT_EQ(r.yield_case, kNaccTensionTip) << alpha;
-        EXPECT_NEAR(r.sigma.prod(), 1.0, 1e-14) << "the tension tip of beta = 0 is p = 0, J = 1";
+        EXPECT_NEAR(r.sigma.prod(), 1.0, tol::kRoundoffKernel) << "the tension tip of beta = 0 is p = 0, J = 1";
     }
 }
 
@@ -70,7 +71,7 @@ TEST(Damage, TensionReturnsDamageAndWeakenTheNext) {
         d = next_d;
     }
     EXPECT_EQ(d, 1);
-    EXPECT_NEAR(last_J, 1.0, 1e-14);
+    EXPECT_NEAR(last_J, 1.0, tol::kRoundoffKernel);
 }
 
 }  // namespace

@@ -351,10 +351,10 @@ TEST(NaccYield, MatchesEquation8) {
     // y = (1 + 2 beta) q^2 + M^2 (p + beta p0)(p - p0) with q = sqrt(3/2) ||s||
     const Real p = 10, s = 4, p0 = 30, beta = 0.5, M = 1.5;
     const Real q = std::sqrt(1.5) * s;
-    EXPECT_NEAR(nacc_yield(p, s, p0, beta, M), (1 + 2 * beta) * q * q + M * M * (p + beta * p0) * (p - p0), 1e-12);
+    EXPECT_NEAR(nacc_yield(p, s, p0, beta, M), (1 + 2 * beta) * q * q + M * M * (p + beta * p0) * (p - p0), tol::kRoundoff);
     EXPECT_LT(nacc_yield(p, 0, p0, beta, M), 0);          // on the p axis between the tips: inside
-    EXPECT_NEAR(nacc_yield(p0, 0, p0, beta, M), 0, 1e-12);  // compression tip
-    EXPECT_NEAR(nacc_yield(-beta * p0, 0, p0, beta, M), 0, 1e-12);  // tension tip
+    EXPECT_NEAR(nacc_yield(p0, 0, p0, beta, M), 0, tol::kRoundoff);  // compression tip
+    EXPECT_NEAR(nacc_yield(-beta * p0, 0, p0, beta, M), 0, tol::kRoundoff);  // tension tip
 }
 
 }  // namespace

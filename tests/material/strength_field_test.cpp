@@ -7,9 +7,16 @@
 #include <vector>
 
 #include "sim/material/strength_field.h"
+#include "tolerance.h"
 
 namespace mudcrack {
 namespace {
+
+// tolerances, named by what they bound
+constexpr double kSampleVariance = 0.1;      // a sampled field's variance vs 1 (finite domain)
+constexpr double kSampleCorrelation = 0.08;  // a sampled correlation vs the kernel's
+constexpr double kSampleMean = 0.05;         // a sampled field's mean vs 1
+constexpr double kTabulated = 1e-3;          // a value against its 4-digit table entry
 
 // a lattice of n^3 points at `spacing`
 std::vector<Vec3> lattice(int n, Real spacing) {
@@ -65,9 +72,9 @@ TEST(StrengthField, GaussianFieldHasUnitVarianceAndTheRequestedCorrelationLength
         corr_l += correlation(2) / seeds;
         corr_2l += correlation(4) / seeds;
     }
-    EXPECT_NEAR(variance, 1.0, 0.1);
-    EXPECT_NEAR(corr_l, std::exp(-0.5), 0.08) << "correlation at one correlation length";
-    EXPECT_NEAR(corr_2l, std::exp(-2.0), 0.08) << "correlation at two correlation lengths";
+    EXPECT_NEAR(variance, 1.0, kSampleVariance);
+    EXPECT_NEAR(corr_l, std::exp(-0.5), kSampleCorrelation) << "correlation at one correlation length";
+    EXPECT_NEAR(corr_2l, std::exp(-2.0), kSampleCorrelation) << "correlation at two correlation lengths";
     // the correlation length a fit of exp(-r^2 / (2 l^2)) to the lag-l value gives
     EXPECT_NEAR(l / std::sqrt(-2 * std::log(corr_l)), l, 0.15 * l);
 }
@@ -79,16 +86,16 @@ TEST(StrengthField, MultipliersHaveMeanOneAndTheWeibullSpread) {
         params.weibull_modulus = modulus;
         // many correlation lengths, so the sample is close to the distribution
         const std::vector<Real> m = strength_multipliers(make_strength_field(params, 7), lattice(40, 0.02));
-        EXPECT_NEAR(mean_of(m), 1.0, 0.05) << "modulus " << modulus;
+        EXPECT_NEAR(mean_of(m), 1.0, kSampleMean) << "modulus " << modulus;
         EXPECT_NEAR(std::sqrt(variance_of(m)), weibull_cv(modulus), 0.2 * weibull_cv(modulus)) << "modulus " << modulus;
         for (Real v : m) ASSERT_GT(v, 0);
     }
-    EXPECT_NEAR(weibull_cv(4), 0.2805, 1e-3);  // the tabulated value
+    EXPECT_NEAR(weibull_cv(4), 0.2805, kTabulated);  // the tabulated value
 }
 
 TEST(StrengthField, WeibullQuantileOfTheNormalCdf) {
     // g = 0 is the median: scale (log 2)^(1/m)
-    EXPECT_NEAR(weibull_of_gaussian(0, 4, 1), std::pow(std::log(2.0), 0.25), 1e-14);
+    EXPECT_NEAR(weibull_of_gaussian(0, 4, 1), std::pow(std::log(2.0), 0.25), tol::kRoundoffKernel);
     // monotone, and the upper tail keeps its digits
     Real last = 0;
     for (Real g = -6; g <= 8; g += 0.5) {

@@ -1,5 +1,6 @@
 #pragma once
 // Small scenes for the MPM tests: lattice blocks of particles and a minimal model.
+#include <cmath>
 #include <vector>
 
 #include "sim/core/types.h"
@@ -35,6 +36,21 @@ inline SimModel plain_model(Real h) {
     m.elastic.youngs_modulus = 1e4;
     m.elastic.poisson_ratio = 0.3;
     m.time.dt_max = 1e-3;
+    return m;
+}
+
+/// A NACC soil block's model: gravity, a sticky ground, hardening and drying moisture, at
+/// h = 0.1 (tests add their initial velocity or other parts).
+inline SimModel soil_model() {
+    SimModel m = plain_model(0.1);
+    m.gravity = Vec3(0, -9.81, 0);
+    m.ground = GroundParams{};
+    m.nacc = NaccParams{};
+    m.nacc->alpha0 = std::log(0.99);
+    m.nacc->beta0 = m.nacc->beta1 = 2;
+    m.nacc->xi = 3;
+    m.moisture = MoistureParams{};
+    m.moisture->lambda = 1;
     return m;
 }
 

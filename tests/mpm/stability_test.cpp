@@ -16,21 +16,8 @@ namespace {
 using test::make_lattice;
 using test::plain_model;
 
-const bool kOneThread = (set_thread_count(1), true);
-
 // a NACC soil block resting on a sticky ground under gravity, with moisture
-SimModel soil_model() {
-    SimModel m = plain_model(0.1);
-    m.gravity = Vec3(0, -9.81, 0);
-    m.ground = GroundParams{};
-    m.nacc = NaccParams{};
-    m.nacc->alpha0 = std::log(0.99);
-    m.nacc->beta0 = m.nacc->beta1 = 2;
-    m.nacc->xi = 3;
-    m.moisture = MoistureParams{};
-    m.moisture->lambda = 1;
-    return m;
-}
+using test::soil_model;
 
 bool state_is_finite(const SimState& s) {
     for (size_t p = 0; p < s.size(); ++p) {

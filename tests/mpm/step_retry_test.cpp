@@ -20,8 +20,6 @@ namespace {
 using test::make_lattice;
 using test::plain_model;
 
-const bool kOneThread = (set_thread_count(1), true);
-
 template <class T>
 bool same_bits(const std::vector<T>& a, const std::vector<T>& b) {
     return a.size() == b.size() && (a.empty() || std::memcmp(a.data(), b.data(), a.size() * sizeof(T)) == 0);
@@ -41,16 +39,8 @@ bool same_bits(const std::vector<T>& a, const std::vector<T>& b) {
 
 // a drying NACC soil block dropped on a sticky ground: every part of the step runs
 SimModel soil_model() {
-    SimModel m = plain_model(0.1);
-    m.gravity = Vec3(0, -9.81, 0);
+    SimModel m = test::soil_model();
     m.initial_velocity = Vec3(0, -1, 0);
-    m.ground = GroundParams{};
-    m.nacc = NaccParams{};
-    m.nacc->alpha0 = std::log(0.99);
-    m.nacc->beta0 = m.nacc->beta1 = 2;
-    m.nacc->xi = 3;
-    m.moisture = MoistureParams{};
-    m.moisture->lambda = 1;
     return m;
 }
 

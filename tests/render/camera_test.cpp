@@ -10,6 +10,11 @@
 namespace mudcrack {
 namespace {
 
+// tolerances, named by what they bound (the camera works in float)
+constexpr double kOrbitAbs = 1e-4;    // positions and distances after trigonometry in float [m]
+constexpr double kFloatAbs = 1e-5;    // one float operation on values of order 1-10 [m]
+constexpr float kFrameFillAbs = 0.02f;  // auto_frame: the box's widest extent in NDC vs the asked fill
+
 /// Normalized device coordinates of p seen through cam.
 Eigen::Vector3f ndc(const Camera& cam, float aspect, const Vec3f& p) {
     const Eigen::Matrix4f m = perspective_matrix(cam.fov_deg, aspect, 0.01f, 100.0f) * view_matrix(cam);
@@ -32,7 +37,7 @@ TEST(Camera, AutoFrameFitsEveryCornerWithAMargin) {
             widest = std::max({widest, std::abs(q.x()), std::abs(q.y())});
         }
         // tight: some corner touches the margin
-        EXPECT_NEAR(widest, 0.88f, 0.02f) << "aspect " << aspect;
+        EXPECT_NEAR(widest, 0.88f, kFrameFillAbs) << "aspect " << aspect;
     }
 }
 
@@ -55,7 +60,7 @@ TEST(Camera, OrbitFrameKeepsTheBoxInEveryViewOfTheTurntable) {
             }
         }
         // tight: in some view a corner comes to the margin
-        EXPECT_NEAR(widest, 0.88f, 0.02f) << "aspect " << aspect;
+        EXPECT_NEAR(widest, 0.88f, kFrameFillAbs) << "aspect " << aspect;
         // and closer than framing the square the box sweeps (what the turntable framed before)
         const Vec3f c = b.center();
         const float r = 0.5f * std::hypot(b.max.x() - b.min.x(), b.max.z() - b.min.z());
@@ -64,7 +69,7 @@ TEST(Camera, OrbitFrameKeepsTheBoxInEveryViewOfTheTurntable) {
         square.extend(Vec3f(c.x() + r, b.max.y(), c.z() + r));
         const Camera loose = auto_frame(square, 35, aspect, 0.88f);
         EXPECT_LT((base.position - base.target).norm(), 0.8f * (loose.position - loose.target).norm());
-        EXPECT_NEAR((base.target - c).norm(), 0, 1e-4);
+        EXPECT_NEAR((base.target - c).norm(), 0, kOrbitAbs);
     }
 }
 
@@ -92,14 +97,14 @@ TEST(Camera, TurntableOrbitsAtConstantDistanceAndHeight) {
     const int views = 8;
     for (int v = 0; v < views; ++v) {
         const Camera c = turntable_camera(base, v, views);
-        EXPECT_NEAR((c.position - c.target).norm(), d0, 1e-4);
-        EXPECT_NEAR(c.position.y(), base.position.y(), 1e-5);
+        EXPECT_NEAR((c.position - c.target).norm(), d0, kOrbitAbs);
+        EXPECT_NEAR(c.position.y(), base.position.y(), kFloatAbs);
     }
     // a quarter turn is two views of eight, and a full turn comes back
     const Camera q = turntable_camera(base, 2, views);
     const Vec3f r0 = base.position - base.target, r1 = q.position - q.target;
-    EXPECT_NEAR(r0.x() * r1.x() + r0.z() * r1.z(), 0.0, 1e-4);
-    EXPECT_NEAR((turntable_camera(base, views, views).position - base.position).norm(), 0, 1e-4);
+    EXPECT_NEAR(r0.x() * r1.x() + r0.z() * r1.z(), 0.0, kOrbitAbs);
+    EXPECT_NEAR((turntable_camera(base, views, views).position - base.position).norm(), 0, kOrbitAbs);
 }
 
 TEST(Camera, ViewMatrixLooksDownMinusZ) {
@@ -107,12 +112,12 @@ TEST(Camera, ViewMatrixLooksDownMinusZ) {
     c.position = Vec3f(0, 0, 5);
     c.target = Vec3f(0, 0, 0);
     const Eigen::Vector4f t = view_matrix(c) * Eigen::Vector4f(0, 0, 0, 1);
-    EXPECT_NEAR(t.z(), -5, 1e-5);
+    EXPECT_NEAR(t.z(), -5, kFloatAbs);
     // straight down still gives a valid basis
     c.position = Vec3f(0, 5, 0);
     const Eigen::Matrix4f m = view_matrix(c);
     EXPECT_TRUE(m.allFinite());
-    EXPECT_NEAR((m * Eigen::Vector4f(0, 0, 0, 1)).z(), -5, 1e-5);
+    EXPECT_NEAR((m * Eigen::Vector4f(0, 0, 0, 1)).z(), -5, kFloatAbs);
 }
 
 }  // namespace

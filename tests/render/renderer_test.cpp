@@ -14,6 +14,9 @@
 namespace mudcrack {
 namespace {
 
+// the lit halves of a symmetric scene: brightness ratio against 1
+constexpr double kSymmetricLight = 0.06;
+
 RenderParams small_params(ColorMode mode, int width = 160, int height = 120) {
     RenderParams p;
     p.width = width;
@@ -95,7 +98,7 @@ TEST(RenderMoisture, WetHalfIsDarker) {
     // control: in plain mode the two halves are lit alike, so the difference is the moisture
     const auto [left, right] = half_lumas(ColorMode::Plain, 1.0f, 0.0f, SurfaceKind::Boundary);
     RecordProperty("plain_left_over_right", std::to_string(left / right));
-    EXPECT_NEAR(left / right, 1.0, 0.06) << "left " << left << " right " << right;
+    EXPECT_NEAR(left / right, 1.0, kSymmetricLight) << "left " << left << " right " << right;
 }
 
 TEST(RenderCracks, CrackFacesReadDarkerThanBoundary) {
@@ -221,12 +224,12 @@ TEST(Render, GroundSitsUnderTheStage) {
 }
 
 TEST(RenderErrors, BadInputIsRefused) {
-    // a resolution out of 1..16384 is refused: the shot layer names the file and key, and below
-    // it a bad size is a bug the renderer's precondition check stops
+    // a resolution out of kMinResolution..kMaxResolution is refused: the shot layer names the
+    // file and key, and below it a bad size is a bug the renderer's precondition check stops
     RenderParams p = small_params(ColorMode::Plain);
     p.width = 0;
     ::testing::FLAGS_gtest_death_test_style = "threadsafe";
-    EXPECT_DEATH(Renderer{p}, "params.width >= 1");
+    EXPECT_DEATH(Renderer{p}, "params.width >= kMinResolution");
     p = small_params(ColorMode::Plain);
     p.height = 16385;
     EXPECT_DEATH(Renderer{p}, "params.height <= kMaxResolution");

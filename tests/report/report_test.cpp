@@ -17,8 +17,6 @@
 namespace mudcrack::report {
 namespace {
 
-const bool kOneThread = (set_thread_count(1), true);
-
 // measured 1.98 on h = 0.04, 0.02, 0.01 (lumped-mass quadratic B-splines, dt ~ h^2: 2)
 constexpr Real kMinDiffusion1dOrderInH = 1.7;
 // measured 0.99 on the time error (backward Euler: 1)

@@ -22,6 +22,9 @@
 namespace mudcrack {
 namespace {
 
+// a float normal's length against 1
+constexpr float kUnitNormal = 1e-6f;
+
 using test::box_lattice;
 using test::LatticeUv;
 
@@ -164,7 +167,7 @@ TEST(CoreRotation, RecoversThePolarRotationAndFixesSigns) {
     // an inverted Fe still gives a proper rotation
     const Mat3 inverted = R0 * Vec3(1.2, 0.9, -0.3).asDiagonal();
     const Mat3 Ri = core_rotation(inverted);
-    EXPECT_NEAR(Ri.determinant(), 1.0, 1e-12);
+    EXPECT_NEAR(Ri.determinant(), 1.0, tol::kRoundoff);
     EXPECT_LT((Ri.transpose() * Ri - Mat3::Identity()).norm(), 1e-12);
     EXPECT_LT((core_rotation(Mat3::Identity()) - Mat3::Identity()).norm(), tol::kRoundoff);
 }
@@ -219,7 +222,7 @@ TEST(SurfaceFrame, IntactBoundaryIsClosedAndEnclosesTheParticleVolume) {
         EXPECT_FLOAT_EQ(out.boundary.saturation[0], 0.5f);
         EXPECT_FLOAT_EQ(out.boundary.alpha[0], -0.01f);
         ASSERT_EQ(out.boundary.normals.size(), out.boundary.positions.size());
-        EXPECT_NEAR(out.boundary.normals[0].norm(), 1.0f, 1e-6f);
+        EXPECT_NEAR(out.boundary.normals[0].norm(), 1.0f, kUnitNormal);
     }
 }
 

@@ -20,7 +20,6 @@ namespace mudcrack::report {
 
 namespace {
 
-constexpr Real kPi = 3.14159265358979323846;
 constexpr Real kGravity = 9.81;  // [m/s^2]
 
 void fit_order(Sweep& sweep) {

@@ -286,6 +286,67 @@ std::vector<StabilityCase> stability_cases() {
     return out;
 }
 
+namespace {
+
+// what the accepted steps of a stability case add up to; a rollback returns to the tally of its
+// rollback point
+struct Tally {
+    int64_t steps = 0;
+    Real max_speed = 0;
+    Real e_scale = 0, e_max = 0, e_last = 0;  // energy: largest |total| seen, largest, last
+};
+
+void sample_energy(const SimModel& model, const SimState& s, Tally& tally) {
+    tally.e_last = state_energy(model, s).total();
+    tally.e_max = std::max(tally.e_max, tally.e_last);
+    tally.e_scale = std::max(tally.e_scale, std::abs(tally.e_last));
+}
+
+// steps the case until the step limit, the wall-time limit, a non-finite state or an error;
+// failed substeps are retried as in mc-sim (sim/mpm/step_retry.h), from the state at t = 0.
+// Sets r's outcome and message.
+void step_case(const SimModel& model, SimState& s, const StabilityLimits& limits, const WallClock& clock,
+               Tally& tally, RetryingStepper& stepper, StabilityResult& r) {
+    stepper.restart(s);
+    Tally at_rollback_point = tally;
+    r.outcome = Outcome::Completed;
+    try {
+        while (tally.steps < limits.max_steps) {
+            if (clock.seconds() > limits.max_wall_s) {
+                r.outcome = Outcome::Hang;
+                r.message = format("exceeded %.0f s of wall time after %lld steps", limits.max_wall_s,
+                                   static_cast<long long>(tally.steps));
+                break;
+            }
+            const StepAttempt a = stepper.attempt(model, s, stable_dt(model, s) * stepper.dt_scale());
+            if (!a.is_accepted) {
+                tally = at_rollback_point;
+                continue;
+            }
+            ++tally.steps;
+            if (has_non_finite(s)) {
+                r.outcome = Outcome::SilentNaN;
+                r.message = format("non-finite state after step %lld and no error", static_cast<long long>(tally.steps));
+                break;
+            }
+            tally.max_speed = std::max(tally.max_speed, a.stats.max_speed);
+            if (tally.steps % 5 == 0 || tally.steps == limits.max_steps) sample_energy(model, s, tally);
+            if (a.is_rollback_point) at_rollback_point = tally;
+        }
+    } catch (const RuntimeError& e) {
+        r.outcome = Outcome::StoppedWithError;
+        r.message = one_line(e.what());
+    } catch (const InputError& e) {
+        r.outcome = Outcome::StoppedWithError;
+        r.message = one_line(std::string("input error while stepping: ") + e.what());
+    } catch (const std::exception& e) {
+        r.outcome = Outcome::Crashed;
+        r.message = one_line(std::string("unexpected exception: ") + e.what());
+    }
+}
+
+}  // namespace
+
 StabilityResult run_stability_case(const std::string& name, Scale scale, const StabilityLimits& limits) {
     const auto& table = case_table();
     const auto it = std::find_if(table.begin(), table.end(), [&](const CaseEntry& e) { return e.info.name == name; });
@@ -308,61 +369,14 @@ StabilityResult run_stability_case(const std::string& name, Scale scale, const S
     }
     SimState& s = *state;
 
-    // what the accepted steps add up to; a rollback returns to the tally of its rollback point
-    struct Tally {
-        int64_t steps = 0;
-        Real max_speed = 0;
-        Real e_scale = 0, e_max = 0, e_last = 0;  // energy: largest |total| seen, largest, last
-    };
+    // the steps, with the energy sampled along the way
     Tally tally;
     const Real e0 = state_energy(c.model, s).total();  // gravity from the ground, so >= 0
     tally.e_scale = std::abs(e0);
     tally.e_max = tally.e_last = e0;
-    auto sample_energy = [&] {
-        tally.e_last = state_energy(c.model, s).total();
-        tally.e_max = std::max(tally.e_max, tally.e_last);
-        tally.e_scale = std::max(tally.e_scale, std::abs(tally.e_last));
-    };
     for (const Vec3& v : s.v) tally.max_speed = std::max(tally.max_speed, v.norm());
-
-    // failed substeps are retried as in mc-sim (sim/mpm/step_retry.h), from the state at t = 0
     RetryingStepper stepper;
-    stepper.restart(s);
-    Tally at_rollback_point = tally;
-    r.outcome = Outcome::Completed;
-    try {
-        while (tally.steps < limits.max_steps) {
-            if (clock.seconds() > limits.max_wall_s) {
-                r.outcome = Outcome::Hang;
-                r.message = format("exceeded %.0f s of wall time after %lld steps", limits.max_wall_s,
-                                   static_cast<long long>(tally.steps));
-                break;
-            }
-            const StepAttempt a = stepper.attempt(c.model, s, stable_dt(c.model, s) * stepper.dt_scale());
-            if (!a.is_accepted) {
-                tally = at_rollback_point;
-                continue;
-            }
-            ++tally.steps;
-            if (has_non_finite(s)) {
-                r.outcome = Outcome::SilentNaN;
-                r.message = format("non-finite state after step %lld and no error", static_cast<long long>(tally.steps));
-                break;
-            }
-            tally.max_speed = std::max(tally.max_speed, a.stats.max_speed);
-            if (tally.steps % 5 == 0 || tally.steps == limits.max_steps) sample_energy();
-            if (a.is_rollback_point) at_rollback_point = tally;
-        }
-    } catch (const RuntimeError& e) {
-        r.outcome = Outcome::StoppedWithError;
-        r.message = one_line(e.what());
-    } catch (const InputError& e) {
-        r.outcome = Outcome::StoppedWithError;
-        r.message = one_line(std::string("input error while stepping: ") + e.what());
-    } catch (const std::exception& e) {
-        r.outcome = Outcome::Crashed;
-        r.message = one_line(std::string("unexpected exception: ") + e.what());
-    }
+    step_case(c.model, s, limits, clock, tally, stepper, r);
     r.steps = tally.steps;
     r.retries = stepper.retries();
     r.max_speed = tally.max_speed;
@@ -372,7 +386,7 @@ StabilityResult run_stability_case(const std::string& name, Scale scale, const S
         r.message = "a RuntimeError with an empty message";
     }
     r.sim_time = s.time;
-    if (r.outcome == Outcome::Completed) sample_energy();
+    if (r.outcome == Outcome::Completed) sample_energy(c.model, s, tally);
     const Real denom = tally.e_scale > 0 ? tally.e_scale : Real(1);
     const bool is_energy_finite = std::isfinite(tally.e_last) && std::isfinite(tally.e_max) && std::isfinite(denom);
     const Real inf = std::numeric_limits<Real>::infinity();

@@ -3,7 +3,7 @@
 /// particle tet mesh (box or heightfield lattice, or a checked surface filled by CGAL Mesh_3), and
 /// writes DIR/init/particles.vdb (P, id, volume0), DIR/init/tets.vtu (tets, boundary faces with
 /// UVs) and DIR/init/manifest.json (last). A failed run leaves nothing.
-#include "pipeline/cmd/stage_cli.h"
+#include "pipeline/stages/stage_options.h"
 
 namespace mudcrack {
 

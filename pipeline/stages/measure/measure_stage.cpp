@@ -151,23 +151,191 @@ void print_mesh_row(int n, const std::optional<MeshPieces>& mesh, const std::opt
         std::printf(" %9s %9s %9s\n", "-", "-", "-");
 }
 
+// the rest state every frame is measured against: the tet mesh, its columns and the ground band
+struct RestSetup {
+    TetMesh mesh;
+    std::vector<Real> rest_volume;
+    Real spacing = 0;
+    RestColumns columns;
+    GroundBand ground;
+    std::vector<int32_t> surface_particles;  // the boundary particles (the ones a render shows)
+    Real alpha0 = 0;
+};
+
+RestSetup read_rest_setup(const Shot& shot, const fs::path& init_dir, const json& init_manifest) {
+    RestSetup r;
+    RecordedChecksums(init_manifest, init_dir / "manifest.json").verify(init_dir / "tets.vtu");
+    r.mesh = read_tet_mesh_vtu(init_dir / "tets.vtu");
+    r.rest_volume = particle_rest_volumes(r.mesh);
+    r.spacing = particle_spacing(r.rest_volume);
+    r.columns = build_rest_columns(r.mesh.X, r.spacing);
+    // gaps within 1.5 cells of the ground are lift-off: the grid holds that band (GroundBand)
+    r.ground.cell = shot.sim.h;
+    if (shot.sim.ground) {
+        r.ground.ground_y = shot.sim.ground->height;
+        r.ground.band = kGroundBandCells * shot.sim.h;
+    }
+    // the boundary particles, for the hardening colormap's halves
+    for (const auto& tri : r.mesh.boundary)
+        for (int k = 0; k < 3; ++k) r.surface_particles.push_back(static_cast<int32_t>(tri[k]));
+    std::sort(r.surface_particles.begin(), r.surface_particles.end());
+    r.surface_particles.erase(std::unique(r.surface_particles.begin(), r.surface_particles.end()),
+                              r.surface_particles.end());
+    r.alpha0 = shot.sim.nacc ? shot.sim.nacc->alpha0 : Real(0);
+    return r;
+}
+
+// the surfacing's outputs, when it ran: its break history is the one source of "broken"
+struct SurfaceOutputs {
+    std::optional<CoreTopology> topo;
+    std::optional<BreakHistory> history;
+    int min_particles = 1;
+    json manifest;
+    RecordedChecksums files;
+};
+
+void read_surface_outputs(const Shot& shot, const fs::path& surface_dir, const TetMesh& mesh, int last,
+                          SurfaceOutputs& s) {
+    if (!fs::exists(surface_dir / "manifest.json")) return;
+    s.manifest = read_current_manifest(surface_dir, shot.slice_hash(Stage::Surface));
+    s.files = RecordedChecksums(s.manifest, surface_dir / "manifest.json");
+    s.min_particles = s.manifest.value("min_fragment_particles", 1);
+    s.files.verify(surface_dir / kBreakHistoryFile);
+    s.topo = build_core_topology(mesh);
+    s.history = read_break_history(surface_dir / kBreakHistoryFile, std::nullopt, s.topo->n_edges());
+    if (!s.history)
+        throw InputError((surface_dir / kBreakHistoryFile).string() +
+                         ": missing or damaged (or from another mesh): re-run mc-surface");
+    if (s.history->last_frame < last)
+        throw InputError((surface_dir / kBreakHistoryFile).string() + ": covers frames up to " +
+                         std::to_string(s.history->last_frame) + ", not " + std::to_string(last) +
+                         ": re-run mc-surface");
+}
+
+// --motion: the tracker that surfaces each frame again, with the shot's fracture in the plates mode
+std::optional<MotionTracker> make_motion_tracker(const Shot& shot, const SurfaceOutputs& surfacing,
+                                                 const fs::path& sim_dir, const fs::path& surface_dir,
+                                                 const RecordedChecksums& sim_files) {
+    if (!surfacing.topo || !shot.surface)
+        throw InputError("--motion: " + shot.path + " has no surfacing output in " + surface_dir.string() +
+                         ": run mc-surface first");
+    std::optional<ShotFracture> fracture;
+    if (shot.surface->mode == SurfaceMode::Plates) {
+        const fs::path last_path = frame_path(sim_dir, "particles", surfacing.history->last_frame, "vdb");
+        sim_files.verify(last_path);
+        fracture = plan_shot_fracture(*surfacing.topo, points_to_frame(read_points(last_path), last_path.string()),
+                                      surfacing.history->first_break, *shot.surface);
+    }
+    return std::make_optional<MotionTracker>(*surfacing.topo, *surfacing.history, *shot.surface, shot.sim.h,
+                                             std::move(fracture));
+}
+
+// one frame's measures: its JSON row and what the table prints
+struct FrameMeasures {
+    json row;
+    double time = 0;
+    LayerShape shape;
+    std::optional<HardeningHalves> halves;
+    int64_t broken = -1;  // -1: no surfacing output
+    FragmentSizes sizes;
+    SurfacePolygons polygons;
+    CrackNetwork network;
+    std::optional<MeshPieces> meshes;
+    std::optional<SurfaceMotion> motion;
+};
+
+FrameMeasures measure_frame(const Shot& shot, const RestSetup& rest, const SurfaceOutputs& surfacing,
+                            const fs::path& init_dir, const fs::path& sim_dir, const fs::path& surface_dir,
+                            const RecordedChecksums& sim_files, std::optional<MotionTracker>& motion_tracker, int n) {
+    const fs::path path = frame_path(sim_dir, "particles", n, "vdb");
+    sim_files.verify(path);
+    const PointCloud cloud = read_points(path);
+    const ParticleFrame frame = points_to_frame(cloud, path.string());
+    if (frame.size() != rest.mesh.X.size())
+        throw InputError(path.string() + ": " + std::to_string(frame.size()) + " particles, but " +
+                         (init_dir / "tets.vtu").string() + " has " + std::to_string(rest.mesh.X.size()));
+    std::vector<Vec3> x(frame.size());
+    for (size_t p = 0; p < x.size(); ++p) x[p] = frame.P[p].cast<Real>();
+    FrameMeasures f;
+    f.shape = measure_layer_shape(rest.columns, rest.mesh.X, x, rest.spacing, rest.ground);
+    f.time = cloud.meta_double.count("mudcrack:time") ? cloud.meta_double.at("mudcrack:time") : 0.0;
+    f.row = {{"frame", n},
+             {"time", f.time},
+             {"top_rise_median", f.shape.top_rise_median},
+             {"top_rise_p95", f.shape.top_rise_p95},
+             {"curl", f.shape.curl},
+             {"split_fraction", f.shape.split_fraction},
+             {"split_height_median_cells", f.shape.split_height_median},
+             {"split_height_p10_cells", f.shape.split_height_p10},
+             {"lifted_fraction", f.shape.lifted_fraction}};
+    if (!frame.alpha.empty()) {
+        f.halves = measure_hardening_halves(rest.surface_particles, frame.alpha, rest.alpha0);
+        f.row["surface_stretched_fraction"] = f.halves->stretched_fraction;
+        f.row["surface_compressed_fraction"] = f.halves->compressed_fraction;
+    }
+    if (!surfacing.topo) return f;
+    const CoreTopology& topo = *surfacing.topo;
+    f.broken = count_broken_edges(surfacing.history->first_break, n);
+    const std::vector<uint8_t> is_broken = broken_at(*surfacing.history, n);
+    f.sizes = measure_fragment_sizes(find_fragments(topo, is_broken, surfacing.min_particles), rest.rest_volume);
+    f.polygons = measure_surface_polygons(topo, is_broken, rest.columns, surfacing.min_particles);
+    f.network = measure_crack_network(topo, is_broken, rest.columns, surfacing.min_particles);
+    f.row["broken_edges"] = f.broken;
+    f.row.update(crack_fields(f.sizes, f.polygons, f.network, measure_crack_depth(topo, is_broken, rest.columns)));
+    f.meshes = measure_frame_meshes(surface_dir, surfacing.manifest, surfacing.files, n, shot.sim.h);
+    if (f.meshes) f.row.update(mesh_fields(*f.meshes));
+    if (motion_tracker) f.motion = motion_tracker->step(frame);
+    if (f.motion) f.row.update(motion_fields(*f.motion));
+    return f;
+}
+
+void print_frame_header(const Shot& shot, const RestSetup& rest) {
+    std::printf("%s: %s, %zu particles in %d columns of %.4g m\n", kProgram, shot.name.c_str(), rest.mesh.X.size(),
+                rest.columns.n_columns(), rest.spacing);
+    std::printf("%6s %8s %11s %9s %9s %8s %10s %8s %10s %9s %7s %13s %8s %6s %6s %8s %8s\n", "frame", "time[s]",
+                "rise50[mm]", "curl[mm]", "split[%]", "splitH", "lifted[%]", "broken", "fragments", "polygons",
+                "plates", "polygon[m^2]", "axis[%]", "T[%]", "Y[%]", "str[%]", "comp[%]");
+}
+
+void print_frame_row(int n, const FrameMeasures& f, bool has_surfacing) {
+    std::printf("%6d %8.4f %11.2f %9.2f %9.2f %8.2f %10.2f", n, f.time, 1e3 * f.shape.top_rise_median,
+                1e3 * f.shape.curl, 100 * f.shape.split_fraction, f.shape.split_height_median,
+                100 * f.shape.lifted_fraction);
+    if (has_surfacing)
+        std::printf(" %8lld %10d %9d %7.2f %13.4g %8.1f %6.1f %6.1f", static_cast<long long>(f.broken), f.sizes.count,
+                    f.polygons.count, f.polygons.effective_count, f.polygons.weighted_mean_area,
+                    100 * f.network.axis_aligned_fraction, 100 * f.network.t_fraction, 100 * f.network.y_fraction);
+    else
+        std::printf(" %8s %10s %9s %7s %13s %8s %6s %6s", "-", "-", "-", "-", "-", "-", "-", "-");
+    if (f.halves)
+        std::printf(" %8.1f %8.1f\n", 100 * f.halves->stretched_fraction, 100 * f.halves->compressed_fraction);
+    else
+        std::printf(" %8s %8s\n", "-", "-");
+}
+
+using MeshRow = std::pair<std::optional<MeshPieces>, std::optional<SurfaceMotion>>;
+
+void print_mesh_table(const json& surface_manifest, bool has_motion, int first, const std::vector<MeshRow>& rows) {
+    std::printf("\nsurfacing meshes (%s): pieces, chips under 2 h, edges not shared by two triangles, crack-wall "
+                "roughness, crack area per metre of top crack line%s\n",
+                surface_manifest.value("mode", "?").c_str(),
+                has_motion ? "; vertex jumps beyond the particles' moves (cells) and particles changing piece" : "");
+    std::printf("%6s %7s %6s %6s %10s %11s %9s %9s %9s\n", "frame", "pieces", "chips", "open", "rough[deg]",
+                "wall[m2/m]", "jump_max", "jump_p99", "changes");
+    for (size_t i = 0; i < rows.size(); ++i) print_mesh_row(first + int(i), rows[i].first, rows[i].second);
+}
+
 }  // namespace
 
 int run_measure_stage(const StageOptions& options, const MeasureStageOptions& measure_options) {
-    const std::string& json_file = measure_options.json_file;
     const Shot shot = load_shot(options.shot);
     const fs::path out(options.out);
     const fs::path init_dir = out / "init", sim_dir = out / "sim", surface_dir = out / "surface";
     const json init_manifest = read_current_manifest(init_dir, shot.slice_hash(Stage::Init));
     const json sim_manifest = read_current_manifest(sim_dir, shot.slice_hash(Stage::Sim));
     const RecordedChecksums sim_files(sim_manifest, sim_dir / "manifest.json");
-    int first = 0, last = 0;
-    try {
-        first = sim_manifest.at("frames").at("first").get<int>();
-        last = sim_manifest.at("frames").at("last").get<int>();
-    } catch (const json::exception&) {
-        throw InputError((sim_dir / "manifest.json").string() + ": /frames/first and /frames/last: missing or not integers");
-    }
+    const ManifestFrames cached = manifest_frames(sim_manifest, sim_dir / "manifest.json");
+    int first = cached.first, last = cached.last;
     if (options.frame_range.is_set()) {
         if (options.frame_range.first < first || options.frame_range.last > last)
             throw InputError("--frames " + options.frames + ": outside the cached frames " + std::to_string(first) +
@@ -176,151 +344,33 @@ int run_measure_stage(const StageOptions& options, const MeasureStageOptions& me
         last = options.frame_range.last;
     }
 
-    RecordedChecksums(init_manifest, init_dir / "manifest.json").verify(init_dir / "tets.vtu");
-    const TetMesh mesh = read_tet_mesh_vtu(init_dir / "tets.vtu");
-    const std::vector<Real> rest_volume = particle_rest_volumes(mesh);
-    const Real spacing = particle_spacing(rest_volume);
-    const RestColumns columns = build_rest_columns(mesh.X, spacing);
-    // gaps within 1.5 cells of the ground are lift-off: the grid holds that band (GroundBand)
-    GroundBand ground;
-    ground.cell = shot.sim.h;
-    if (shot.sim.ground) {
-        ground.ground_y = shot.sim.ground->height;
-        ground.band = kGroundBandCells * shot.sim.h;
-    }
-    // the boundary particles (the ones a render shows), for the hardening colormap's halves
-    std::vector<int32_t> surface_particles;
-    for (const auto& tri : mesh.boundary)
-        for (int k = 0; k < 3; ++k) surface_particles.push_back(static_cast<int32_t>(tri[k]));
-    std::sort(surface_particles.begin(), surface_particles.end());
-    surface_particles.erase(std::unique(surface_particles.begin(), surface_particles.end()), surface_particles.end());
-    const Real alpha0 = shot.sim.nacc ? shot.sim.nacc->alpha0 : Real(0);
+    // the rest state, the surfacing's outputs when it ran, the motion tracker on --motion
+    const RestSetup rest = read_rest_setup(shot, init_dir, init_manifest);
+    SurfaceOutputs surfacing;
+    read_surface_outputs(shot, surface_dir, rest.mesh, last, surfacing);
+    if (!options.quiet) print_frame_header(shot, rest);
+    std::optional<MotionTracker> motion_tracker =
+        measure_options.motion ? make_motion_tracker(shot, surfacing, sim_dir, surface_dir, sim_files) : std::nullopt;
 
-    // fragments only when the surfacing ran: its break history is the one source of "broken"
-    std::optional<CoreTopology> topo;
-    std::optional<BreakHistory> history;
-    int min_particles = 1;
-    json surface_manifest;
-    RecordedChecksums surface_files;
-    if (fs::exists(surface_dir / "manifest.json")) {
-        surface_manifest = read_current_manifest(surface_dir, shot.slice_hash(Stage::Surface));
-        surface_files = RecordedChecksums(surface_manifest, surface_dir / "manifest.json");
-        min_particles = surface_manifest.value("min_fragment_particles", 1);
-        surface_files.verify(surface_dir / kBreakHistoryFile);
-        topo = build_core_topology(mesh);
-        history = read_break_history(surface_dir / kBreakHistoryFile, std::nullopt, topo->n_edges());
-        if (!history)
-            throw InputError((surface_dir / kBreakHistoryFile).string() +
-                             ": missing or damaged (or from another mesh): re-run mc-surface");
-        if (history->last_frame < last)
-            throw InputError((surface_dir / kBreakHistoryFile).string() + ": covers frames up to " +
-                             std::to_string(history->last_frame) + ", not " + std::to_string(last) +
-                             ": re-run mc-surface");
-    }
-
-    if (!options.quiet) {
-        std::printf("%s: %s, %zu particles in %d columns of %.4g m\n", kProgram, shot.name.c_str(), mesh.X.size(),
-                    columns.n_columns(), spacing);
-        std::printf("%6s %8s %11s %9s %9s %8s %10s %8s %10s %9s %7s %13s %8s %6s %6s %8s %8s\n", "frame", "time[s]",
-                    "rise50[mm]", "curl[mm]", "split[%]", "splitH", "lifted[%]", "broken", "fragments", "polygons",
-                    "plates", "polygon[m^2]", "axis[%]", "T[%]", "Y[%]", "str[%]", "comp[%]");
-    }
-    std::optional<MotionTracker> motion_tracker;
-    if (measure_options.motion) {
-        if (!topo || !shot.surface)
-            throw InputError("--motion: " + shot.path + " has no surfacing output in " + surface_dir.string() +
-                             ": run mc-surface first");
-        std::optional<ShotFracture> fracture;
-        if (shot.surface->mode == SurfaceMode::Plates) {
-            const fs::path last_path = frame_path(sim_dir, "particles", history->last_frame, "vdb");
-            sim_files.verify(last_path);
-            fracture = plan_shot_fracture(*topo, points_to_frame(read_points(last_path), last_path.string()),
-                                          history->first_break, *shot.surface);
-        }
-        motion_tracker.emplace(*topo, *history, *shot.surface, shot.sim.h, std::move(fracture));
-    }
+    // the frames, in order (the motion tracker carries one frame to the next)
     json table = json::array();
-    std::vector<std::pair<std::optional<MeshPieces>, std::optional<SurfaceMotion>>> mesh_rows;
+    std::vector<MeshRow> mesh_rows;
     for (int n = first; n <= last; ++n) {
-        const fs::path path = frame_path(sim_dir, "particles", n, "vdb");
-        sim_files.verify(path);
-        const PointCloud cloud = read_points(path);
-        const ParticleFrame frame = points_to_frame(cloud, path.string());
-        if (frame.size() != mesh.X.size())
-            throw InputError(path.string() + ": " + std::to_string(frame.size()) + " particles, but " +
-                             (init_dir / "tets.vtu").string() + " has " + std::to_string(mesh.X.size()));
-        std::vector<Vec3> x(frame.size());
-        for (size_t p = 0; p < x.size(); ++p) x[p] = frame.P[p].cast<Real>();
-        const LayerShape shape = measure_layer_shape(columns, mesh.X, x, spacing, ground);
-        const double time = cloud.meta_double.count("mudcrack:time") ? cloud.meta_double.at("mudcrack:time") : 0.0;
-        json row = {{"frame", n},
-                    {"time", time},
-                    {"top_rise_median", shape.top_rise_median},
-                    {"top_rise_p95", shape.top_rise_p95},
-                    {"curl", shape.curl},
-                    {"split_fraction", shape.split_fraction},
-                    {"split_height_median_cells", shape.split_height_median},
-                    {"split_height_p10_cells", shape.split_height_p10},
-                    {"lifted_fraction", shape.lifted_fraction}};
-        std::optional<HardeningHalves> halves;
-        if (!frame.alpha.empty()) {
-            halves = measure_hardening_halves(surface_particles, frame.alpha, alpha0);
-            row["surface_stretched_fraction"] = halves->stretched_fraction;
-            row["surface_compressed_fraction"] = halves->compressed_fraction;
-        }
-        int64_t broken = -1;
-        FragmentSizes sizes;
-        SurfacePolygons polygons;
-        CrackNetwork network;
-        if (topo) {
-            broken = count_broken_edges(history->first_break, n);
-            const std::vector<uint8_t> is_broken = broken_at(*history, n);
-            sizes = measure_fragment_sizes(find_fragments(*topo, is_broken, min_particles), rest_volume);
-            polygons = measure_surface_polygons(*topo, is_broken, columns, min_particles);
-            network = measure_crack_network(*topo, is_broken, columns, min_particles);
-            row["broken_edges"] = broken;
-            row.update(crack_fields(sizes, polygons, network, measure_crack_depth(*topo, is_broken, columns)));
-            const std::optional<MeshPieces> meshes =
-                measure_frame_meshes(surface_dir, surface_manifest, surface_files, n, shot.sim.h);
-            if (meshes) row.update(mesh_fields(*meshes));
-            std::optional<SurfaceMotion> motion;
-            if (motion_tracker) motion = motion_tracker->step(frame);
-            if (motion) row.update(motion_fields(*motion));
-            mesh_rows.emplace_back(meshes, motion);
-        }
-        if (!options.quiet) {
-            std::printf("%6d %8.4f %11.2f %9.2f %9.2f %8.2f %10.2f", n, time, 1e3 * shape.top_rise_median,
-                        1e3 * shape.curl, 100 * shape.split_fraction, shape.split_height_median,
-                        100 * shape.lifted_fraction);
-            if (topo)
-                std::printf(" %8lld %10d %9d %7.2f %13.4g %8.1f %6.1f %6.1f", static_cast<long long>(broken),
-                            sizes.count, polygons.count, polygons.effective_count, polygons.weighted_mean_area,
-                            100 * network.axis_aligned_fraction, 100 * network.t_fraction, 100 * network.y_fraction);
-            else
-                std::printf(" %8s %10s %9s %7s %13s %8s %6s %6s", "-", "-", "-", "-", "-", "-", "-", "-");
-            if (halves)
-                std::printf(" %8.1f %8.1f\n", 100 * halves->stretched_fraction, 100 * halves->compressed_fraction);
-            else
-                std::printf(" %8s %8s\n", "-", "-");
-        }
-        table.push_back(std::move(row));
+        FrameMeasures f = measure_frame(shot, rest, surfacing, init_dir, sim_dir, surface_dir, sim_files,
+                                        motion_tracker, n);
+        if (surfacing.topo) mesh_rows.emplace_back(f.meshes, f.motion);
+        if (!options.quiet) print_frame_row(n, f, surfacing.topo.has_value());
+        table.push_back(std::move(f.row));
     }
-    if (!options.quiet && !mesh_rows.empty()) {
-        std::printf("\nsurfacing meshes (%s): pieces, chips under 2 h, edges not shared by two triangles, crack-wall "
-                    "roughness, crack area per metre of top crack line%s\n",
-                    surface_manifest.value("mode", "?").c_str(),
-                    motion_tracker ? "; vertex jumps beyond the particles' moves (cells) and particles changing piece" : "");
-        std::printf("%6s %7s %6s %6s %10s %11s %9s %9s %9s\n", "frame", "pieces", "chips", "open", "rough[deg]",
-                    "wall[m2/m]", "jump_max", "jump_p99", "changes");
-        for (size_t i = 0; i < mesh_rows.size(); ++i) print_mesh_row(first + int(i), mesh_rows[i].first, mesh_rows[i].second);
-    }
-    if (!json_file.empty()) {
+    if (!options.quiet && !mesh_rows.empty())
+        print_mesh_table(surfacing.manifest, motion_tracker.has_value(), first, mesh_rows);
+    if (!measure_options.json_file.empty()) {
         const json doc = {{"shot", shot.name},
-                          {"particles", mesh.X.size()},
-                          {"column_width", spacing},
-                          {"columns", columns.n_columns()},
+                          {"particles", rest.mesh.X.size()},
+                          {"column_width", rest.spacing},
+                          {"columns", rest.columns.n_columns()},
                           {"frames", std::move(table)}};
-        write_text_atomically(json_file, doc.dump(2) + "\n");
+        write_text_atomically(measure_options.json_file, doc.dump(2) + "\n");
     }
     return 0;
 }

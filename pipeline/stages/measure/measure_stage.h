@@ -7,7 +7,7 @@
 /// sizes of the surfacing. Writes nothing into DIR.
 #include <string>
 
-#include "pipeline/cmd/stage_cli.h"
+#include "pipeline/stages/stage_options.h"
 
 namespace mudcrack {
 

@@ -10,7 +10,7 @@
 
 #include <nlohmann/json.hpp>
 
-#include "pipeline/cmd/stage_cli.h"
+#include "pipeline/stages/stage_options.h"
 #include "pipeline/io/manifest.h"
 #include "pipeline/shot/shot.h"
 #include "render/render_params.h"

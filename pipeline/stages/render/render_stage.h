@@ -8,7 +8,7 @@
 /// DIR/render/ (each PNG renamed into place), then one `--assemble` job makes the turntable, the
 /// contact sheet, the movies and the manifest from those PNGs. Both ways give the same bytes: every
 /// frame is framed from the bounds of all frames of the shot.
-#include "pipeline/cmd/stage_cli.h"
+#include "pipeline/stages/stage_options.h"
 
 namespace mudcrack {
 

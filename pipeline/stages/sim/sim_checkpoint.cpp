@@ -61,6 +61,18 @@ void load_array(const Checkpoint& c, const char* name, size_t n, ArrayPresence p
     values = unflatten<Element>(c, name, n, presence == ArrayPresence::Optional);
 }
 
+// the run's counters (MC_SIM_TOTALS): int64 counters as meta_int, the others as meta_double
+enum class TotalPresence { Required, Optional };
+void save_total(Checkpoint& c, const std::string& key, int64_t value) { c.meta_int[key] = value; }
+void save_total(Checkpoint& c, const std::string& key, double value) { c.meta_double[key] = value; }
+// an Optional counter an older checkpoint lacks is 0: that run never counted it
+void load_total(const Checkpoint& c, const std::string& key, TotalPresence presence, int64_t& value) {
+    value = presence == TotalPresence::Optional && !c.meta_int.count(key) ? 0 : c.require_int(key);
+}
+void load_total(const Checkpoint& c, const std::string& key, TotalPresence presence, double& value) {
+    value = presence == TotalPresence::Optional && !c.meta_double.count(key) ? 0 : c.require_double(key);
+}
+
 }  // namespace
 
 fs::path checkpoint_path(const fs::path& dir, int frame) {
@@ -107,15 +119,9 @@ void write_sim_checkpoint(const fs::path& path, const SimCheckpoint& checkpoint)
     c.f64["domain_min"] = flatten(std::vector<Vec3>{s.domain_min});
     c.f64["domain_max"] = flatten(std::vector<Vec3>{s.domain_max});
     // the run's counters, so a resumed run's manifest covers every frame
-    c.meta_int["totals.substeps"] = t.substeps;
-    c.meta_double["totals.dt_min"] = t.dt_min;
-    c.meta_double["totals.dt_max"] = t.dt_max;
-    c.meta_int["totals.cg_iterations"] = t.cg_iterations;
-    c.meta_int["totals.cg_max"] = t.cg_max;
-    c.meta_int["totals.active_nodes_max"] = t.active_nodes_max;
-    c.meta_int["totals.allocated_nodes_max"] = t.allocated_nodes_max;
-    c.meta_double["totals.max_speed"] = t.max_speed;
-    c.meta_int["totals.retries"] = t.retries;
+#define MC_SAVE_TOTAL(type, name, presence) save_total(c, "totals." #name, t.name);
+    MC_SIM_TOTALS(MC_SAVE_TOTAL)
+#undef MC_SAVE_TOTAL
     // the frame caches' checksums, as numbers (a CRC-32 fits an int64)
     for (const auto& [frame, crc] : checkpoint.cache_crc32) {
         c.i64["caches.frame"].push_back(frame);
@@ -159,16 +165,9 @@ SimCheckpoint read_sim_checkpoint(const fs::path& path) {
     s.domain_min = unflatten<Vec3>(c, "domain_min", 1, false)[0];
     s.domain_max = unflatten<Vec3>(c, "domain_max", 1, false)[0];
     SimTotals& t = sc.totals;
-    t.substeps = c.require_int("totals.substeps");
-    t.dt_min = c.require_double("totals.dt_min");
-    t.dt_max = c.require_double("totals.dt_max");
-    t.cg_iterations = c.require_int("totals.cg_iterations");
-    t.cg_max = c.require_int("totals.cg_max");
-    t.active_nodes_max = c.require_int("totals.active_nodes_max");
-    t.allocated_nodes_max = c.require_int("totals.allocated_nodes_max");
-    t.max_speed = c.require_double("totals.max_speed");
-    // written since step retries were added; an older checkpoint's run retried nothing
-    t.retries = c.meta_int.count("totals.retries") ? c.meta_int.at("totals.retries") : 0;
+#define MC_LOAD_TOTAL(type, name, presence) load_total(c, "totals." #name, TotalPresence::presence, t.name);
+    MC_SIM_TOTALS(MC_LOAD_TOTAL)
+#undef MC_LOAD_TOTAL
     // none recorded (no cache written yet, or an older checkpoint): no frame it precedes is trusted
     if (c.i64.count("caches.frame")) {
         const std::vector<int64_t>& frames = c.require_i64("caches.frame");

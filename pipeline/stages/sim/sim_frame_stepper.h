@@ -11,18 +11,29 @@
 
 namespace mudcrack {
 
+/// The run's counters, one X(type, name, presence) each with its doc: SimTotals' fields
+/// and the checkpoint's "totals.<name>" entries (sim_checkpoint.cpp) both come from this list.
+/// presence: Required, or Optional for a counter older checkpoints lack (read as 0).
+// clang-format off
+#define MC_SIM_TOTALS(X)                                                                        \
+    X(int64_t, substeps, Required)            /* MPM steps taken */                             \
+    X(double, dt_min, Required)               /* smallest step [s] (0 until the first step) */  \
+    X(double, dt_max, Required)               /* largest step [s] */                            \
+    X(int64_t, cg_iterations, Required)       /* moisture CG iterations, summed over substeps */\
+    X(int64_t, cg_max, Required)              /* most CG iterations in one substep */           \
+    X(int64_t, active_nodes_max, Required)    /* most grid nodes with mass in one substep */    \
+    X(int64_t, allocated_nodes_max, Required) /* most grid nodes allocated in one substep */    \
+    X(double, max_speed, Required)            /* fastest particle seen [m/s] */                 \
+    X(int64_t, retries, Optional)             /* substeps redone at a smaller dt after failing  \
+                                                 their checks (since step retries) */
+// clang-format on
+
 /// Counters of a run (deterministic: they depend on the simulation only, never on wall time),
 /// saved in checkpoints so a resumed run's manifest covers every frame.
 struct SimTotals {
-    int64_t substeps = 0;         // MPM steps taken
-    double dt_min = 0;            // smallest step [s] (0 until the first step)
-    double dt_max = 0;            // largest step [s]
-    int64_t cg_iterations = 0;    // moisture CG iterations, summed over substeps
-    int64_t cg_max = 0;           // most CG iterations in one substep
-    int64_t active_nodes_max = 0; // most grid nodes with mass in one substep
-    int64_t allocated_nodes_max = 0;  // most grid nodes allocated in one substep
-    double max_speed = 0;         // fastest particle seen [m/s]
-    int64_t retries = 0;          // substeps that failed their checks and were redone at a smaller dt
+#define MC_DECLARE_TOTAL(type, name, presence) type name = 0;
+    MC_SIM_TOTALS(MC_DECLARE_TOTAL)
+#undef MC_DECLARE_TOTAL
 };
 
 /// End time of frame k: k / fps [s] (frame 0 ends at t = 0, the initial state).

@@ -231,56 +231,102 @@ std::pair<int, int> frames_to_write(const Shot& shot, const StageOptions& option
     return {first, last};
 }
 
-}  // namespace
+// what a run carries from frame to frame, and what its manifest reports
+struct SimRun {
+    SimState state;
+    SimTotals totals;
+    std::map<int, std::string> cache_crc32;  // of the frame caches on disk, by frame
+    int done_frame = 0;                      // the state is at the end of this frame
+    bool resumed = false;                    // the state came from a checkpoint (--resume)
+    int64_t substeps_before = 0;             // totals.substeps when this run started
+    int64_t retries_before = 0;              // totals.retries when this run started
+    double step_seconds = 0;                 // in advance_frame only: the rate's denominator
+    int64_t state_bytes = 0;                 // the state and stepper's largest footprint
+    std::vector<std::string> cached_attributes;
+};
 
-int run_sim_stage(const Shot& shot, const StageOptions& options, const SimStageOptions& sim_options) {
-    WallTimer wall;
-    const SimModel& model = shot.sim;
-    const fs::path out(options.out);
-    const fs::path sim_dir = out / "sim";
-
-    // the frames to write
-    const std::pair<int, int> frames = frames_to_write(shot, options);
-    const int first = frames.first, last = frames.second;
-    const InitParticles init = read_init(out / "init", shot);
-    const size_t n = init.X.size();
-
-    // the starting state: a checkpoint (--resume) or the rest state at t = 0 (end of "frame 0")
+// the starting state: a checkpoint (--resume) or the rest state at t = 0 (end of "frame 0");
+// clears what a run must not leave behind
+SimRun start_run(const Shot& shot, const SimStageOptions& sim_options, const InitParticles& init,
+                 const fs::path& sim_dir, int first, int last) {
     std::error_code ec;
     fs::create_directories(sim_dir, ec);
     if (ec) throw RuntimeError(sim_dir.string() + ": cannot create: " + ec.message());
     std::optional<SimCheckpoint> resumed;
     if (sim_options.resume) {
-        resumed = find_resume_checkpoint(sim_dir, shot, n, first, last);
+        resumed = find_resume_checkpoint(sim_dir, shot, init.X.size(), first, last);
         if (!resumed) log::info("--resume: no usable checkpoint in " + sim_dir.string() + ", starting from t = 0");
     }
-    SimState state;
-    SimTotals totals;
-    std::map<int, std::string> cache_crc32;  // of the frame caches on disk, by frame
-    int done_frame = 0;  // the state is at the end of this frame
+    SimRun run;
     if (resumed) {
-        state = std::move(resumed->state);
-        totals = resumed->totals;
-        cache_crc32 = std::move(resumed->cache_crc32);
-        done_frame = resumed->frame;
-        log::info("resuming from " + checkpoint_path(sim_dir, done_frame).string());
+        run.state = std::move(resumed->state);
+        run.totals = resumed->totals;
+        run.cache_crc32 = std::move(resumed->cache_crc32);
+        run.done_frame = resumed->frame;
+        run.resumed = true;
+        log::info("resuming from " + checkpoint_path(sim_dir, run.done_frame).string());
     } else {
-        state = make_initial_state(model, init.X, init.V0, init.strength);
+        run.state = make_initial_state(shot.sim, init.X, init.V0, init.strength);
     }
     // the old manifest goes first, so make sees an incomplete stage until this run succeeds;
     // stale frames and checkpoints (after the resumed one) and half-written temporaries too
-    clear_sim_dir(sim_dir, resumed ? done_frame : -1);
+    clear_sim_dir(sim_dir, run.resumed ? run.done_frame : -1);
+    run.substeps_before = run.totals.substeps;
+    run.retries_before = run.totals.retries;
+    run.state_bytes = state_memory_bytes(run.state);
+    return run;
+}
 
-    SimProgress progress(int64_t(n), first, last, state.time, frame_end_time(model, last), !options.quiet,
+// the frame's cache; a failure (a full disk) keeps what is done for --resume
+void write_frame_cache(const SimModel& model, SimRun& run, const fs::path& sim_dir, int frame, int frame_substeps,
+                       int first, SimProgress& progress) {
+    ParticleFrame particles = state_to_frame(model, run.state, model.cache);
+    particles.frame = frame;
+    particles.time = run.state.time;
+    particles.substeps = frame_substeps;
+    const PointCloud cloud = frame_to_points(particles);  // with the cache's metadata
+    try {
+        const fs::path cache = frame_path(sim_dir, "particles", frame, "vdb");
+        write_points(cache, cloud, model.h);
+        run.cache_crc32[frame] = file_crc32(cache);
+    } catch (const RuntimeError& e) {
+        progress.finish();
+        throw RuntimeError(std::string(e.what()) + kept_frames_note(first, frame - 1, sim_dir));
+    }
+    if (run.cached_attributes.empty()) run.cached_attributes = attribute_names(cloud);
+}
+
+// a full-precision checkpoint of the state at the end of `frame`, then the oldest pruned
+void write_frame_checkpoint(const Shot& shot, SimRun& run, const fs::path& sim_dir, int frame, int first,
+                            SimProgress& progress) {
+    SimCheckpoint checkpoint;
+    checkpoint.frame = frame;
+    checkpoint.slice_hash = shot.slice_hash(Stage::Sim);
+    checkpoint.threads = thread_count();
+    checkpoint.totals = run.totals;
+    checkpoint.cache_crc32 = run.cache_crc32;
+    // lend the state to the checkpoint instead of copying it (it can be GBs)
+    checkpoint.state = std::move(run.state);
+    try {
+        write_sim_checkpoint(checkpoint_path(sim_dir, frame), checkpoint);
+    } catch (const RuntimeError& e) {
+        progress.finish();
+        throw RuntimeError(std::string(e.what()) + kept_frames_note(first, frame, sim_dir));
+    }
+    run.state = std::move(checkpoint.state);
+    prune_checkpoints(sim_dir);
+}
+
+// frames done_frame + 1 .. last: substeps, caches (from `first` on) and checkpoints
+void simulate_frames(const Shot& shot, const SimStageOptions& sim_options, SimRun& run, const fs::path& sim_dir,
+                     int first, int last, bool verbose) {
+    const SimModel& model = shot.sim;
+    SimState& state = run.state;
+    SimProgress progress(int64_t(state.size()), first, last, state.time, frame_end_time(model, last), verbose,
                          stderr, is_terminal(stderr));
     WallTimer step_timer;
-    double step_seconds = 0;          // in advance_frame only: the rate's denominator
-    const int64_t substeps_before = totals.substeps;
-    const int64_t retries_before = totals.retries;
-    std::vector<std::string> cached_attributes;
     RetryingStepper stepper;
-    int64_t state_bytes = state_memory_bytes(state);
-    for (int frame = done_frame + 1; frame <= last; ++frame) {
+    for (int frame = run.done_frame + 1; frame <= last; ++frame) {
         if (frame == sim_options.inject_nan_at_frame) {
             const auto slot = std::find(state.id.begin(), state.id.end(), 0) - state.id.begin();
             state.v[size_t(slot)] = Vec3::Constant(std::numeric_limits<Real>::quiet_NaN());
@@ -290,79 +336,53 @@ int run_sim_stage(const Shot& shot, const StageOptions& options, const SimStageO
         int frame_substeps = 0;
         try {
             step_timer.reset();
-            frame_substeps = advance_frame(model, state, frame, stepper, totals, [&](int k) {
-                progress.substep(frame, k, state.time, totals.substeps - substeps_before,
-                                 step_seconds + step_timer.seconds());
+            frame_substeps = advance_frame(model, state, frame, stepper, run.totals, [&](int k) {
+                progress.substep(frame, k, state.time, run.totals.substeps - run.substeps_before,
+                                 run.step_seconds + step_timer.seconds());
             });
-            step_seconds += step_timer.seconds();
+            run.step_seconds += step_timer.seconds();
         } catch (const RuntimeError& e) {
             progress.finish();
             throw RuntimeError(std::string(e.what()) + kept_frames_note(first, frame - 1, sim_dir));
         }
-        state_bytes = std::max(state_bytes, state_memory_bytes(state) + stepper.memory_bytes());
+        run.state_bytes = std::max(run.state_bytes, state_memory_bytes(state) + stepper.memory_bytes());
 
         // the frame's cache (frames before the requested range are simulated, not written)
-        if (frame >= first) {
-            ParticleFrame particles = state_to_frame(model, state, model.cache);
-            particles.frame = frame;
-            particles.time = state.time;
-            particles.substeps = frame_substeps;
-            PointCloud cloud = frame_to_points(particles);
-            cloud.meta_string["mudcrack:stage"] = "sim";
-            cloud.meta_int["mudcrack:frame"] = frame;
-            cloud.meta_int["mudcrack:substeps"] = frame_substeps;
-            cloud.meta_double["mudcrack:time"] = state.time;
-            try {
-                const fs::path cache = frame_path(sim_dir, "particles", frame, "vdb");
-                write_points(cache, cloud, model.h);
-                cache_crc32[frame] = file_crc32(cache);
-            } catch (const RuntimeError& e) {  // a full disk: what is done stays for --resume
-                progress.finish();
-                throw RuntimeError(std::string(e.what()) + kept_frames_note(first, frame - 1, sim_dir));
-            }
-            if (cached_attributes.empty()) cached_attributes = attribute_names(cloud);
-        }
+        if (frame >= first) write_frame_cache(model, run, sim_dir, frame, frame_substeps, first, progress);
 
-        // a full-precision checkpoint every checkpoint_every frames (by absolute frame number,
-        // so a resumed run checkpoints the same frames as an uninterrupted one)
-        if (model.checkpoint_every > 0 && frame % model.checkpoint_every == 0) {
-            SimCheckpoint checkpoint;
-            checkpoint.frame = frame;
-            checkpoint.slice_hash = shot.slice_hash(Stage::Sim);
-            checkpoint.threads = thread_count();
-            checkpoint.totals = totals;
-            checkpoint.cache_crc32 = cache_crc32;
-            // lend the state to the checkpoint instead of copying it (it can be GBs)
-            checkpoint.state = std::move(state);
-            try {
-                write_sim_checkpoint(checkpoint_path(sim_dir, frame), checkpoint);
-            } catch (const RuntimeError& e) {
-                progress.finish();
-                throw RuntimeError(std::string(e.what()) + kept_frames_note(first, frame, sim_dir));
-            }
-            state = std::move(checkpoint.state);
-            prune_checkpoints(sim_dir);
-        }
-        progress.frame_done(frame, frame_substeps, state.time, totals.substeps - substeps_before, step_seconds);
+        // a checkpoint every checkpoint_every frames (by absolute frame number, so a resumed run
+        // checkpoints the same frames as an uninterrupted one)
+        if (model.checkpoint_every > 0 && frame % model.checkpoint_every == 0)
+            write_frame_checkpoint(shot, run, sim_dir, frame, first, progress);
+        progress.frame_done(frame, frame_substeps, state.time, run.totals.substeps - run.substeps_before,
+                            run.step_seconds);
     }
     progress.finish();
-    if (cached_attributes.empty())  // resumed past the last frame: name what the caches hold
-        cached_attributes = attribute_names(frame_to_points(state_to_frame(model, state, model.cache)));
+}
 
-    // the manifest, last
-    const int64_t run_substeps = totals.substeps - substeps_before;
-    const double rate = step_seconds > 0 ? double(run_substeps) * double(n) / step_seconds : 0;
+// the run's particle-steps per second of stepping
+double step_rate(const SimRun& run) {
+    const int64_t run_substeps = run.totals.substeps - run.substeps_before;
+    return run.step_seconds > 0 ? double(run_substeps) * double(run.state.size()) / run.step_seconds : 0;
+}
+
+json sim_manifest(const Shot& shot, const fs::path& out, const InitParticles& init, const SimRun& run, int first,
+                  int last, double wall_seconds) {
+    const SimModel& model = shot.sim;
+    const SimTotals& totals = run.totals;
+    const fs::path sim_dir = out / "sim";
+    const size_t n = init.X.size();
     const double cg_mean = totals.substeps > 0 ? double(totals.cg_iterations) / double(totals.substeps) : 0;
-    nlohmann::json m = make_manifest("sim", shot.path, shot.slice_hash(Stage::Sim));
+    json m = make_manifest("sim", shot.path, shot.slice_hash(Stage::Sim));
     m["inputs"] = {{"init", {{"dir", (out / "init").string()}, {"slice_hash", manifest_slice_hash(init.manifest)}}}};
     m["frames"] = {{"first", first}, {"last", last}, {"count", last - first + 1}, {"fps", model.time.fps}};
     m["particles"] = n;
     m["threads"] = thread_count();
-    m["resumed_from_frame"] = resumed ? nlohmann::json(done_frame) : nlohmann::json(nullptr);
-    m["wall_seconds"] = wall.seconds();
-    m["step_loop_seconds"] = step_seconds;
-    m["substeps_this_run"] = run_substeps;
-    m["particle_steps_per_second"] = rate;
+    m["resumed_from_frame"] = run.resumed ? json(run.done_frame) : json(nullptr);
+    m["wall_seconds"] = wall_seconds;
+    m["step_loop_seconds"] = run.step_seconds;
+    m["substeps_this_run"] = totals.substeps - run.substeps_before;
+    m["particle_steps_per_second"] = step_rate(run);
     m["substeps"] = totals.substeps;
     m["dt"] = {{"min", totals.dt_min}, {"max", totals.dt_max}};
     m["max_speed"] = totals.max_speed;
@@ -371,25 +391,48 @@ int run_sim_stage(const Shot& shot, const StageOptions& options, const SimStageO
     m["moisture"] = model.moisture.has_value();
     m["cg_iterations"] = {{"mean_per_substep", cg_mean}, {"max", totals.cg_max}, {"total", totals.cg_iterations}};
     m["peak_memory_bytes"] = peak_rss_bytes();
-    m["state_bytes"] = state_bytes;
-    m["bytes_per_particle"] = double(state_bytes) / double(n);
+    m["state_bytes"] = run.state_bytes;
+    m["bytes_per_particle"] = double(run.state_bytes) / double(n);
     m["allocated"] = {{"moisture_grid", model.moisture.has_value()},
-                      {"theta", !state.theta.empty()},
-                      {"Jw", !state.Jw.empty()},
-                      {"plasticity", !state.alpha.empty()}};
-    m["cached_attributes"] = cached_attributes;
-    m["caches"] = cache_records(sim_dir, first, last, cache_crc32);
+                      {"theta", !run.state.theta.empty()},
+                      {"Jw", !run.state.Jw.empty()},
+                      {"plasticity", !run.state.alpha.empty()}};
+    m["cached_attributes"] = run.cached_attributes;
+    m["caches"] = cache_records(sim_dir, first, last, run.cache_crc32);
     m["checkpoint_every"] = model.checkpoint_every;
     std::vector<std::string> checkpoints;
     for (const int c : list_checkpoint_frames(sim_dir)) checkpoints.push_back(checkpoint_path(sim_dir, c).filename().string());
     m["checkpoints"] = checkpoints;
-    write_manifest(sim_dir, m);
+    return m;
+}
 
+}  // namespace
+
+int run_sim_stage(const Shot& shot, const StageOptions& options, const SimStageOptions& sim_options) {
+    WallTimer wall;
+    const SimModel& model = shot.sim;
+    const fs::path out(options.out);
+    const fs::path sim_dir = out / "sim";
+
+    // the frames to write, the rest state, the starting state
+    const std::pair<int, int> frames = frames_to_write(shot, options);
+    const int first = frames.first, last = frames.second;
+    const InitParticles init = read_init(out / "init", shot);
+    SimRun run = start_run(shot, sim_options, init, sim_dir, first, last);
+
+    // the frames, then the manifest, last
+    simulate_frames(shot, sim_options, run, sim_dir, first, last, !options.quiet);
+    if (run.cached_attributes.empty())  // resumed past the last frame: name what the caches hold
+        run.cached_attributes = attribute_names(frame_to_points(state_to_frame(model, run.state, model.cache)));
+    write_manifest(sim_dir, sim_manifest(shot, out, init, run, first, last, wall.seconds()));
+
+    const size_t n = init.X.size();
     char line[240];
     std::snprintf(line, sizeof line,
                   "frames %d-%d: %lld substeps, %lld retried, %.3g M particle-steps/s, %.0f bytes/particle",
-                  first, last, (long long)run_substeps, (long long)(totals.retries - retries_before), rate * 1e-6,
-                  double(state_bytes) / double(n));
+                  first, last, (long long)(run.totals.substeps - run.substeps_before),
+                  (long long)(run.totals.retries - run.retries_before), step_rate(run) * 1e-6,
+                  double(run.state_bytes) / double(n));
     log::info(line);
     return 0;
 }

@@ -2,7 +2,7 @@
 /// The mc-sim stage: reads DIR/init/, runs the shot's frames, and writes
 /// DIR/sim/particles.####.vdb per frame (each atomically), checkpoint.####.bin every
 /// model.checkpoint_every frames (the last two kept), and manifest.json last.
-#include "pipeline/cmd/stage_cli.h"
+#include "pipeline/stages/stage_options.h"
 #include "pipeline/shot/shot.h"
 
 namespace mudcrack {

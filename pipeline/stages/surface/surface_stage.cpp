@@ -46,7 +46,7 @@ uint64_t break_source_hash(const json& sim_manifest, const SurfaceParams& params
     os.precision(17);
     os << params.zeta << "|" << params.length_consistent << "|" << topo.n_edges() << "|" << topo.n_tets();
     const std::string s = os.str();
-    return fnv1a64(s.data(), s.size());
+    return fnv1a64_of(s);
 }
 
 /// Loads one sim cache, verified against the checksum the sim manifest records, and checks that it
@@ -183,13 +183,10 @@ struct FrameResult {
     int64_t triangles = 0;
 };
 
-}  // namespace
-
-int run_surface_stage(const StageOptions& options, const SurfaceStageOptions& surface_options) {
+// the shot's surfacing settings with the --mode and --format flags applied
+SurfaceParams flagged_params(const Shot& shot, const SurfaceStageOptions& surface_options) {
     const std::string& mode_flag = surface_options.mode;
     const std::string& format_flag = surface_options.format;
-    WallTimer wall;
-    const Shot shot = load_shot(options.shot);
     if (!shot.surface)
         throw InputError(shot.path + ": /surfacing: missing: this shot has no surfacing stage (add a \"surfacing\" section)");
     SurfaceParams params = *shot.surface;
@@ -197,39 +194,53 @@ int run_surface_stage(const StageOptions& options, const SurfaceStageOptions& su
         const std::optional<SurfaceMode> mode = parse_surface_mode(mode_flag);
         if (!mode) throw InputError("--mode " + mode_flag + ": not a surfacing mode");
         params.mode = *mode;
-        if (params.debris != DebrisOutput::None && params.mode != SurfaceMode::Plates)
+        if (debris_needs_plates(params))
             throw InputError("--mode " + mode_flag + ": " + shot.path +
                              " asks for /surfacing/debris, which only the plates mode writes");
     }
     if (!format_flag.empty()) params.format = format_flag;
     if (!is_supported_mesh_format(params.format))
         throw InputError("--format " + params.format + ": " + mesh_format_refusal(params.format));
+    return params;
+}
 
-    const fs::path out = options.out, init_dir = out / "init", sim_dir = out / "sim", surface_dir = out / "surface";
-    const json init_manifest = read_current_manifest(init_dir, shot.slice_hash(Stage::Init));
-    const json sim_manifest = read_current_manifest(sim_dir, shot.slice_hash(Stage::Sim));
-    const RecordedChecksums sim_files(sim_manifest, sim_dir / "manifest.json");
-    int sim_first = 0, sim_last = -1;
-    try {
-        sim_first = sim_manifest.at("frames").at("first").get<int>();
-        sim_last = sim_manifest.at("frames").at("last").get<int>();
-    } catch (const json::exception&) {
-        throw InputError((sim_dir / "manifest.json").string() + ": /frames/first and /frames/last: missing or not integers");
-    }
-    int first = sim_first, last = sim_last;
+// the stage's inputs: init's and sim's folders and manifests, the cached and the requested frames
+struct SurfaceInputs {
+    fs::path init_dir, sim_dir;
+    json init_manifest, sim_manifest;
+    RecordedChecksums sim_files;
+    int sim_first = 0, sim_last = -1;  // the cached frames
+    int first = 0, last = -1;          // the frames this run surfaces
+};
+
+SurfaceInputs read_surface_inputs(const Shot& shot, const StageOptions& options) {
+    SurfaceInputs in;
+    in.init_dir = fs::path(options.out) / "init";
+    in.sim_dir = fs::path(options.out) / "sim";
+    const fs::path sim_dir = in.sim_dir;
+    in.init_manifest = read_current_manifest(in.init_dir, shot.slice_hash(Stage::Init));
+    in.sim_manifest = read_current_manifest(sim_dir, shot.slice_hash(Stage::Sim));
+    in.sim_files = RecordedChecksums(in.sim_manifest, sim_dir / "manifest.json");
+    const ManifestFrames sim_frames = manifest_frames(in.sim_manifest, sim_dir / "manifest.json");
+    in.sim_first = in.first = sim_frames.first;
+    in.sim_last = in.last = sim_frames.last;
     if (options.frame_range.is_set()) {
-        first = options.frame_range.first;
-        last = options.frame_range.last;
-        if (first < sim_first || last > sim_last)
-            throw UsageError("--frames " + options.frames + ": outside the cached frames " + std::to_string(sim_first) +
-                             "-" + std::to_string(sim_last) + " of " + (sim_dir / "manifest.json").string());
+        in.first = options.frame_range.first;
+        in.last = options.frame_range.last;
+        if (in.first < in.sim_first || in.last > in.sim_last)
+            throw UsageError("--frames " + options.frames + ": outside the cached frames " +
+                             std::to_string(in.sim_first) + "-" + std::to_string(in.sim_last) + " of " +
+                             (sim_dir / "manifest.json").string());
     }
+    return in;
+}
 
-    // preprocessing, once per tet mesh
+// preprocessing, once per tet mesh: the tet mesh lives only while its topology is built (the
+// frames need only the topology)
+CoreTopology load_topology(const Shot& shot, const SurfaceParams& params, const SurfaceInputs& in) {
     WallTimer timer;
-    const fs::path tets_file = init_dir / "tets.vtu";
-    RecordedChecksums(init_manifest, init_dir / "manifest.json").verify(tets_file);
-    // the tet mesh lives only while its topology is built: the frames need only the topology
+    const fs::path tets_file = in.init_dir / "tets.vtu";
+    RecordedChecksums(in.init_manifest, in.init_dir / "manifest.json").verify(tets_file);
     const CoreTopology topo = [&] {
         const TetMesh mesh = read_tet_mesh_vtu(tets_file);
         try {
@@ -239,108 +250,128 @@ int run_surface_stage(const StageOptions& options, const SurfaceStageOptions& su
         }
     }();
     if (params.mode == SurfaceMode::Plates) check_piece_size(shot, params, topo);
-    const double preprocessing_seconds = timer.seconds();
     log::info("particle cores: " + std::to_string(topo.n_particles) + " particles, " + std::to_string(topo.n_tets()) +
               " tets, " + std::to_string(topo.n_edges()) + " edges, " + std::to_string(topo.skin_faces.size()) +
-              " boundary faces (" + std::to_string(preprocessing_seconds) + " s)");
+              " boundary faces (" + std::to_string(timer.seconds()) + " s)");
+    return topo;
+}
 
-    // an existing surface folder of the same shot, mode and format is updated in place by --frames
+// the manifest of an existing surface folder of the same shot, mode and format, which --frames
+// updates in place; nullopt when there is none (or no --frames)
+std::optional<json> in_place_manifest(const Shot& shot, const StageOptions& options, const SurfaceParams& params,
+                                      const fs::path& surface_dir) {
+    if (!options.frame_range.is_set() || !fs::exists(surface_dir / "manifest.json")) return std::nullopt;
     json previous;
-    const bool update_in_place = options.frame_range.is_set() && fs::exists(surface_dir / "manifest.json") && [&] {
-        try {
-            previous = read_manifest(surface_dir);
-        } catch (const InputError&) {
-            return false;
-        }
-        return manifest_slice_hash(previous) == shot.slice_hash(Stage::Surface) &&
-               previous.value("mode", "") == surface_mode_name(params.mode) &&
-               previous.value("format", "") == params.format;
-    }();
-    // an update in place is staged like a full run, its folder starting as hard links to the
-    // current files: a failed run leaves the previous outputs exactly as they were
-    StagingDir staging(surface_dir, options.keep_partial);
-    if (update_in_place) link_folder_contents(surface_dir, staging.path());
-    const fs::path dir = staging.path();
+    try {
+        previous = read_manifest(surface_dir);
+    } catch (const InputError&) {
+        return std::nullopt;
+    }
+    if (manifest_slice_hash(previous) == shot.slice_hash(Stage::Surface) &&
+        previous.value("mode", "") == surface_mode_name(params.mode) && previous.value("format", "") == params.format)
+        return previous;
+    return std::nullopt;
+}
 
-    // the break history: reused when it matches the inputs and covers the frames, else scanned
-    timer.reset();
-    const uint64_t source_hash = break_source_hash(sim_manifest, params, topo);
+// the edge-break history, and in the plates mode the shot's fracture
+struct Breaks {
+    BreakHistory history;
+    std::optional<ShotFracture> fracture;
+    bool reused = false;  // the history of the folder updated in place
+    double seconds = 0;
+};
+
+// the break history: reused when it matches the inputs and covers the frames, else scanned and
+// written into `dir`; the plates mode's fracture, decided once from the shot's last frame
+// (surfacing/shot_fracture.h)
+Breaks plan_breaks(const SurfaceInputs& in, const SurfaceParams& params, const CoreTopology& topo,
+                   const fs::path& surface_dir, const std::optional<json>& previous, const fs::path& dir) {
+    WallTimer timer;
+    const uint64_t source_hash = break_source_hash(in.sim_manifest, params, topo);
     std::optional<BreakHistory> history;
-    if (update_in_place && is_intact_break_history(surface_dir, previous))
+    if (previous && is_intact_break_history(surface_dir, *previous))
         history = read_break_history(surface_dir / kBreakHistoryFile, source_hash, topo.n_edges());
-    const bool reused = history && history->first_frame <= sim_first && history->last_frame >= last;
-    if (!reused) {
-        log::info("break history: scanning frames " + std::to_string(sim_first) + "-" + std::to_string(sim_last));
-        history = scan_breaks(sim_dir, sim_files, sim_first, sim_last, topo, params, source_hash);
+    Breaks breaks;
+    breaks.reused = history && history->first_frame <= in.sim_first && history->last_frame >= in.last;
+    if (!breaks.reused) {
+        log::info("break history: scanning frames " + std::to_string(in.sim_first) + "-" + std::to_string(in.sim_last));
+        history = scan_breaks(in.sim_dir, in.sim_files, in.sim_first, in.sim_last, topo, params, source_hash);
         write_break_history(dir / kBreakHistoryFile, *history);
     }
-    // the plates mode's fracture, decided once from the shot's last frame (surfacing/shot_fracture.h)
-    std::optional<ShotFracture> fracture;
+    breaks.history = std::move(*history);
     if (params.mode == SurfaceMode::Plates) {
-        fracture = plan_shot_fracture(topo, load_frame(sim_dir, sim_files, sim_last, topo), history->first_break, params);
-        log::info("plates: the fracture of frame " + std::to_string(sim_last) + ": " +
-                  std::to_string(fracture->last.count) + " pieces, " + std::to_string(fracture->last.debris) +
-                  " debris particles, " + std::to_string(fracture->walls.size()) + " wall points");
+        breaks.fracture = plan_shot_fracture(topo, load_frame(in.sim_dir, in.sim_files, in.sim_last, topo),
+                                             breaks.history.first_break, params);
+        log::info("plates: the fracture of frame " + std::to_string(in.sim_last) + ": " +
+                  std::to_string(breaks.fracture->last.count) + " pieces, " +
+                  std::to_string(breaks.fracture->last.debris) + " debris particles, " +
+                  std::to_string(breaks.fracture->walls.size()) + " wall points");
     }
-    const double break_seconds = timer.seconds();
+    breaks.seconds = timer.seconds();
+    return breaks;
+}
 
-    // frames, in parallel; each writes its own files atomically
-    const int n_frames = last - first + 1;
-    std::vector<FrameResult> results(n_frames);
-    for_each_item(n_frames, [&](int i) {
-        const int n = first + i;
-        const ParticleFrame frame = load_frame(sim_dir, sim_files, n, topo);
-        WallTimer t;
-        SurfacedFrame s = surface_frame(topo, frame, history->first_break, params, fracture ? &*fracture : nullptr);
-        results[i].surfacing_seconds = t.seconds();
-        results[i].triangles = int64_t(s.boundary.faces.size() + s.crack.faces.size());
-        const fs::path boundary_file = frame_path(dir, "boundary", n, params.format);
-        json entry = {{"frame", n},
-                      {"boundary", {{"file", boundary_file.filename().string()},
-                                    {"vertices", s.boundary.positions.size()},
-                                    {"faces", s.boundary.faces.size()}}},
-                      {"broken_edges", s.broken_edges},
-                      {"fragments", s.fragments},
-                      {"culled_fragments", s.culled_fragments},
-                      {"surfacing_seconds", results[i].surfacing_seconds}};
-        entry["bounds"] = params.cracks ? bounds_json({&s.boundary, &s.crack}) : bounds_json({&s.boundary});
-        if (params.mode == SurfaceMode::Plates) {
-            entry["pieces"] = s.fragments;
-            entry["debris_particles"] = s.debris_particles;
-            entry["wall_points_smoothed"] = s.wall_points_smoothed;
+// frame n's meshes (and debris) written into `dir`, each atomically, and its manifest entry
+FrameResult surface_one_frame(const SurfaceInputs& in, const SurfaceParams& params, const CoreTopology& topo,
+                              const Breaks& breaks, const fs::path& dir, int n) {
+    FrameResult result;
+    const ParticleFrame frame = load_frame(in.sim_dir, in.sim_files, n, topo);
+    WallTimer t;
+    SurfacedFrame s = surface_frame(topo, frame, breaks.history.first_break, params,
+                                    breaks.fracture ? &*breaks.fracture : nullptr);
+    result.surfacing_seconds = t.seconds();
+    result.triangles = int64_t(s.boundary.faces.size() + s.crack.faces.size());
+    const fs::path boundary_file = frame_path(dir, "boundary", n, params.format);
+    json entry = {{"frame", n},
+                  {"boundary", {{"file", boundary_file.filename().string()},
+                                {"vertices", s.boundary.positions.size()},
+                                {"faces", s.boundary.faces.size()}}},
+                  {"broken_edges", s.broken_edges},
+                  {"fragments", s.fragments},
+                  {"culled_fragments", s.culled_fragments},
+                  {"surfacing_seconds", result.surfacing_seconds}};
+    entry["bounds"] = params.cracks ? bounds_json({&s.boundary, &s.crack}) : bounds_json({&s.boundary});
+    if (params.mode == SurfaceMode::Plates) {
+        entry["pieces"] = s.fragments;
+        entry["debris_particles"] = s.debris_particles;
+        entry["wall_points_smoothed"] = s.wall_points_smoothed;
+    }
+    if (params.debris == DebrisOutput::Points) {
+        const fs::path debris_file = frame_path(dir, "debris", n, "ply");
+        write_debris_ply(debris_file, s.debris);
+        entry["debris"] = file_record(debris_file);
+        entry["debris"]["points"] = s.debris.size();
+    }
+    // each mesh moves into its export and is freed after it: a frame's peak memory holds one
+    // copy of its meshes
+    export_meshes(boundary_file, take_mesh(s.boundary), params.format);
+    entry["boundary"]["crc32"] = file_crc32(boundary_file);
+    if (params.cracks) {
+        // a frame without cracks gets no crack file: a glTF mesh cannot be empty, and assimp
+        // writes an empty mesh that no reader (assimp included) accepts; the manifest records
+        // "file": null
+        const fs::path crack_file = frame_path(dir, "crack", n, params.format);
+        std::error_code ec;
+        fs::remove(crack_file, ec);  // a stale file of an earlier run
+        entry["crack"] = {{"file", s.crack.faces.empty() ? json(nullptr) : json(crack_file.filename().string())},
+                          {"vertices", s.crack.positions.size()},
+                          {"faces", s.crack.faces.size()}};
+        if (!s.crack.faces.empty()) {
+            export_meshes(crack_file, take_mesh(s.crack), params.format);
+            entry["crack"]["crc32"] = file_crc32(crack_file);
         }
-        if (params.debris == DebrisOutput::Points) {
-            const fs::path debris_file = frame_path(dir, "debris", n, "ply");
-            write_debris_ply(debris_file, s.debris);
-            entry["debris"] = file_record(debris_file);
-            entry["debris"]["points"] = s.debris.size();
-        }
-        // each mesh moves into its export and is freed after it: a frame's peak memory holds
-        // one copy of its meshes
-        export_meshes(boundary_file, take_mesh(s.boundary), params.format);
-        entry["boundary"]["crc32"] = file_crc32(boundary_file);
-        if (params.cracks) {
-            // a frame without cracks gets no crack file: a glTF mesh cannot be empty, and
-            // assimp writes an empty mesh that no reader (assimp included) accepts; the manifest
-            // records "file": null
-            const fs::path crack_file = frame_path(dir, "crack", n, params.format);
-            std::error_code ec;
-            fs::remove(crack_file, ec);  // a stale file of an earlier run
-            entry["crack"] = {{"file", s.crack.faces.empty() ? json(nullptr) : json(crack_file.filename().string())},
-                              {"vertices", s.crack.positions.size()},
-                              {"faces", s.crack.faces.size()}};
-            if (!s.crack.faces.empty()) {
-                export_meshes(crack_file, take_mesh(s.crack), params.format);
-                entry["crack"]["crc32"] = file_crc32(crack_file);
-            }
-        }
-        results[i].entry = std::move(entry);
-    });
+    }
+    result.entry = std::move(entry);
+    return result;
+}
 
-    // the manifest, last (merged with the frames already there when updating in place)
+// the manifest: this run's frames merged with those already there when updating in place
+json surface_manifest(const Shot& shot, const SurfaceInputs& in, const SurfaceParams& params,
+                      const CoreTopology& topo, const Breaks& breaks, const std::optional<json>& previous,
+                      const std::vector<FrameResult>& results, const fs::path& dir, double preprocessing_seconds) {
     std::map<int, json> frames;
-    if (update_in_place && previous.contains("per_frame"))
-        for (const json& e : previous["per_frame"]) frames[e.value("frame", 0)] = e;
+    if (previous && previous->contains("per_frame"))
+        for (const json& e : (*previous)["per_frame"]) frames[e.value("frame", 0)] = e;
     double surfacing_seconds = 0;
     int64_t triangles = 0;
     for (const FrameResult& r : results) {
@@ -351,8 +382,8 @@ int run_surface_stage(const StageOptions& options, const SurfaceStageOptions& su
     json per_frame = json::array();
     for (auto& [n, e] : frames) per_frame.push_back(e);
     json m = make_manifest("surface", shot.path, shot.slice_hash(Stage::Surface));
-    m["inputs"] = {{"init", {{"dir", init_dir.string()}, {"slice_hash", manifest_slice_hash(init_manifest)}}},
-                   {"sim", {{"dir", sim_dir.string()}, {"slice_hash", manifest_slice_hash(sim_manifest)}}}};
+    m["inputs"] = {{"init", {{"dir", in.init_dir.string()}, {"slice_hash", manifest_slice_hash(in.init_manifest)}}},
+                   {"sim", {{"dir", in.sim_dir.string()}, {"slice_hash", manifest_slice_hash(in.sim_manifest)}}}};
     m["mode"] = surface_mode_name(params.mode);
     m["format"] = params.format;
     m["zeta"] = params.zeta;
@@ -366,7 +397,7 @@ int run_surface_stage(const StageOptions& options, const SurfaceStageOptions& su
                        {"debris", params.debris == DebrisOutput::Points ? "points" : "none"}};
     // fps: the shot's (/frames/fps), so a DCC importer sets its scene's rate from this manifest alone
     m["frames"] = {{"first", frames.begin()->first}, {"last", frames.rbegin()->first}, {"count", frames.size()},
-                   {"fps", shot.sim.time.fps}, {"this_run", {{"first", first}, {"last", last}}}};
+                   {"fps", shot.sim.time.fps}, {"this_run", {{"first", in.first}, {"last", in.last}}}};
     m["particles"] = topo.n_particles;
     m["tets"] = topo.n_tets();
     m["edges"] = topo.n_edges();
@@ -375,27 +406,65 @@ int run_surface_stage(const StageOptions& options, const SurfaceStageOptions& su
     m["topology_bytes"] = topo.memory_bytes();
     m["topology_bytes_per_tet"] = double(topo.memory_bytes()) / topo.n_tets();
     m["break_history"] = {{"file", kBreakHistoryFile}, {"crc32", file_crc32(dir / kBreakHistoryFile)},
-                          {"reused", reused}, {"frames_scanned", reused ? 0 : sim_last - sim_first + 1},
-                          {"seconds", break_seconds}};
+                          {"reused", breaks.reused},
+                          {"frames_scanned", breaks.reused ? 0 : in.sim_last - in.sim_first + 1},
+                          {"seconds", breaks.seconds}};
+    const int n_frames = in.last - in.first + 1;
     m["surfacing_seconds"] = surfacing_seconds;
     m["tets_per_second"] = surfacing_seconds > 0 ? double(topo.n_tets()) * n_frames / surfacing_seconds : 0.0;
     m["triangles_per_second"] = surfacing_seconds > 0 ? double(triangles) / surfacing_seconds : 0.0;
     m["threads"] = thread_count();
-    m["wall_seconds"] = wall.seconds();
-    m["peak_memory_bytes"] = peak_rss_bytes();
     m["per_frame"] = per_frame;
-    write_manifest(dir, m);
-    staging.commit();
+    return m;
+}
 
-    // results table on stdout
+// the results table on stdout
+void print_surface_results(const std::vector<FrameResult>& results, const json& manifest, double wall_seconds) {
     std::printf("frame  boundary_faces  crack_faces  broken_edges  fragments\n");
     for (const FrameResult& r : results)
         std::printf("%5d  %14lld  %11lld  %12lld  %9d\n", r.entry["frame"].get<int>(),
                     (long long)r.entry["boundary"]["faces"].get<int64_t>(),
                     (long long)(r.entry.contains("crack") ? r.entry["crack"]["faces"].get<int64_t>() : 0),
                     (long long)r.entry["broken_edges"].get<int64_t>(), r.entry["fragments"].get<int>());
-    std::printf("surfaced %d frames: %.3g tets/s, %.3g triangles/s per frame compute; wall %.2f s\n", n_frames,
-                m["tets_per_second"].get<double>(), m["triangles_per_second"].get<double>(), wall.seconds());
+    std::printf("surfaced %d frames: %.3g tets/s, %.3g triangles/s per frame compute; wall %.2f s\n",
+                int(results.size()), manifest["tets_per_second"].get<double>(),
+                manifest["triangles_per_second"].get<double>(), wall_seconds);
+}
+
+}  // namespace
+
+int run_surface_stage(const StageOptions& options, const SurfaceStageOptions& surface_options) {
+    WallTimer wall;
+    const Shot shot = load_shot(options.shot);
+    const SurfaceParams params = flagged_params(shot, surface_options);
+    const SurfaceInputs in = read_surface_inputs(shot, options);
+    const fs::path surface_dir = fs::path(options.out) / "surface";
+
+    // preprocessing, once per tet mesh
+    WallTimer timer;
+    const CoreTopology topo = load_topology(shot, params, in);
+    const double preprocessing_seconds = timer.seconds();
+
+    // an update in place is staged like a full run, its folder starting as hard links to the
+    // current files: a failed run leaves the previous outputs exactly as they were
+    const std::optional<json> previous = in_place_manifest(shot, options, params, surface_dir);
+    StagingDir staging(surface_dir, options.keep_partial);
+    if (previous) link_folder_contents(surface_dir, staging.path());
+    const fs::path dir = staging.path();
+    const Breaks breaks = plan_breaks(in, params, topo, surface_dir, previous, dir);
+
+    // frames, in parallel; each writes its own files atomically
+    std::vector<FrameResult> results(in.last - in.first + 1);
+    for_each_item(int(results.size()),
+                  [&](int i) { results[i] = surface_one_frame(in, params, topo, breaks, dir, in.first + i); });
+
+    // the manifest, last
+    json m = surface_manifest(shot, in, params, topo, breaks, previous, results, dir, preprocessing_seconds);
+    m["wall_seconds"] = wall.seconds();
+    m["peak_memory_bytes"] = peak_rss_bytes();
+    write_manifest(dir, m);
+    staging.commit();
+    print_surface_results(results, m, wall.seconds());
     return 0;
 }
 

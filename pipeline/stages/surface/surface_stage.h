@@ -8,7 +8,7 @@
 /// frame range can be surfaced, in any order and in parallel, with identical files.
 #include <string>
 
-#include "pipeline/cmd/stage_cli.h"
+#include "pipeline/stages/stage_options.h"
 
 namespace mudcrack {
 

@@ -3,7 +3,7 @@
 
 #include <random>
 
-#include "sim/mpm/bspline.h"
+#include "sim/grid/bspline.h"
 #include "tolerance.h"
 
 namespace mudcrack::mpm {

@@ -1,4 +1,4 @@
-#include "sim/mpm/sparse_grid.h"
+#include "sim/grid/sparse_grid.h"
 
 #include <algorithm>
 #include <cmath>

@@ -9,11 +9,11 @@
 #include <map>
 #include <random>
 
-#include "mpm_test_util.h"
+#include "mpm/mpm_test_util.h"
 #include "sim/core/parallel.h"
 #include "sim/moisture/moisture_solver.h"
 #include "sim/moisture/pore.h"
-#include "sim/mpm/bspline.h"
+#include "sim/grid/bspline.h"
 #include "sim/mpm/simulation.h"
 #include "sim/mpm/workspace.h"
 #include "tolerance.h"
@@ -21,10 +21,12 @@
 namespace mudcrack {
 namespace {
 
+// tolerances, named by what they bound
+constexpr double kCubeRoot = 1e-15;     // a cube root against its closed form, a few ulps
+constexpr double kEvaporatedTop = 1e-9; // the top layer's theta after exact exponential decay
+
 using test::make_lattice;
 using test::plain_model;
-
-const bool kOneThread = (set_thread_count(1), true);
 
 // tolerance of the 1 % volume check of a fully dried block
 constexpr Real kDriedVolumeTolerance = 0.01;
@@ -393,7 +395,7 @@ TEST(Pore, StepMatchesTheClosedFormAndCapsTheJump) {
         const PoreStep ps = pore_step(Jw_old, s, eta, 0);
         const Real exact_rel = (pore_jw(s, eta) - Jw_old) / Jw_old;
         EXPECT_NEAR(ps.log_ratio, std::log1p(exact_rel), 1e-15 * std::abs(exact_rel)) << "rel " << rel;
-        EXPECT_NEAR(ps.Fe_scale, std::cbrt(Jw_old / pore_jw(s, eta)), 1e-15) << "rel " << rel;
+        EXPECT_NEAR(ps.Fe_scale, std::cbrt(Jw_old / pore_jw(s, eta)), kCubeRoot) << "rel " << rel;
     }
     // a large drop is capped at max_log_step and the remainder carried
     const PoreStep capped = pore_step(1.0, 0.0, eta, 1e-3);
@@ -538,7 +540,7 @@ TEST(SurfaceEvaporation, AtZeroDiffusivityOnlyTheExposedLayerDriesExactly) {
         const bool inner = x.x() > 2 * spacing && x.x() < 9 * spacing && x.z() > 2 * spacing && x.z() < 9 * spacing;
         if (!inner) continue;  // the side faces are exposed too
         if (std::abs(x.y() - top_y) < spacing / 4) {
-            EXPECT_NEAR(s.theta[p], expected_top, 1e-9) << "top-layer particle " << s.id[p];
+            EXPECT_NEAR(s.theta[p], expected_top, kEvaporatedTop) << "top-layer particle " << s.id[p];
             ++top;
         } else if (x.y() < second_y + spacing / 4) {
             EXPECT_EQ(s.theta[p], eta) << "particle " << s.id[p] << " at y = " << x.y() << " under the exposed layer";

@@ -4,9 +4,9 @@
 
 #include <cmath>
 
-#include "mpm_test_util.h"
+#include "mpm/mpm_test_util.h"
 #include "sim/moisture/flux_history.h"
-#include "sim/mpm/sparse_grid.h"
+#include "sim/grid/sparse_grid.h"
 #include "tolerance.h"
 
 namespace mudcrack {
