@@ -52,8 +52,8 @@ struct SurfacedFrame {
 /// welded vertex. Saturation and alpha are averaged over the owners of each welded vertex.
 /// In SurfaceMode::Plates the shot's fracture (shot_fracture.h) gives the frame its pieces and
 /// cuts: face_fragment holds each face's piece id; crack walls are placed smoothly in rest space
-/// and smoothed where they are over the shot's wall graph, their rims along the rim (wall_smoothing.h,
-/// params.wall_smoothing steps each); the particles along the walls move by their
+/// and smoothed where they are over the shot's wall graph, their rims along the rim
+/// (wall_smoothing.h, params.wall_smoothing steps each); the particles along the walls move by their
 /// neighbourhood's fitted affine motion (wall_deformation.h); cores follow their particles'
 /// rotation without the Jw scaling (a crack is as wide as the particles moved apart); a wall
 /// vertex closer than close_gaps spacings to its far side in another piece meets it half way,

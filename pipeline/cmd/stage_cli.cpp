@@ -29,7 +29,7 @@ namespace {
 
 // OpenMP threads that spin at barriers (libgomp spins 300,000 times before it sleeps) take the
 // cores the working threads need whenever other jobs share the node, and a stage then runs many
-// times slower (README, Reliability: 145 s instead of 8 s for six demo frames on a loaded node).
+// times slower (docs/reliability.md: 145 s instead of 8 s for six demo frames on a loaded node).
 // libgomp reads its wait policy once, when it is loaded, before main runs, so setting it here
 // would come too late: a stage whose user set neither variable re-executes itself, once, with
 // OMP_WAIT_POLICY=passive. A user's own OMP_WAIT_POLICY or GOMP_SPINCOUNT is kept as it is.

@@ -21,7 +21,7 @@ constexpr Real kMinCellSize = 1e-4;  // [m]
 // the MPM grid keys its 4^3-node blocks with 32 bits (sim/grid/sparse_grid.h)
 constexpr double kMaxGridBlocks = 4.0e9;
 // memory per particle of a step: the state, the workspace with its grid, the retry path's copy of
-// the state (README, "Measured on this machine": 550 to 645 bytes), with room for the caches
+// the state (docs/measurements.md: 550 to 645 bytes), with room for the caches
 constexpr double kBytesPerParticle = 1024;
 // llvmpipe (OSMesa) allocates at most 1 GiB per render buffer (Mesa's LP_MAX_TEXTURE_SIZE); the
 // multisampled colour buffer is the largest: 4 bytes x samples per pixel

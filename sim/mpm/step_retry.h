@@ -8,7 +8,7 @@
 /// every frame start), every RetryPolicy::snapshot_interval accepted steps, and before dt grows
 /// back; a failure rolls back to it and redoes the steps since then at the smaller dt. A copy
 /// per substep would cost a pass over every particle array on every step; one every 64 steps
-/// costs a 64th of that (measured in README). Rolling back the whole interval also undoes an
+/// costs a 64th of that (measured in docs/reliability.md). Rolling back the whole interval also undoes an
 /// instability that built up over several steps before a particle inverted.
 ///
 /// Deterministic: a rollback restores every SimState array bit for bit and forgets the step

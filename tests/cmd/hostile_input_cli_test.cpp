@@ -1,4 +1,5 @@
-// Hostile input to the stage binaries (README, "Bad input"; docs/architecture.md §5): every case
+// Hostile input to the stage binaries (the README's exit codes, docs/reliability.md and
+// docs/architecture.md §5): every case
 // ends in a clear refusal with the right exit code, a message naming the file, key or flag, and
 // nothing left behind (no .partial folder, temporary file, lock file or new output folder).
 // - Usage: bad --threads / --frames / --log-level values and unknown flags, for every stage:

@@ -181,7 +181,7 @@ TEST_F(FigureClaims, Fig8NaccAloneShrinksWithoutPeelingWhileTheFullModelPeelsAnd
     ASSERT_FALSE(a.is_null() || b.is_null() || c.is_null());
 
     // (b) NACC merely: the slab shrinks, but no column splits horizontally. The paper's (b) also
-    // cracks vertically into polygons; ours does not (README, Known limitations: without the
+    // cracks vertically into polygons; ours does not (docs/limitations.md: without the
     // saturation hardening the crust keeps Table 1's p0 = 0.04 kappa, yields in tension as it
     // dries and flows instead of storing the stress a crack needs), so that is not asserted.
     EXPECT_LT(b.at("top_rise_median").get<double>(), -kVisibleShrinkage);
