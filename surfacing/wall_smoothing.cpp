@@ -284,13 +284,12 @@ WallGraph plan_wall_graph(const CoreTopology& topo, const std::vector<uint8_t>& 
     auto on_rim = [&](int32_t n) { return g.held[n] && !g.hidden[n]; };
     for (int32_t n = 0; n < g.n_nodes; ++n) {
         if (!on_rim(n)) continue;
-        std::array<int32_t, 2> along{};
-        int count = 0;
+        std::vector<int32_t> along;
         for (int32_t k = g.begin[n]; k < g.begin[n + 1]; ++k)
-            if (on_rim(g.neighbour[k]) && count++ < 2) along[count - 1] = g.neighbour[k];
-        if (count != 2) continue;
+            if (on_rim(g.neighbour[k])) along.push_back(g.neighbour[k]);
+        if (along.size() != 2) continue;  // a rim's end, or where three cracks meet: held
         g.rim_nodes.push_back(n);
-        g.rim_neighbours.push_back(along);
+        g.rim_neighbours.push_back({along[0], along[1]});
     }
     // kept for the whole shot: without the slack push_back left (up to half of each)
     g.points.shrink_to_fit();
@@ -304,7 +303,7 @@ void smooth_wall_nodes(const WallGraph& g, int steps, std::vector<Vec3>& positio
     // in single precision, as the meshes are written: half the memory traffic of the steps
     std::vector<Vec3f> y(position.size()), next;
     parallel_for(g.n_nodes, [&](int64_t n) { y[n] = position[n].cast<float>(); });
-    next = y;  // only the free nodes change; the held and unused ones are the same in both
+    next = y;  // only the free and rim nodes change; the others are the same in both
     const int64_t n_free = static_cast<int64_t>(g.free_nodes.size());
     const int64_t n_rim = static_cast<int64_t>(g.rim_nodes.size());
     for (int it = 0; it < 2 * steps; ++it) {
