@@ -8,6 +8,7 @@
 
 #include "sim/core/error.h"
 #include "sim/core/parallel.h"
+#include "sim/core/union_find.h"
 #include "surfacing/core_rotation.h"
 #include "surfacing/edge_breaks.h"
 #include "surfacing/fragments.h"
@@ -96,8 +97,8 @@ public:
     }
 
     bool has_saturation() const { return !m_frame.saturation.empty(); }
-    /// Plates mode: the wall through cut edge e reaches no surface and is not meshed (WallGraph).
-    bool hides_wall(int32_t e) const { return m_plates.wall_graph && m_plates.wall_graph->hides(e); }
+    /// Plates mode: walls that reach no surface in this frame are not meshed (hide_unseen_walls).
+    bool hides_unseen_walls() const { return m_plates.wall_graph != nullptr; }
     bool has_alpha() const { return !m_frame.alpha.empty(); }
 
     PointOwners particle_point(int32_t p) const {
@@ -560,12 +561,39 @@ CrackRanks rank_crack_elements(const CoreTopology& topo, const std::vector<int32
     return ranks;
 }
 
+/// Culls (owner -1) the wall triangles of this frame that reach no surface: the parts of the walls,
+/// joined through shared weld slots, with no point on the skin (a skin edge's midpoint or a skin
+/// face's centroid). A wall inside the soil (a cavity left by a grain torn loose, a hairline) is
+/// a closed surface of its own that no camera sees, and the wall graph holds its nodes where the
+/// dual cells put them. Decided on the frame's own walls, not the last frame's: a wall hidden at
+/// the end can be joined to a visible one earlier, while the cuts between them are still to come,
+/// and culling it then would leave a hole in the visible one. Sequential, hence deterministic.
+void hide_unseen_walls(const CoreTopology& topo, const std::vector<int32_t>& broken, const CrackRanks& ranks,
+                       int64_t face0, int64_t n_weld, std::vector<SlotTri>& tris) {
+    UnionFind walls(static_cast<int32_t>(n_weld));
+    for (const SlotTri& t : tris)
+        if (t.owner >= 0) walls.unite(t.weld_slot[0], t.weld_slot[1]), walls.unite(t.weld_slot[0], t.weld_slot[2]);
+    std::vector<uint8_t> seen(n_weld, 0);  // by root
+    auto see = [&](int64_t first_slot, int n_slots) {
+        for (int k = 0; k < n_slots; ++k) seen[walls.find(static_cast<int32_t>(first_slot + k))] = 1;
+    };
+    for (const SkinFace& sf : topo.skin_faces) {
+        if (ranks.face_rank[sf.face] >= 0) see(face0 + 3 * int64_t(ranks.face_rank[sf.face]), 3);
+        for (int32_t e : sf.edge) {
+            const auto r = std::lower_bound(broken.begin(), broken.end(), e);  // broken is ascending
+            if (r != broken.end() && *r == e) see(2 * int64_t(r - broken.begin()), 2);
+        }
+    }
+    for (SlotTri& t : tris)
+        if (t.owner >= 0 && !seen[walls.find(t.weld_slot[0])]) t.owner = -1;
+}
+
 void build_crack(const CoreTopology& topo, const FrameCores& cores, const Fragments& frag,
                  const std::vector<uint8_t>& is_broken, SurfacedFrame& out) {
     TriMesh& mesh = out.crack;
     std::vector<int32_t> broken;
     for (int32_t e = 0; e < topo.n_edges(); ++e)
-        if (is_broken[e] && !cores.hides_wall(e)) broken.push_back(e);
+        if (is_broken[e]) broken.push_back(e);
     const int64_t nbr = static_cast<int64_t>(broken.size());
 
     // faces and tets around broken edges get compact ranks, in order of first use
@@ -623,6 +651,7 @@ void build_crack(const CoreTopology& topo, const FrameCores& cores, const Fragme
             }
         }
     });
+    if (cores.hides_unseen_walls()) hide_unseen_walls(topo, broken, ranks, face0, n_weld, tris);
     Numbered num = number_vertices(tris, 3 * n_weld, n_weld, frag, mesh);
     // released before the vertices are made, which is the peak of a frame's surfacing
     std::vector<SlotTri>().swap(tris);

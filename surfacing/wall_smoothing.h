@@ -95,11 +95,6 @@ struct WallGraph {
         if (points.empty() || kind == RestPointKind::Particle) return -1;
         return point_of[int(kind) - 1][id];
     }
-    /// Whether the wall through cut edge e is hidden: both its sides reach no surface.
-    bool hides(int32_t e) const {
-        const int32_t point = find(RestPointKind::EdgeMidpoint, e);
-        return point >= 0 && hidden[points[point].first_node] && hidden[points[point].first_node + 1];
-    }
 };
 
 /// The graph of the walls through the edges with is_cut[e] != 0. Deterministic.

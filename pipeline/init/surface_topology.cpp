@@ -5,6 +5,7 @@
 
 #include "pipeline/init/surface_check.h"
 #include "sim/core/tet_mesh.h"
+#include "sim/core/union_find.h"
 
 namespace mudcrack {
 namespace {
@@ -21,15 +22,6 @@ struct EdgeUse {
     bool is_forward;  // the face traverses it lo -> hi
 };
 
-/// Tiny union-find over link vertices (vertex-manifold check).
-struct UnionFind {
-    std::vector<int> parent;
-    int find(int a) {
-        while (parent[a] != a) a = parent[a] = parent[parent[a]];
-        return a;
-    }
-    void unite(int a, int b) { parent[find(a)] = find(b); }
-};
 
 }  // namespace
 
@@ -116,8 +108,7 @@ std::vector<std::string> surface_topology_problems(const InputSurface& surface, 
         std::vector<int32_t> ids = link;
         std::sort(ids.begin(), ids.end());
         ids.erase(std::unique(ids.begin(), ids.end()), ids.end());
-        uf.parent.resize(ids.size());
-        std::iota(uf.parent.begin(), uf.parent.end(), 0);
+        uf.reset(static_cast<int32_t>(ids.size()));
         auto index_of = [&](int32_t w) {
             return static_cast<int>(std::lower_bound(ids.begin(), ids.end(), w) - ids.begin());
         };

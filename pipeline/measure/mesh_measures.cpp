@@ -120,6 +120,7 @@ MeshPieces measure_mesh_pieces(const TriMesh& boundary, const TriMesh& crack, Re
     for (const auto& [key, fs] : edge_faces) {
         if (fs.size() != 2) {
             ++out.open_edges;
+            out.hole_edges += fs.size() % 2;
             open_pieces.insert(w.faces[fs[0]].piece);
             continue;
         }

@@ -20,6 +20,9 @@ struct MeshPieces {
     double chip_triangle_fraction = 0; // share of all triangles that belong to chips
     int32_t open_pieces = 0;           // pieces with an edge not shared by exactly two triangles
     int64_t open_edges = 0;            // such edges, over all pieces
+    int64_t hole_edges = 0;            // of those, edges of an odd number of triangles: a hole's
+                                       // rim (an even number is sheets that touch, such as the
+                                       // two sides of a crack not yet open)
     double crack_roughness_deg = 0;    // area-weighted mean angle between neighbouring crack
                                        // triangles' normals [degrees]
     double crack_area = 0;             // crack-wall area, one side of each crack [m^2]

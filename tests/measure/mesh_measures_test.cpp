@@ -59,9 +59,35 @@ TEST(MeshMeasures, ASlabTornInTwoIsTwoClosedPiecesAndNoChips) {
     EXPECT_EQ(m.chips, 0);
     EXPECT_EQ(m.open_pieces, 0);
     EXPECT_EQ(m.open_edges, 0);
+    EXPECT_EQ(m.hole_edges, 0);
     // one wall across the slab's 0.3 x 0.4 m section, a side
     EXPECT_NEAR(m.crack_area, 0.3 * 0.4, 0.1 * 0.3 * 0.4);
     EXPECT_LT(m.crack_roughness_deg, 10);
+}
+
+TEST(MeshMeasures, AMissingTriangleIsAHoleAndTheTwoSidesOfAClosedCrackAreNot) {
+    // two closed tetrahedra that touch along an edge, as the two sides of a crack not yet open
+    // do: that edge has four triangles
+    TriMesh two;
+    for (const float s : {1.0f, -1.0f})  // the second: the first turned half a turn about x
+        for (const Vec3f& x : {Vec3f(0, 0, 0), Vec3f(1, 0, 0), Vec3f(0, s, 0), Vec3f(0, 0, s)})
+            two.positions.push_back(x);
+    for (const int32_t o : {0, 4})
+        for (const Tri& t : {Tri{0, 2, 1}, Tri{0, 1, 3}, Tri{0, 3, 2}, Tri{1, 2, 3}})
+            two.faces.push_back(Tri{o + t[0], o + t[1], o + t[2]});
+    const MeshPieces touching = measure_mesh_pieces(two, TriMesh{}, 2 * kH);
+    EXPECT_EQ(touching.open_edges, 1);
+    EXPECT_EQ(touching.hole_edges, 0);
+    // a wall triangle taken out of the open crack: its three edges are a hole's rim
+    const Slab slab(1);
+    SurfacedFrame holed = surface_frame(slab.topo, slab.frame(1, 0.05), slab.first_break, plates());
+    ASSERT_FALSE(holed.crack.faces.empty());
+    holed.crack.faces.pop_back();
+    holed.crack.face_fragment.pop_back();
+    const MeshPieces m = measure_mesh_pieces(holed.boundary, holed.crack, 2 * kH);
+    EXPECT_EQ(m.hole_edges, 3);
+    EXPECT_EQ(m.open_edges, 3);
+    EXPECT_EQ(m.open_pieces, 1);
 }
 
 TEST(MeshMeasures, VerticesThatMoveWithTheirParticlesDoNotJumpEvenAsTheCrackOpens) {

@@ -492,11 +492,60 @@ TEST(WallGraph, AWallInsideTheSoilIsHiddenAndNotMeshed) {
     params.min_piece_size = 0.5;
     const ShotFracture fracture = plan_shot_fracture(topo, frame, first_break, params);
     ASSERT_TRUE(fracture.last.is_cut[deep]);
-    EXPECT_TRUE(fracture.wall_graph.hides(deep));
+    const WallGraph& graph = fracture.wall_graph;
+    const int32_t deep_point = graph.find(RestPointKind::EdgeMidpoint, deep);
+    ASSERT_GE(deep_point, 0);
+    EXPECT_TRUE(graph.hidden[graph.points[deep_point].first_node]);
+    EXPECT_TRUE(graph.hidden[graph.points[deep_point].first_node + 1]);
     const SurfacedFrame s = surface_frame(topo, frame, first_break, params, &fracture);
     EXPECT_EQ(s.edge_cut[deep], 1);
     EXPECT_TRUE(s.crack.faces.empty());
     EXPECT_FALSE(s.boundary.faces.empty());
+}
+
+TEST(Plates, EveryFrameOfAGrowingNetworkIsClosed) {
+    // a crack band three columns wide through the top of a block, its edges breaking at random
+    // over five frames, and a few edges anywhere: partial walls, grains torn loose and walls inside
+    // the soil that the last frame hides, while the plates part
+    const TetMesh mesh = box_lattice(14, 6, 8, kH);
+    const CoreTopology topo = build_core_topology(mesh);
+    std::vector<int32_t> first_break = no_edge_breaks(topo);
+    uint64_t state = 0;
+    auto percent = [&] {  // splitmix64: the same sequence on every platform
+        uint64_t z = (state += 0x9e3779b97f4a7c15ull);
+        z = (z ^ (z >> 30)) * 0xbf58476d1ce4e5b9ull;
+        z = (z ^ (z >> 27)) * 0x94d049bb133111ebull;
+        return int((z ^ (z >> 31)) % 100);
+    };
+    constexpr int kLast = 5;
+    for (int32_t e = 0; e < topo.n_edges(); ++e) {
+        const auto [p, q] = topo.edges[e];
+        const int a = column_of(topo.X[p]), b = column_of(topo.X[q]);
+        const bool band = std::max(a, b) >= 5 && std::min(a, b) <= 8 && std::min(topo.X[p].y(), topo.X[q].y()) > 1.5 * kH;
+        if (percent() < (band ? 80 : 3)) first_break[e] = 1 + percent() % kLast;
+    }
+    auto at = [&](int n) {  // the right plate moves away 1 cm a frame
+        ParticleFrame f;
+        f.frame = n;
+        for (const Vec3& X : topo.X) {
+            f.P.push_back((X + Vec3(column_of(X) > 6 ? 0.01 * n : 0, 0, 0)).cast<float>());
+            f.Fe.push_back(Mat3f::Identity());
+        }
+        return f;
+    };
+    SurfaceParams params = plates_params();
+    params.min_piece_size = 0.5;
+    const ShotFracture fracture = plan_shot_fracture(topo, at(kLast), first_break, params);
+    int hidden_nodes = 0;
+    for (uint8_t h : fracture.wall_graph.hidden) hidden_nodes += h;
+    ASSERT_GT(hidden_nodes, 0);
+    for (int n = 1; n <= kLast; ++n) {
+        const SurfacedFrame s = surface_frame(topo, at(n), first_break, params, &fracture);
+        EXPECT_FALSE(s.crack.faces.empty()) << "frame " << n;
+        std::set<int32_t> pieces(s.boundary.face_fragment.begin(), s.boundary.face_fragment.end());
+        pieces.insert(s.crack.face_fragment.begin(), s.crack.face_fragment.end());
+        for (int32_t piece : pieces) EXPECT_TRUE(is_closed(s, piece)) << "frame " << n << ", piece " << piece;
+    }
 }
 
 TEST(WallDeformation, FollowsAnAffineMotionExactlyAndStaysOnItsSideOfEveryCut) {

@@ -96,6 +96,7 @@ json mesh_fields(const MeshPieces& m) {
             {"mesh_chip_triangle_fraction", m.chip_triangle_fraction},
             {"mesh_open_pieces", m.open_pieces},
             {"mesh_open_edges", m.open_edges},
+            {"mesh_hole_edges", m.hole_edges},
             {"crack_wall_roughness_deg", m.crack_roughness_deg},
             {"crack_wall_area", m.crack_area},
             {"top_crack_length", m.top_crack_length},
@@ -140,10 +141,11 @@ private:
 void print_mesh_row(int n, const std::optional<MeshPieces>& mesh, const std::optional<SurfaceMotion>& motion) {
     std::printf("%6d", n);
     if (mesh)
-        std::printf(" %7d %6d %6lld %10.2f %11.4f", mesh->pieces, mesh->chips, static_cast<long long>(mesh->open_edges),
+        std::printf(" %7d %6d %6lld %6lld %10.2f %11.4f", mesh->pieces, mesh->chips,
+                    static_cast<long long>(mesh->open_edges), static_cast<long long>(mesh->hole_edges),
                     mesh->crack_roughness_deg, mesh->crack_area_per_metre);
     else
-        std::printf(" %7s %6s %6s %10s %11s", "-", "-", "-", "-", "-");
+        std::printf(" %7s %6s %6s %6s %10s %11s", "-", "-", "-", "-", "-", "-");
     if (motion)
         std::printf(" %9.3f %9.3f %9lld\n", motion->jump_max_cells, motion->jump_p99_cells,
                     static_cast<long long>(motion->piece_changes));
@@ -316,12 +318,12 @@ void print_frame_row(int n, const FrameMeasures& f, bool has_surfacing) {
 using MeshRow = std::pair<std::optional<MeshPieces>, std::optional<SurfaceMotion>>;
 
 void print_mesh_table(const json& surface_manifest, bool has_motion, int first, const std::vector<MeshRow>& rows) {
-    std::printf("\nsurfacing meshes (%s): pieces, chips under 2 h, edges not shared by two triangles, crack-wall "
-                "roughness, crack area per metre of top crack line%s\n",
+    std::printf("\nsurfacing meshes (%s): pieces, chips under 2 h, edges not shared by two triangles and those of "
+                "an odd number (holes), crack-wall roughness, crack area per metre of top crack line%s\n",
                 surface_manifest.value("mode", "?").c_str(),
                 has_motion ? "; vertex jumps beyond the particles' moves (cells) and particles changing piece" : "");
-    std::printf("%6s %7s %6s %6s %10s %11s %9s %9s %9s\n", "frame", "pieces", "chips", "open", "rough[deg]",
-                "wall[m2/m]", "jump_max", "jump_p99", "changes");
+    std::printf("%6s %7s %6s %6s %6s %10s %11s %9s %9s %9s\n", "frame", "pieces", "chips", "open", "holes",
+                "rough[deg]", "wall[m2/m]", "jump_max", "jump_p99", "changes");
     for (size_t i = 0; i < rows.size(); ++i) print_mesh_row(first + int(i), rows[i].first, rows[i].second);
 }
 
