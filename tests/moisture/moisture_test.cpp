@@ -256,7 +256,8 @@ TEST(Moisture, ImplicitRobinAgreesAndDampsOvershoot) {
     EXPECT_LT(lowest_explicit, lowest);
 }
 
-TEST(Moisture, FreeBlockThatDriesFullyEndsAtDryVolume) {
+/// A soft block that dries to theta 0 with eta 0.5 and no gravity, fast (D 1, lambda 2).
+SimModel drying_block_model() {
     SimModel model = plain_model(0.1);
     model.elastic.youngs_modulus = 1e5;
     model.moisture = MoistureParams{};
@@ -264,6 +265,11 @@ TEST(Moisture, FreeBlockThatDriesFullyEndsAtDryVolume) {
     model.moisture->D = 1.0;
     model.moisture->lambda = 2.0;
     model.moisture->theta0 = 0;
+    return model;
+}
+
+TEST(Moisture, FreeBlockThatDriesFullyEndsAtDryVolume) {
+    const SimModel model = drying_block_model();
     const test::Lattice l = make_lattice(Vec3::Zero(), Vec3i(8, 8, 8), 0.05);
     SimState s = make_initial_state(model, l.X, l.V0);
     Real V0_total = 0;
@@ -287,13 +293,7 @@ TEST(Moisture, FreeBlockThatDriesFullyEndsAtDryVolume) {
 // particle: on mc-init's lattice the bottom face sat on a node and the top face between two, they
 // dried unalike, and the block moved by 0.7 mm here, 4 mm in 4 s in a TD's shot.)
 TEST(Moisture, FreeBlockStaysWhereItIsWhileItDries) {
-    SimModel model = plain_model(0.1);
-    model.elastic.youngs_modulus = 1e5;
-    model.moisture = MoistureParams{};
-    model.moisture->eta = 0.5;
-    model.moisture->D = 1.0;
-    model.moisture->lambda = 2.0;
-    model.moisture->theta0 = 0;
+    const SimModel model = drying_block_model();
     // mc-init's box lattice: a particle on every vertex, the first at the origin, spacing h / 2
     const test::Lattice l = make_lattice(Vec3::Constant(-0.025), Vec3i(8, 8, 8), 0.05);
     SimState s = make_initial_state(model, l.X, l.V0);
