@@ -256,35 +256,30 @@ TEST_F(HostileInput, ThreadsAboveTheCapNameTheCap) {
 
 // ---- --frames against the shot's frames, in every per-frame stage -----------------------------
 
-TEST_F(HostileInput, SimRefusesFramesPastTheShot) {
+class FramesPastTheShot : public HostileInput, public ::testing::WithParamInterface<std::string> {};
+
+// one check in every stage (mc-init included, though its output serves every frame): exit 2
+// like any usage error, naming the flag, the frames there are and where they come from
+TEST_P(FramesPastTheShot, RefusedAsAUsageError) {
+    const std::string stage = GetParam();
     const fs::path shot = write_shot(tiny_shot());
-    run_before("sim", shot);
-    const Result r = run("sim", shot, {"--frames", "99-100"});
-    EXPECT_EQ(r.code, 2) << r.err;
-    expect_error(r, "sim", {"--frames 99-100", "1-3", shot.string()});
-    EXPECT_FALSE(fs::exists(out() / "sim")) << "nothing simulated";
-    expect_no_debris(out());
+    run_before(stage, shot);
+    const fs::path where = stage == "init" || stage == "sim" ? shot
+                           : stage == "render"              ? out() / "surface" / "manifest.json"
+                                                            : out() / "sim" / "manifest.json";
+    for (const std::string frames : {"99-100", "2-4", "3-9"}) {
+        const Result r = run(stage, shot, {"--frames", frames});
+        EXPECT_EQ(r.code, 2) << r.err;
+        expect_error(r, stage, {"--frames " + frames + ": outside the frames 1-3 of " + where.string()});
+        EXPECT_FALSE(fs::exists(out() / stage)) << "nothing written";
+        expect_no_debris(out());
+    }
+    // the shot's own frames are accepted
+    const Result r = run(stage, shot, {"--frames", "1-3"});
+    EXPECT_EQ(r.code, 0) << r.err;
 }
 
-TEST_F(HostileInput, SurfaceRefusesFramesPastTheShot) {
-    const fs::path shot = write_shot(tiny_shot());
-    run_before("surface", shot);
-    const Result r = run("surface", shot, {"--frames", "99-100"});
-    EXPECT_EQ(r.code, 2) << r.err;
-    expect_error(r, "surface", {"--frames 99-100"});
-    EXPECT_FALSE(fs::exists(out() / "surface"));
-    expect_no_debris(out());
-}
-
-TEST_F(HostileInput, RenderRefusesFramesPastTheShot) {
-    const fs::path shot = write_shot(tiny_shot());
-    run_before("render", shot);
-    const Result r = run("render", shot, {"--frames", "99-100"});
-    EXPECT_EQ(r.code, 2) << r.err;
-    expect_error(r, "render", {"--frames 99-100", "1-3"});
-    EXPECT_FALSE(fs::exists(out() / "render"));
-    expect_no_debris(out());
-}
+INSTANTIATE_TEST_SUITE_P(EveryStage, FramesPastTheShot, ::testing::ValuesIn(kStages));
 
 // the bounds are not the whole story: 0 (all cores) and the cap itself are accepted
 TEST_F(HostileInput, ThreadsZeroAndTheCapAreAccepted) {
