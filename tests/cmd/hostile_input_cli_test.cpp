@@ -372,6 +372,46 @@ TEST_F(HostileInput, LatticeBeyondMemoryNamesTheSpacing) {
     }
 }
 
+// a spacing so far below the extent that the lattice's cells overflow an int: refused by its
+// count, not wrapped into a lattice of a few particles
+struct SpacingCase {
+    std::string name;
+    std::function<void(json&)> edit;
+    std::string key;
+};
+const SpacingCase kSpacingCases[] = {
+    {"box", [](json& s) { s["source"]["box"]["spacing"] = 1e-300; }, "/source/box/spacing = 1e-300: gives inf"},
+    {"box_one_axis",
+     [](json& s) { s["source"]["box"] = {{"min", {0, 0, 0}}, {"max", {1e-299, 1e-299, 1}}, {"spacing", 1e-300}}; },
+     "/source/box/spacing = 1e-300: gives"},
+    {"heightfield_columns",
+     [](json& s) { s["source"] = {{"type", "heightfield"}, {"heightfield", {{"spacing", 1e-300}}}}; },
+     "/source/heightfield/spacing = 1e-300: gives inf columns"},
+    {"heightfield_layers",
+     [](json& s) {
+         s["source"] = {{"type", "heightfield"},
+                        {"heightfield", {{"size", {1e-299, 1e-299}}, {"channel_depth", 0}, {"spacing", 1e-300}}}};
+     },
+     "/source/heightfield/spacing = 1e-300: gives"},
+};
+
+class LatticeSpacing : public HostileInput, public ::testing::WithParamInterface<int> {};
+
+TEST_P(LatticeSpacing, BeyondAnIntIsRefusedByItsCount) {
+    const SpacingCase& c = kSpacingCases[GetParam()];
+    json shot = tiny_shot();
+    c.edit(shot);
+    const fs::path path = write_shot(shot);
+    const Result r = run("init", path);
+    EXPECT_EQ(r.code, 1) << r.err;
+    expect_error(r, "init", {path.string() + ": " + c.key, "expected at most 50000000"});
+    EXPECT_FALSE(fs::exists(out() / "init"));
+    expect_no_debris(out());
+}
+
+INSTANTIATE_TEST_SUITE_P(Init, LatticeSpacing, ::testing::Range(0, int(std::size(kSpacingCases))),
+                         [](const auto& info) { return kSpacingCases[info.param].name; });
+
 class NumberOverflow : public HostileInput, public ::testing::WithParamInterface<int> {};
 
 TEST_P(NumberOverflow, NamesTheFileAndTheKey) {
