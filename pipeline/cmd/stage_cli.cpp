@@ -230,8 +230,9 @@ int run_stage(const std::string& program, const std::string& description, int ar
     // usage errors: the parser's and the flag values', one line each, exit 2
     try {
         app.parse(argc, argv);
-        if (!threads_text.empty()) opt.threads = parse_thread_count(threads_text);
-        if (!opt.frames.empty()) opt.frame_range = parse_frame_range(opt.frames);
+        // given, even as "", a value is parsed: an empty one is refused, not taken for the default
+        if (app.count("--threads") > 0) opt.threads = parse_thread_count(threads_text);
+        if (app.count("--frames") > 0) opt.frame_range = parse_frame_range(opt.frames);
     } catch (const CLI::ParseError& e) {
         return parse_error_exit(app, e, program);
     } catch (const UsageError& e) {

@@ -207,6 +207,8 @@ const UsageCase kUsageCases[] = {
     {{"--frames", "5-2"}, "--frames = \"5-2\": expected 1 <= A <= B"},
     {{"--frames", "0"}, "--frames = \"0\""},
     {{"--frames", "99999999999"}, "--frames = \"99999999999\""},
+    {{"--threads", ""}, "--threads = \"\""},
+    {{"--frames", ""}, "--frames = \"\""},
     {{"--log-level", "loud"}, "--log-level"},
     {{"--no-such-flag"}, "--no-such-flag"},
 };
