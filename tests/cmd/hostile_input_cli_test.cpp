@@ -5,7 +5,8 @@
 // - Usage: bad --threads / --frames / --log-level values and unknown flags, for every stage:
 //   exit 2, one "mc-<stage>: error:" line naming the flag.
 // - Shot values inside their ranges that no run survives (a collapsed time step, h below OpenVDB's
-//   voxel, a grid or lattice too large, a framebuffer OSMesa cannot allocate, a number overflow):
+//   voxel, a grid or lattice too large, a framebuffer OSMesa cannot allocate, a camera the
+//   renderer cannot place, a movie rate ffmpeg cannot write, a number overflow):
 //   exit 1 at load, naming the file and the key, before any output folder exists.
 // - Non-finite input mesh vertices, named with their index.
 // - One writer per folder: a lock held elsewhere refuses the stage, naming its holder; a lock
@@ -320,6 +321,15 @@ const ShotCase kShotCases[] = {
     {"resolution_16384x8192", [](json& s) { s["render"]["resolution"] = {16384, 8192}; }, "/render/resolution"},
     {"samples_64_at_4k", [](json& s) { s["render"]["resolution"] = {4096, 2160}; s["render"]["samples"] = 64; },
      "/render/resolution"},
+    {"camera_on_its_target", [](json& s) { s["render"]["camera"] = {{"position", {1, 2, 3}}, {"target", {1, 2, 3}}}; },
+     "/render/camera/position = [1,2,3]: is on /render/camera/target"},
+    {"camera_beyond_float", [](json& s) { s["render"]["camera"] = {{"position", {1e300, 0, 0}}}; },
+     "/render/camera/position"},
+    {"target_beyond_float", [](json& s) { s["render"]["camera"] = {{"target", {0, -1e39, 0}}}; },
+     "/render/camera/target"},
+    {"fov_1e_300", [](json& s) { s["render"]["camera"] = {{"fov", 1e-300}}; }, "/render/camera/fov"},
+    {"render_fps_1e_300", [](json& s) { s["render"]["fps"] = 1e-300; }, "/render/fps"},
+    {"render_fps_1e300", [](json& s) { s["render"]["fps"] = 1e300; }, "/render/fps"},
 };
 
 // a number too large for a double, written into the shot's text
@@ -349,8 +359,8 @@ TEST_P(ShotValues, RefusedAtLoadNamingTheKey) {
     EXPECT_FALSE(fs::exists(out())) << "refused at load: no output folder";
 }
 
-INSTANTIATE_TEST_SUITE_P(InitAndSim, ShotValues,
-                         ::testing::Combine(::testing::Values("init", "sim"),
+INSTANTIATE_TEST_SUITE_P(InitSimAndRender, ShotValues,
+                         ::testing::Combine(::testing::Values("init", "sim", "render"),
                                             ::testing::Range(0, int(std::size(kShotCases)))),
                          [](const auto& info) {
                              return std::get<0>(info.param) + "_" + kShotCases[std::get<1>(info.param)].name;
