@@ -151,6 +151,15 @@ int run_locked_body(const StageOptions& opt, const std::function<int(const Stage
     return code;
 }
 
+// a flag given an empty value ("--json ''", "--format ''") is a usage error, not the flag left out
+void refuse_empty_values(const CLI::App& app) {
+    for (const CLI::Option* option : app.get_options()) {
+        if (option->count() == 0 || option->get_expected_min() == 0) continue;  // not given, or a switch
+        for (const std::string& value : option->results())
+            if (value.empty()) throw UsageError(option->get_name() + " = \"\": expected a value");
+    }
+}
+
 }  // namespace
 
 FrameRange parse_frame_range(const std::string& text) {
@@ -230,6 +239,7 @@ int run_stage(const std::string& program, const std::string& description, int ar
     // usage errors: the parser's and the flag values', one line each, exit 2
     try {
         app.parse(argc, argv);
+        refuse_empty_values(app);
         // given, even as "", a value is parsed: an empty one is refused, not taken for the default
         if (app.count("--threads") > 0) opt.threads = parse_thread_count(threads_text);
         if (app.count("--frames") > 0) opt.frame_range = parse_frame_range(opt.frames);

@@ -234,6 +234,38 @@ INSTANTIATE_TEST_SUITE_P(AllStages, UsageErrors,
                              return std::get<0>(info.param) + "_" + std::to_string(std::get<1>(info.param));
                          });
 
+// a stage's own flags: an empty value or one the stage refuses is a usage error too
+struct StageFlagCase {
+    std::string stage;
+    std::vector<std::string> args;
+    std::string names;
+};
+void PrintTo(const StageFlagCase& c, std::ostream* os) { *os << c.stage << " " << c.names; }
+
+class StageFlags : public HostileInput, public ::testing::WithParamInterface<StageFlagCase> {};
+
+TEST_P(StageFlags, ExitTwoNamingTheFlag) {
+    const StageFlagCase& c = GetParam();
+    const fs::path shot = write_shot(tiny_shot());
+    run_before(c.stage, shot);
+    const Result r = run(c.stage, shot, c.args);
+    EXPECT_EQ(r.code, 2) << r.err;
+    expect_error(r, c.stage, {c.names});
+    EXPECT_FALSE(fs::exists(out() / c.stage)) << "a usage error must write nothing";
+    EXPECT_FALSE(fs::exists(m_dir / "table.json"));
+    expect_no_debris(out());
+}
+
+INSTANTIATE_TEST_SUITE_P(
+    Stages, StageFlags,
+    ::testing::Values(StageFlagCase{"surface", {"--format", ""}, "--format = \"\": expected a value"},
+                      StageFlagCase{"surface", {"--format", "fbx"}, "--format fbx: fbx is not supported"},
+                      StageFlagCase{"surface", {"--format", "stl"}, "--format stl: "},
+                      StageFlagCase{"measure", {"--json", ""}, "--json = \"\": expected a value"},
+                      StageFlagCase{"sim", {"--seed", ""}, "--seed = \"\": expected a value"},
+                      StageFlagCase{"render", {"--log-level", ""}, "--log-level"}),
+    [](const auto& info) { return info.param.stage + "_" + std::to_string(info.index); });
+
 TEST_F(HostileInput, MissingOutIsAUsageErrorWithThePrefix) {
     const fs::path shot = write_shot(tiny_shot());
     const Result r = Process("mc-sim", {"--shot", shot.string()}, m_dir / "err.txt").wait();

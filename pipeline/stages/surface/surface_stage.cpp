@@ -192,15 +192,16 @@ SurfaceParams flagged_params(const Shot& shot, const SurfaceStageOptions& surfac
     SurfaceParams params = *shot.surface;
     if (!mode_flag.empty()) {
         const std::optional<SurfaceMode> mode = parse_surface_mode(mode_flag);
-        if (!mode) throw InputError("--mode " + mode_flag + ": not a surfacing mode");
+        if (!mode) throw UsageError("--mode " + mode_flag + ": not a surfacing mode");
         params.mode = *mode;
         if (debris_needs_plates(params))
-            throw InputError("--mode " + mode_flag + ": " + shot.path +
+            throw UsageError("--mode " + mode_flag + ": " + shot.path +
                              " asks for /surfacing/debris, which only the plates mode writes");
     }
+    // the shot's own format passed the spec's check; only the flag's can be refused here
     if (!format_flag.empty()) params.format = format_flag;
     if (!is_supported_mesh_format(params.format))
-        throw InputError("--format " + params.format + ": " + mesh_format_refusal(params.format));
+        throw UsageError("--format " + params.format + ": " + mesh_format_refusal(params.format));
     return params;
 }
 
