@@ -151,16 +151,16 @@ int run_locked_body(const StageOptions& opt, const std::function<int(const Stage
     return code;
 }
 
-// a flag given an empty value ("--json ''", "--format ''") is a usage error, not the flag left out
+}  // namespace
+
 void refuse_empty_values(const CLI::App& app) {
     for (const CLI::Option* option : app.get_options()) {
         if (option->count() == 0 || option->get_expected_min() == 0) continue;  // not given, or a switch
         for (const std::string& value : option->results())
             if (value.empty()) throw UsageError(option->get_name() + " = \"\": expected a value");
     }
+    for (const CLI::App* command : app.get_subcommands()) refuse_empty_values(*command);
 }
-
-}  // namespace
 
 FrameRange parse_frame_range(const std::string& text) {
     // at most 9 digits: a frame number fits an int

@@ -282,6 +282,17 @@ TEST_F(HostileInput, ShotToolUsageErrorsHaveThePrefix) {
     }
 }
 
+TEST_F(HostileInput, ShotToolRefusesEmptyValues) {
+    const fs::path shot = write_shot(tiny_shot());
+    for (const std::vector<std::string>& args :
+         {std::vector<std::string>{"slice", shot.string(), "sim", "--out", ""},
+          std::vector<std::string>{"validate", ""}}) {
+        const Result r = Process("mc-shot", args, m_dir / "err.txt").wait();
+        EXPECT_EQ(r.code, 2) << r.err;
+        expect_error(r, "shot", {"= \"\": expected a value"});
+    }
+}
+
 TEST_F(HostileInput, ThreadsAboveTheCapNameTheCap) {
     const fs::path shot = write_shot(tiny_shot());
     const Result r = run("init", shot, {"--threads", "1000000"});
