@@ -217,12 +217,10 @@ json cache_records(const fs::path& sim_dir, int first, int last, const std::map<
     return records;
 }
 
-// the frames a run writes: --frames, within the shot's, or the shot's
+// the frames a run writes: --frames, within the shot's, or the shot's (the loader checked
+// 1 <= /frames/start <= /frames/end)
 std::pair<int, int> frames_to_write(const Shot& shot, const StageOptions& options) {
     const TimeParams& time = shot.sim.time;
-    if (time.frame_start < 1 || time.frame_end < time.frame_start)
-        throw InputError(shot.path + ": frames " + std::to_string(time.frame_start) + "-" +
-                         std::to_string(time.frame_end) + ": expected 1 <= start <= end");
     const FrameRange frames = frames_to_process(options, {time.frame_start, time.frame_end},
                                                 shot.path + " (/frames/start, /frames/end)");
     return {frames.first, frames.last};
