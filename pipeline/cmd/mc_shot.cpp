@@ -66,8 +66,12 @@ int main(int argc, char** argv) {
 
     try {
         app.parse(argc, argv);
+        refuse_empty_values(app);
     } catch (const CLI::ParseError& e) {
         return parse_error_exit(app, e, kProgram);
+    } catch (const UsageError& e) {
+        log::error(e.what());
+        return kExitUsage;
     }
 
     try {

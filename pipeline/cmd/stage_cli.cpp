@@ -153,6 +153,15 @@ int run_locked_body(const StageOptions& opt, const std::function<int(const Stage
 
 }  // namespace
 
+void refuse_empty_values(const CLI::App& app) {
+    for (const CLI::Option* option : app.get_options()) {
+        if (option->count() == 0 || option->get_expected_min() == 0) continue;  // not given, or a switch
+        for (const std::string& value : option->results())
+            if (value.empty()) throw UsageError(option->get_name() + " = \"\": expected a value");
+    }
+    for (const CLI::App* command : app.get_subcommands()) refuse_empty_values(*command);
+}
+
 FrameRange parse_frame_range(const std::string& text) {
     // at most 9 digits: a frame number fits an int
     static const std::regex range(R"(^\s*(\d{1,9})\s*(?:-\s*(\d{1,9}))?\s*$)");
@@ -230,8 +239,10 @@ int run_stage(const std::string& program, const std::string& description, int ar
     // usage errors: the parser's and the flag values', one line each, exit 2
     try {
         app.parse(argc, argv);
-        if (!threads_text.empty()) opt.threads = parse_thread_count(threads_text);
-        if (!opt.frames.empty()) opt.frame_range = parse_frame_range(opt.frames);
+        refuse_empty_values(app);
+        // given, even as "", a value is parsed: an empty one is refused, not taken for the default
+        if (app.count("--threads") > 0) opt.threads = parse_thread_count(threads_text);
+        if (app.count("--frames") > 0) opt.frame_range = parse_frame_range(opt.frames);
     } catch (const CLI::ParseError& e) {
         return parse_error_exit(app, e, program);
     } catch (const UsageError& e) {

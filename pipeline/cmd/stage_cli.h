@@ -39,6 +39,11 @@ using LockModeOf = std::function<std::optional<LockMode>(const StageOptions&)>;
 /// a usage error prints one "program: error: ..." line and returns kExitUsage.
 int parse_error_exit(const CLI::App& app, const CLI::ParseError& e, const std::string& program);
 
+/// Throws UsageError naming the first option or argument given an empty value ("--json ''",
+/// "--format ''"), in `app` and the subcommands it parsed: an empty value is a mistake, not the
+/// option left out.
+void refuse_empty_values(const CLI::App& app);
+
 /// Prints one "program: error: ..." line per line of a (possibly multi-line) message, so every
 /// problem a validation reports is greppable on its own.
 void report_error_lines(const std::string& message);

@@ -68,11 +68,13 @@ TetMesh make_heightfield_tets(const HeightfieldSource& hf) {
     if (!(hf.spacing > 0))
         throw ShotValueError("/source/heightfield/spacing = " + num(hf.spacing) + ": must be > 0 [m]");
     const Real x0 = -0.5 * hf.size.x(), z0 = -0.5 * hf.size.z();
-    const int nx = lattice_cells(hf.size.x(), hf.spacing), nz = lattice_cells(hf.size.z(), hf.spacing);
-    if (double(nx + 1) * (nz + 1) > kMaxInitParticles)
+    const double columns_x = lattice_cells(hf.size.x(), hf.spacing);
+    const double columns_z = lattice_cells(hf.size.z(), hf.spacing);
+    if ((columns_x + 1) * (columns_z + 1) > kMaxInitParticles)
         throw ShotValueError("/source/heightfield/spacing = " + num(hf.spacing) + ": gives " +
-                             count_text(double(nx + 1) * (nz + 1)) + " columns; expected at most " +
+                             count_text((columns_x + 1) * (columns_z + 1)) + " columns; expected at most " +
                              count_text(kMaxInitParticles) + ": raise the spacing");
+    const int nx = int(columns_x), nz = int(columns_z);
 
     // the top height per column
     std::vector<Real> top(static_cast<size_t>(nx + 1) * (nz + 1));
@@ -105,11 +107,13 @@ TetMesh make_heightfield_tets(const HeightfieldSource& hf) {
                                                num(floor_height) + " m (a quarter of the spacing)");
     }
     const Real tallest = *std::max_element(top.begin(), top.end());
-    const int ny = std::max(1, static_cast<int>(std::ceil(tallest / hf.spacing - 1e-9)));
-    const double points = double(nx + 1) * (ny + 1) * (nz + 1);
+    // a double until it is bounded: a tall column over a fine spacing has more layers than an int holds
+    const double layers = std::max(1.0, std::ceil(tallest / hf.spacing - 1e-9));
+    const double points = double(nx + 1) * (layers + 1) * (nz + 1);
     if (points > kMaxInitParticles)
         throw ShotValueError("/source/heightfield/spacing = " + num(hf.spacing) + ": gives " + count_text(points) +
                              " particles; expected at most " + count_text(kMaxInitParticles) + ": raise the spacing");
+    const int ny = int(layers);
 
     return make_column_lattice_tets(x0, z0, hf.size.x(), hf.size.z(), nx, ny, nz, top);
 }

@@ -62,9 +62,7 @@ std::string count_text(double count) {
     return text;
 }
 
-int lattice_cells(Real extent, Real spacing) {
-    return std::max(1, static_cast<int>(std::lround(extent / spacing)));
-}
+double lattice_cells(Real extent, Real spacing) { return std::max(1.0, std::round(extent / spacing)); }
 
 std::vector<Tet> kuhn_tets(int nx, int ny, int nz) {
     // the 6 monotone paths from corner (0,0,0) to (1,1,1), one per axis permutation; a tet's
@@ -97,13 +95,14 @@ TetMesh make_box_tets(const BoxSource& box, unsigned seed) {
                              ": max must exceed min on every axis");
     if (!(box.spacing > 0))
         throw ShotValueError("/source/box/spacing = " + num(box.spacing) + ": must be > 0 [m]");
-    const int n[3] = {lattice_cells(extent.x(), box.spacing), lattice_cells(extent.y(), box.spacing),
-                      lattice_cells(extent.z(), box.spacing)};
-    const double points = double(n[0] + 1) * (n[1] + 1) * (n[2] + 1);
+    const double cells[3] = {lattice_cells(extent.x(), box.spacing), lattice_cells(extent.y(), box.spacing),
+                             lattice_cells(extent.z(), box.spacing)};
+    const double points = (cells[0] + 1) * (cells[1] + 1) * (cells[2] + 1);
     if (points > kMaxInitParticles)
         throw ShotValueError("/source/box/spacing = " + num(box.spacing) + ": gives " + count_text(points) +
                              " particles; expected at most " + count_text(kMaxInitParticles) +
                              ": raise the spacing or shrink the box");
+    const int n[3] = {int(cells[0]), int(cells[1]), int(cells[2])};
     const Vec3 step(extent.x() / n[0], extent.y() / n[1], extent.z() / n[2]);
 
     TetMesh mesh;

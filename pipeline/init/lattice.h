@@ -20,7 +20,9 @@ std::string count_text(double count);
 
 /// Cells per axis of a box of the given extent: round(extent / spacing), at least 1. The
 /// spacing is then stretched per axis to extent / cells so the box stays exact.
-int lattice_cells(Real extent, Real spacing);
+/// @note A double, whole-valued: a spacing far below the extent gives more cells than an int
+/// holds, and callers compare the count with kMaxInitParticles before they index with it.
+double lattice_cells(Real extent, Real spacing);
 
 /// Lattice vertex id of (i, j, k) on an (nx+1) x (ny+1) x (nz+1) lattice, x fastest.
 inline int32_t lattice_index(int i, int j, int k, int nx, int ny) {

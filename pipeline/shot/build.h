@@ -54,7 +54,8 @@ void check_across(const nlohmann::json& tree, const InitParams& init, const SimM
 /// velocity bound with the initial velocity and one frame of gravity) against mc-sim's floor
 /// of kCollapsedDtFraction frame lengths; /sim/h against OpenVDB's smallest voxel and against
 /// the domain (the grid's block count); a lattice source's particle count against the machine's
-/// memory; /render/resolution x /render/samples against what OSMesa allocates.
+/// memory; /render/resolution x /render/samples against what OSMesa allocates; a camera placed by
+/// hand: finite in the renderer's single precision and away from its target.
 void check_plausible(const nlohmann::json& tree, const InitParams& init, const SimModel& sim,
                      const std::optional<RenderParams>& render, Issues& issues);
 

@@ -177,6 +177,25 @@ void check_render_buffer(const json& tree, const std::optional<RenderParams>& re
                    "64 pixels)");
 }
 
+// a camera placed by hand, as the renderer sees it: in single precision, looking somewhere
+void check_camera(const json& tree, const std::optional<RenderParams>& render, Issues& issues) {
+    if (!render || render->camera.is_auto || issues.has("/render/camera")) return;
+    const CameraParams& camera = render->camera;
+    for (const auto& [pointer, point] : {std::pair{"/render/camera/position", camera.position},
+                                         std::pair{"/render/camera/target", camera.target}}) {
+        if (point.cast<float>().allFinite()) continue;
+        issues.add(pointer, issues.value_of(tree, pointer),
+                   "beyond the renderer's single precision: expected coordinates below 3.4e+38", "m");
+        return;
+    }
+    // the view direction of a camera on its target is undefined: every pixel would show nothing
+    if (!((camera.target.cast<float>() - camera.position.cast<float>()).norm() > 0))
+        issues.add("/render/camera/position", issues.value_of(tree, "/render/camera/position"),
+                   "is on /render/camera/target = " + issues.value_of(tree, "/render/camera/target") +
+                       ": the camera would look nowhere; expected a position away from the target",
+                   "m");
+}
+
 }  // namespace
 
 void check_plausible(const json& tree, const InitParams& init, const SimModel& sim,
@@ -185,6 +204,7 @@ void check_plausible(const json& tree, const InitParams& init, const SimModel& s
     check_time_step(tree, sim, issues);
     check_particle_memory(tree, init, issues);
     check_render_buffer(tree, render, issues);
+    check_camera(tree, render, issues);
 }
 
 }  // namespace mudcrack::spec

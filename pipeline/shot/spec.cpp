@@ -231,7 +231,7 @@ std::vector<KeySpec> build_fixed_table() {
     Key("/render/camera", T::Section).optional().doc("fixed camera; omit to frame the bounds automatically"),
     Key("/render/camera/position", T::Vec3).def(vec(3, 2, 3)).units("m").doc("eye position"),
     Key("/render/camera/target", T::Vec3).def(vec(0, 0, 0)).units("m").doc("look-at point"),
-    Key("/render/camera/fov", T::Number).def(35.0).gt(0).lt(180).units("deg").doc("vertical field of view"),
+    Key("/render/camera/fov", T::Number).def(35.0).ge(0.01).lt(180).units("deg").doc("vertical field of view (at least 0.01, with room to spare for the renderer's single precision)"),
     Key("/render/samples", T::Integer).def(4).ge(1).le(64).units("").doc("anti-aliasing samples per pixel"),
     Key("/render/turntable", T::Section).optional().doc("orbit around one frame; omit for no turntable"),
     Key("/render/turntable/views", T::Integer).def(36).ge(1).le(3600).units("").doc("views in the orbit"),
@@ -239,7 +239,7 @@ std::vector<KeySpec> build_fixed_table() {
         .doc("frame to orbit, in [start, end]; -1 = the last frame"),
     Key("/render/albedo", T::Vec3).def(vec(0.55, 0.42, 0.30)).ge(0).le(1).units("").doc("dry soil color, linear RGB"),
     Key("/render/alpha_range", T::Number).def(0.5).gt(0).units("-").doc("hardening colormap spans alpha0 -/+ this"),
-    Key("/render/fps", T::Number).def(24.0).gt(0).units("1/s").doc("movie frame rate"),
+    Key("/render/fps", T::Number).def(24.0).ge(0.1).le(1000).units("1/s").doc("movie frame rate (ffmpeg's mp4 writer fails far outside this range)"),
     };
     // clang-format on
 }

@@ -26,4 +26,12 @@ struct StageOptions {
     std::string log_level = "info";
 };
 
+/// The frames a stage works on: --frames when given, else all of `available`. The one check of
+/// --frames against the frames there are, so every stage refuses a range outside them alike.
+/// Throws UsageError ("--frames A-B: outside the frames F-L of <where>") when --frames is not
+/// within `available`.
+/// @param available the frames the stage's input holds (the shot's, or a manifest's /frames)
+/// @param where what `available` comes from, for the message (a file, with its keys)
+FrameRange frames_to_process(const StageOptions& options, const FrameRange& available, const std::string& where);
+
 }  // namespace mudcrack

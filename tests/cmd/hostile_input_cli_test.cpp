@@ -5,7 +5,8 @@
 // - Usage: bad --threads / --frames / --log-level values and unknown flags, for every stage:
 //   exit 2, one "mc-<stage>: error:" line naming the flag.
 // - Shot values inside their ranges that no run survives (a collapsed time step, h below OpenVDB's
-//   voxel, a grid or lattice too large, a framebuffer OSMesa cannot allocate, a number overflow):
+//   voxel, a grid or lattice too large, a framebuffer OSMesa cannot allocate, a camera the
+//   renderer cannot place, a movie rate ffmpeg cannot write, a number overflow):
 //   exit 1 at load, naming the file and the key, before any output folder exists.
 // - Non-finite input mesh vertices, named with their index.
 // - One writer per folder: a lock held elsewhere refuses the stage, naming its holder; a lock
@@ -207,6 +208,8 @@ const UsageCase kUsageCases[] = {
     {{"--frames", "5-2"}, "--frames = \"5-2\": expected 1 <= A <= B"},
     {{"--frames", "0"}, "--frames = \"0\""},
     {{"--frames", "99999999999"}, "--frames = \"99999999999\""},
+    {{"--threads", ""}, "--threads = \"\""},
+    {{"--frames", ""}, "--frames = \"\""},
     {{"--log-level", "loud"}, "--log-level"},
     {{"--no-such-flag"}, "--no-such-flag"},
 };
@@ -231,6 +234,38 @@ INSTANTIATE_TEST_SUITE_P(AllStages, UsageErrors,
                              return std::get<0>(info.param) + "_" + std::to_string(std::get<1>(info.param));
                          });
 
+// a stage's own flags: an empty value or one the stage refuses is a usage error too
+struct StageFlagCase {
+    std::string stage;
+    std::vector<std::string> args;
+    std::string names;
+};
+void PrintTo(const StageFlagCase& c, std::ostream* os) { *os << c.stage << " " << c.names; }
+
+class StageFlags : public HostileInput, public ::testing::WithParamInterface<StageFlagCase> {};
+
+TEST_P(StageFlags, ExitTwoNamingTheFlag) {
+    const StageFlagCase& c = GetParam();
+    const fs::path shot = write_shot(tiny_shot());
+    run_before(c.stage, shot);
+    const Result r = run(c.stage, shot, c.args);
+    EXPECT_EQ(r.code, 2) << r.err;
+    expect_error(r, c.stage, {c.names});
+    EXPECT_FALSE(fs::exists(out() / c.stage)) << "a usage error must write nothing";
+    EXPECT_FALSE(fs::exists(m_dir / "table.json"));
+    expect_no_debris(out());
+}
+
+INSTANTIATE_TEST_SUITE_P(
+    Stages, StageFlags,
+    ::testing::Values(StageFlagCase{"surface", {"--format", ""}, "--format = \"\": expected a value"},
+                      StageFlagCase{"surface", {"--format", "fbx"}, "--format fbx: fbx is not supported"},
+                      StageFlagCase{"surface", {"--format", "stl"}, "--format stl: "},
+                      StageFlagCase{"measure", {"--json", ""}, "--json = \"\": expected a value"},
+                      StageFlagCase{"sim", {"--seed", ""}, "--seed = \"\": expected a value"},
+                      StageFlagCase{"render", {"--log-level", ""}, "--log-level"}),
+    [](const auto& info) { return info.param.stage + "_" + std::to_string(info.index); });
+
 TEST_F(HostileInput, MissingOutIsAUsageErrorWithThePrefix) {
     const fs::path shot = write_shot(tiny_shot());
     const Result r = Process("mc-sim", {"--shot", shot.string()}, m_dir / "err.txt").wait();
@@ -247,6 +282,17 @@ TEST_F(HostileInput, ShotToolUsageErrorsHaveThePrefix) {
     }
 }
 
+TEST_F(HostileInput, ShotToolRefusesEmptyValues) {
+    const fs::path shot = write_shot(tiny_shot());
+    for (const std::vector<std::string>& args :
+         {std::vector<std::string>{"slice", shot.string(), "sim", "--out", ""},
+          std::vector<std::string>{"validate", ""}}) {
+        const Result r = Process("mc-shot", args, m_dir / "err.txt").wait();
+        EXPECT_EQ(r.code, 2) << r.err;
+        expect_error(r, "shot", {"= \"\": expected a value"});
+    }
+}
+
 TEST_F(HostileInput, ThreadsAboveTheCapNameTheCap) {
     const fs::path shot = write_shot(tiny_shot());
     const Result r = run("init", shot, {"--threads", "1000000"});
@@ -256,35 +302,30 @@ TEST_F(HostileInput, ThreadsAboveTheCapNameTheCap) {
 
 // ---- --frames against the shot's frames, in every per-frame stage -----------------------------
 
-TEST_F(HostileInput, SimRefusesFramesPastTheShot) {
+class FramesPastTheShot : public HostileInput, public ::testing::WithParamInterface<std::string> {};
+
+// one check in every stage (mc-init included, though its output serves every frame): exit 2
+// like any usage error, naming the flag, the frames there are and where they come from
+TEST_P(FramesPastTheShot, RefusedAsAUsageError) {
+    const std::string stage = GetParam();
     const fs::path shot = write_shot(tiny_shot());
-    run_before("sim", shot);
-    const Result r = run("sim", shot, {"--frames", "99-100"});
-    EXPECT_EQ(r.code, 2) << r.err;
-    expect_error(r, "sim", {"--frames 99-100", "1-3", shot.string()});
-    EXPECT_FALSE(fs::exists(out() / "sim")) << "nothing simulated";
-    expect_no_debris(out());
+    run_before(stage, shot);
+    const fs::path where = stage == "init" || stage == "sim" ? shot
+                           : stage == "render"              ? out() / "surface" / "manifest.json"
+                                                            : out() / "sim" / "manifest.json";
+    for (const std::string frames : {"99-100", "2-4", "3-9"}) {
+        const Result r = run(stage, shot, {"--frames", frames});
+        EXPECT_EQ(r.code, 2) << r.err;
+        expect_error(r, stage, {"--frames " + frames + ": outside the frames 1-3 of " + where.string()});
+        EXPECT_FALSE(fs::exists(out() / stage)) << "nothing written";
+        expect_no_debris(out());
+    }
+    // the shot's own frames are accepted
+    const Result r = run(stage, shot, {"--frames", "1-3"});
+    EXPECT_EQ(r.code, 0) << r.err;
 }
 
-TEST_F(HostileInput, SurfaceRefusesFramesPastTheShot) {
-    const fs::path shot = write_shot(tiny_shot());
-    run_before("surface", shot);
-    const Result r = run("surface", shot, {"--frames", "99-100"});
-    EXPECT_EQ(r.code, 2) << r.err;
-    expect_error(r, "surface", {"--frames 99-100"});
-    EXPECT_FALSE(fs::exists(out() / "surface"));
-    expect_no_debris(out());
-}
-
-TEST_F(HostileInput, RenderRefusesFramesPastTheShot) {
-    const fs::path shot = write_shot(tiny_shot());
-    run_before("render", shot);
-    const Result r = run("render", shot, {"--frames", "99-100"});
-    EXPECT_EQ(r.code, 2) << r.err;
-    expect_error(r, "render", {"--frames 99-100", "1-3"});
-    EXPECT_FALSE(fs::exists(out() / "render"));
-    expect_no_debris(out());
-}
+INSTANTIATE_TEST_SUITE_P(EveryStage, FramesPastTheShot, ::testing::ValuesIn(kStages));
 
 // the bounds are not the whole story: 0 (all cores) and the cap itself are accepted
 TEST_F(HostileInput, ThreadsZeroAndTheCapAreAccepted) {
@@ -323,6 +364,15 @@ const ShotCase kShotCases[] = {
     {"resolution_16384x8192", [](json& s) { s["render"]["resolution"] = {16384, 8192}; }, "/render/resolution"},
     {"samples_64_at_4k", [](json& s) { s["render"]["resolution"] = {4096, 2160}; s["render"]["samples"] = 64; },
      "/render/resolution"},
+    {"camera_on_its_target", [](json& s) { s["render"]["camera"] = {{"position", {1, 2, 3}}, {"target", {1, 2, 3}}}; },
+     "/render/camera/position = [1,2,3]: is on /render/camera/target"},
+    {"camera_beyond_float", [](json& s) { s["render"]["camera"] = {{"position", {1e300, 0, 0}}}; },
+     "/render/camera/position"},
+    {"target_beyond_float", [](json& s) { s["render"]["camera"] = {{"target", {0, -1e39, 0}}}; },
+     "/render/camera/target"},
+    {"fov_1e_300", [](json& s) { s["render"]["camera"] = {{"fov", 1e-300}}; }, "/render/camera/fov"},
+    {"render_fps_1e_300", [](json& s) { s["render"]["fps"] = 1e-300; }, "/render/fps"},
+    {"render_fps_1e300", [](json& s) { s["render"]["fps"] = 1e300; }, "/render/fps"},
 };
 
 // a number too large for a double, written into the shot's text
@@ -352,8 +402,8 @@ TEST_P(ShotValues, RefusedAtLoadNamingTheKey) {
     EXPECT_FALSE(fs::exists(out())) << "refused at load: no output folder";
 }
 
-INSTANTIATE_TEST_SUITE_P(InitAndSim, ShotValues,
-                         ::testing::Combine(::testing::Values("init", "sim"),
+INSTANTIATE_TEST_SUITE_P(InitSimAndRender, ShotValues,
+                         ::testing::Combine(::testing::Values("init", "sim", "render"),
                                             ::testing::Range(0, int(std::size(kShotCases)))),
                          [](const auto& info) {
                              return std::get<0>(info.param) + "_" + kShotCases[std::get<1>(info.param)].name;
@@ -376,6 +426,46 @@ TEST_F(HostileInput, LatticeBeyondMemoryNamesTheSpacing) {
         EXPECT_FALSE(fs::exists(out()));
     }
 }
+
+// a spacing so far below the extent that the lattice's cells overflow an int: refused by its
+// count, not wrapped into a lattice of a few particles
+struct SpacingCase {
+    std::string name;
+    std::function<void(json&)> edit;
+    std::string key;
+};
+const SpacingCase kSpacingCases[] = {
+    {"box", [](json& s) { s["source"]["box"]["spacing"] = 1e-300; }, "/source/box/spacing = 1e-300: gives inf"},
+    {"box_one_axis",
+     [](json& s) { s["source"]["box"] = {{"min", {0, 0, 0}}, {"max", {1e-299, 1e-299, 1}}, {"spacing", 1e-300}}; },
+     "/source/box/spacing = 1e-300: gives"},
+    {"heightfield_columns",
+     [](json& s) { s["source"] = {{"type", "heightfield"}, {"heightfield", {{"spacing", 1e-300}}}}; },
+     "/source/heightfield/spacing = 1e-300: gives inf columns"},
+    {"heightfield_layers",
+     [](json& s) {
+         s["source"] = {{"type", "heightfield"},
+                        {"heightfield", {{"size", {1e-299, 1e-299}}, {"channel_depth", 0}, {"spacing", 1e-300}}}};
+     },
+     "/source/heightfield/spacing = 1e-300: gives"},
+};
+
+class LatticeSpacing : public HostileInput, public ::testing::WithParamInterface<int> {};
+
+TEST_P(LatticeSpacing, BeyondAnIntIsRefusedByItsCount) {
+    const SpacingCase& c = kSpacingCases[GetParam()];
+    json shot = tiny_shot();
+    c.edit(shot);
+    const fs::path path = write_shot(shot);
+    const Result r = run("init", path);
+    EXPECT_EQ(r.code, 1) << r.err;
+    expect_error(r, "init", {path.string() + ": " + c.key, "expected at most 50000000"});
+    EXPECT_FALSE(fs::exists(out() / "init"));
+    expect_no_debris(out());
+}
+
+INSTANTIATE_TEST_SUITE_P(Init, LatticeSpacing, ::testing::Range(0, int(std::size(kSpacingCases))),
+                         [](const auto& info) { return kSpacingCases[info.param].name; });
 
 class NumberOverflow : public HostileInput, public ::testing::WithParamInterface<int> {};
 

@@ -293,9 +293,9 @@ TEST_F(McSurfaceCli, BadInputFailsNamingTheFileAndWritesNothing) {
     EXPECT_EQ(r.code, 1);
     EXPECT_NE(r.err.find("particles.0003.vdb"), std::string::npos) << r.err;
 
-    // fbx is refused with the reason
+    // fbx is refused with the reason, as a flag's bad value: a usage error
     r = mc_surface(out, "--format fbx");
-    EXPECT_EQ(r.code, 1);
+    EXPECT_EQ(r.code, 2);
     EXPECT_NE(r.err.find("fbx"), std::string::npos) << r.err;
 
     // frames outside the cache
@@ -361,7 +361,7 @@ TEST_F(McSurfaceCli, PlatesBadInputNamesTheKeyAndWritesNothing) {
         << r.err;
     std::ofstream(m_shot_path) << shot_with_surfacing(R"({ "mode": "plates", "debris": "points" })");
     r = mc_surface(out, "--mode wang2019");
-    EXPECT_EQ(r.code, 1);
+    EXPECT_EQ(r.code, 2);  // the flag is refused for this shot, as --frames past it is
     EXPECT_NE(r.err.find("--mode wang2019"), std::string::npos) << r.err;
     EXPECT_NE(r.err.find("/surfacing/debris"), std::string::npos) << r.err;
     EXPECT_FALSE(fs::exists(out / "surface"));

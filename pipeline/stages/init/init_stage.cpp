@@ -95,6 +95,10 @@ void print_summary(const InitParams& params, const InitResult& r, double build_s
 int run_init_stage(const StageOptions& opt, bool parallel_mesh) {
     WallTimer wall;
     const Shot shot = load_shot(opt.shot);
+    // the rest state serves every frame, so --frames selects nothing here; a range outside the
+    // shot is still refused, as in every other stage
+    frames_to_process(opt, {shot.sim.time.frame_start, shot.sim.time.frame_end},
+                      opt.shot + " (/frames/start, /frames/end)");
     InitParams params = shot.init;
     if (opt.seed != 0) params.seed = opt.seed;
     MesherOptions mesher = mesher_options(params, shot.sim.h);

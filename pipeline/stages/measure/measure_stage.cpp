@@ -337,14 +337,9 @@ int run_measure_stage(const StageOptions& options, const MeasureStageOptions& me
     const json sim_manifest = read_current_manifest(sim_dir, shot.slice_hash(Stage::Sim));
     const RecordedChecksums sim_files(sim_manifest, sim_dir / "manifest.json");
     const ManifestFrames cached = manifest_frames(sim_manifest, sim_dir / "manifest.json");
-    int first = cached.first, last = cached.last;
-    if (options.frame_range.is_set()) {
-        if (options.frame_range.first < first || options.frame_range.last > last)
-            throw InputError("--frames " + options.frames + ": outside the cached frames " + std::to_string(first) +
-                             "-" + std::to_string(last) + " of " + (sim_dir / "manifest.json").string());
-        first = options.frame_range.first;
-        last = options.frame_range.last;
-    }
+    const FrameRange frames =
+        frames_to_process(options, {cached.first, cached.last}, (sim_dir / "manifest.json").string());
+    const int first = frames.first, last = frames.last;
 
     // the rest state, the surfacing's outputs when it ran, the motion tracker on --motion
     const RestSetup rest = read_rest_setup(shot, init_dir, init_manifest);

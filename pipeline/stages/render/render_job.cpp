@@ -129,13 +129,9 @@ RenderJob resolve_render_job(const StageOptions& opt, bool force_turntable) {
         job.surface_frames = index_surface_frames(input);
         src.frames_without_cracks = job.surface_frames.frames_without_cracks;
     }
-    job.first = shot.sim.time.frame_start;
-    job.last = shot.sim.time.frame_end;
-    if (input.contains("frames") && input["frames"].is_object()) {
-        const json& fr = input["frames"];
-        if (fr.contains("first") && fr["first"].is_number_integer()) job.first = fr["first"].get<int>();
-        if (fr.contains("last") && fr["last"].is_number_integer()) job.last = fr["last"].get<int>();
-    }
+    const ManifestFrames frames = manifest_frames(input, job.input_manifest_path());
+    job.first = frames.first;
+    job.last = frames.last;
     job.turntable_frame = params.turntable_frame < 0 ? job.last : params.turntable_frame;
     if (job.do_turntable && (job.turntable_frame < job.first || job.turntable_frame > job.last))
         throw InputError(opt.shot + ": /render/turntable/frame = " + std::to_string(job.turntable_frame) +

@@ -286,10 +286,8 @@ int run_full(const StageOptions& opt, const RenderJob& job) {
 /// PNG renamed into place when complete); the folder's manifest is removed first because it no
 /// longer describes the folder until --assemble writes a new one.
 int run_frames(const StageOptions& opt, const RenderJob& job) {
-    const int a = opt.frame_range.first, b = opt.frame_range.last;
-    if (a < job.first || b > job.last)
-        throw UsageError("--frames " + opt.frames + ": outside the frames " + std::to_string(job.first) + "-" +
-                         std::to_string(job.last) + " of " + job.input_manifest_path().string());
+    const FrameRange frames = frames_to_process(opt, {job.first, job.last}, job.input_manifest_path().string());
+    const int a = frames.first, b = frames.last;
     const Bounds stage = stage_bounds(job);
     std::unique_ptr<Renderer> renderer = make_renderer(opt, job);
     const fs::path dir = fs::path(opt.out) / "render";

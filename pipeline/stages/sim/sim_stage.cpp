@@ -217,18 +217,13 @@ json cache_records(const fs::path& sim_dir, int first, int last, const std::map<
     return records;
 }
 
-// the frames a run writes: --frames, within the shot's, or the shot's
+// the frames a run writes: --frames, within the shot's, or the shot's (the loader checked
+// 1 <= /frames/start <= /frames/end)
 std::pair<int, int> frames_to_write(const Shot& shot, const StageOptions& options) {
     const TimeParams& time = shot.sim.time;
-    const int first = options.frame_range.is_set() ? options.frame_range.first : time.frame_start;
-    const int last = options.frame_range.is_set() ? options.frame_range.last : time.frame_end;
-    if (first < 1 || last < first)
-        throw InputError(shot.path + ": frames " + std::to_string(first) + "-" + std::to_string(last) +
-                         ": expected 1 <= start <= end");
-    if (options.frame_range.is_set() && (first < time.frame_start || last > time.frame_end))
-        throw UsageError("--frames " + options.frames + ": outside the frames " + std::to_string(time.frame_start) +
-                         "-" + std::to_string(time.frame_end) + " of " + shot.path + " (/frames/start, /frames/end)");
-    return {first, last};
+    const FrameRange frames = frames_to_process(options, {time.frame_start, time.frame_end},
+                                                shot.path + " (/frames/start, /frames/end)");
+    return {frames.first, frames.last};
 }
 
 // what a run carries from frame to frame, and what its manifest reports

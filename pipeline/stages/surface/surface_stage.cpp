@@ -192,15 +192,16 @@ SurfaceParams flagged_params(const Shot& shot, const SurfaceStageOptions& surfac
     SurfaceParams params = *shot.surface;
     if (!mode_flag.empty()) {
         const std::optional<SurfaceMode> mode = parse_surface_mode(mode_flag);
-        if (!mode) throw InputError("--mode " + mode_flag + ": not a surfacing mode");
+        if (!mode) throw UsageError("--mode " + mode_flag + ": not a surfacing mode");
         params.mode = *mode;
         if (debris_needs_plates(params))
-            throw InputError("--mode " + mode_flag + ": " + shot.path +
+            throw UsageError("--mode " + mode_flag + ": " + shot.path +
                              " asks for /surfacing/debris, which only the plates mode writes");
     }
+    // the shot's own format passed the spec's check; only the flag's can be refused here
     if (!format_flag.empty()) params.format = format_flag;
     if (!is_supported_mesh_format(params.format))
-        throw InputError("--format " + params.format + ": " + mesh_format_refusal(params.format));
+        throw UsageError("--format " + params.format + ": " + mesh_format_refusal(params.format));
     return params;
 }
 
@@ -222,16 +223,12 @@ SurfaceInputs read_surface_inputs(const Shot& shot, const StageOptions& options)
     in.sim_manifest = read_current_manifest(sim_dir, shot.slice_hash(Stage::Sim));
     in.sim_files = RecordedChecksums(in.sim_manifest, sim_dir / "manifest.json");
     const ManifestFrames sim_frames = manifest_frames(in.sim_manifest, sim_dir / "manifest.json");
-    in.sim_first = in.first = sim_frames.first;
-    in.sim_last = in.last = sim_frames.last;
-    if (options.frame_range.is_set()) {
-        in.first = options.frame_range.first;
-        in.last = options.frame_range.last;
-        if (in.first < in.sim_first || in.last > in.sim_last)
-            throw UsageError("--frames " + options.frames + ": outside the cached frames " +
-                             std::to_string(in.sim_first) + "-" + std::to_string(in.sim_last) + " of " +
-                             (sim_dir / "manifest.json").string());
-    }
+    in.sim_first = sim_frames.first;
+    in.sim_last = sim_frames.last;
+    const FrameRange frames =
+        frames_to_process(options, {sim_frames.first, sim_frames.last}, (sim_dir / "manifest.json").string());
+    in.first = frames.first;
+    in.last = frames.last;
     return in;
 }
 
