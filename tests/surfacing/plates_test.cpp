@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <cmath>
 #include <map>
+#include <random>
 #include <set>
 
 #include "surfacing/core_surface.h"
@@ -510,13 +511,8 @@ TEST(Plates, EveryFrameOfAGrowingNetworkIsClosed) {
     const TetMesh mesh = box_lattice(14, 6, 8, kH);
     const CoreTopology topo = build_core_topology(mesh);
     std::vector<int32_t> first_break = no_edge_breaks(topo);
-    uint64_t state = 0;
-    auto percent = [&] {  // splitmix64: the same sequence on every platform
-        uint64_t z = (state += 0x9e3779b97f4a7c15ull);
-        z = (z ^ (z >> 30)) * 0xbf58476d1ce4e5b9ull;
-        z = (z ^ (z >> 27)) * 0x94d049bb133111ebull;
-        return int((z ^ (z >> 31)) % 100);
-    };
+    std::mt19937_64 rng(0);  // the engine's sequence is the same on every platform
+    auto percent = [&] { return int(rng() % 100); };
     constexpr int kLast = 5;
     for (int32_t e = 0; e < topo.n_edges(); ++e) {
         const auto [p, q] = topo.edges[e];
