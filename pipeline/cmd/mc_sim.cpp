@@ -1,14 +1,15 @@
-// mc-sim: the MPM simulation stage (pipeline/stages/sim/sim_stage.h). Reads DIR/init/, writes DIR/sim/.
-#include "pipeline/stages/sim/sim_stage.h"
+// mc-sim: the MPM simulation stage (pipeline/stages/sim/sim_stage.h). Reads DIR/init/, writes
+// DIR/sim/.
 #include "pipeline/cmd/stage_cli.h"
 #include "pipeline/shot/shot.h"
+#include "pipeline/stages/sim/sim_stage.h"
 
 int main(int argc, char** argv) {
     using namespace mudcrack;
     SimStageOptions sim_options;
     return run_stage(
-        "mc-sim", "MPM simulation of drying soil: writes per-frame particle caches to OUT/sim/", argc,
-        argv,
+        "mc-sim", "MPM simulation of drying soil: writes per-frame particle caches to OUT/sim/",
+        argc, argv,
         [&](CLI::App& app) {
             app.add_flag("--resume", sim_options.resume,
                          "continue from the last valid checkpoint in OUT/sim/ (bitwise identical "

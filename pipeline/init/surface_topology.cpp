@@ -22,10 +22,10 @@ struct EdgeUse {
     bool is_forward;  // the face traverses it lo -> hi
 };
 
-
 }  // namespace
 
-std::vector<std::string> surface_topology_problems(const InputSurface& surface, const std::string& name) {
+std::vector<std::string> surface_topology_problems(const InputSurface& surface,
+                                                   const std::string& name) {
     std::vector<std::string> problems;
     const auto& X = surface.positions;
 
@@ -72,7 +72,8 @@ std::vector<std::string> surface_topology_problems(const InputSurface& surface, 
     }
     if (border > 0)
         problems.push_back(name + ": " + std::to_string(border) +
-                           " border edges (the mesh is not closed), first at " + point_text(first_border));
+                           " border edges (the mesh is not closed), first at " +
+                           point_text(first_border));
     if (non_manifold > 0)
         problems.push_back(name + ": " + std::to_string(non_manifold) +
                            " non-manifold edges (shared by more than two faces), first at " +
@@ -80,7 +81,8 @@ std::vector<std::string> surface_topology_problems(const InputSurface& surface, 
     if (misoriented > 0)
         problems.push_back(name + ": " + std::to_string(misoriented) +
                            " edges whose two faces have opposite orientations (the faces are not "
-                           "consistently wound), first at " + point_text(first_misoriented));
+                           "consistently wound), first at " +
+                           point_text(first_misoriented));
     if (!problems.empty()) return problems;
 
     // non-manifold vertices: the faces around a vertex must form a single fan, i.e. the
@@ -112,9 +114,11 @@ std::vector<std::string> surface_topology_problems(const InputSurface& surface, 
         auto index_of = [&](int32_t w) {
             return static_cast<int>(std::lower_bound(ids.begin(), ids.end(), w) - ids.begin());
         };
-        for (size_t k = 0; k + 1 < link.size(); k += 2) uf.unite(index_of(link[k]), index_of(link[k + 1]));
+        for (size_t k = 0; k + 1 < link.size(); k += 2)
+            uf.unite(index_of(link[k]), index_of(link[k + 1]));
         int components = 0;
-        for (size_t k = 0; k < ids.size(); ++k) components += uf.find(static_cast<int>(k)) == static_cast<int>(k);
+        for (size_t k = 0; k < ids.size(); ++k)
+            components += uf.find(static_cast<int>(k)) == static_cast<int>(k);
         if (components > 1 && bad_vertices++ == 0) first_bad = static_cast<int32_t>(v);
     }
     if (bad_vertices > 0)
@@ -131,7 +135,8 @@ Real enclosed_volume(const InputSurface& surface) {
     const Vec3 o = surface.positions[0];
     Real v = 0;
     for (const Tri& t : surface.faces)
-        v += signed_tet_volume(o, surface.positions[t[0]], surface.positions[t[1]], surface.positions[t[2]]);
+        v += signed_tet_volume(o, surface.positions[t[0]], surface.positions[t[1]],
+                               surface.positions[t[2]]);
     return v;
 }
 

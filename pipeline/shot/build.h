@@ -30,7 +30,8 @@ InitParams build_init(nlohmann::json& tree, const std::string& shot_path, Issues
 /// and frame ranges. The cache attributes are left at their defaults (see derive_cache).
 SimModel build_sim(nlohmann::json& tree, Issues& issues);
 
-/// /surfacing, or nullopt when the section is off; adds an issue for debris asked of a mode that has none.
+/// /surfacing, or nullopt when the section is off; adds an issue for debris asked of a mode that
+/// has none.
 std::optional<SurfaceParams> build_surface(const nlohmann::json& tree, Issues& issues);
 
 /// /render, or nullopt when the section is off.

@@ -56,8 +56,8 @@ StepBound smallest_step(const json& tree, const SimModel& sim, const Issues& iss
                                 std::abs(std::log10(sim.elastic.youngs_modulus / 1e6));
         const std::string other = is_density ? "/material/youngs_modulus" : "/material/density";
         b = {elastic, is_density ? "/material/density" : "/material/youngs_modulus",
-             "the elastic bound C_E h / c_p (c_p = " + g(dry.wave_speed()) + " m/s, with " + other + " = " +
-                 issues.value_of(tree, other) + ")"};
+             "the elastic bound C_E h / c_p (c_p = " + g(dry.wave_speed()) + " m/s, with " + other +
+                 " = " + issues.value_of(tree, other) + ")"};
     }
     // the speed it starts with, plus what gravity adds over one frame
     const Real v0 = sim.initial_velocity.norm(), fall = sim.gravity.norm() / t.fps;
@@ -80,20 +80,22 @@ void check_time_step(const json& tree, const SimModel& sim, Issues& issues) {
     const Real floor = kCollapsedDtFraction * frame;
     const StepBound b = smallest_step(tree, sim, issues);
     if (b.dt >= floor && std::isfinite(b.dt)) return;
-    const std::string floor_text = "the floor " + g(kCollapsedDtFraction) + " x the frame length 1 / fps = " +
-                                   g(floor) + " s: a frame would take more than " + g(1 / kCollapsedDtFraction) +
-                                   " substeps";
+    const std::string floor_text =
+        "the floor " + g(kCollapsedDtFraction) + " x the frame length 1 / fps = " + g(floor) +
+        " s: a frame would take more than " + g(1 / kCollapsedDtFraction) + " substeps";
     // the largest step allowed is below the floor while it would do for frames of a usual
     // length: the frames are too long
     const Real largest = sim.time.dt_fixed > 0 ? sim.time.dt_fixed : sim.time.dt_max;
     if (largest < floor && largest >= kCollapsedDtFraction * kUsualFrameLength) {
         issues.add("/frames/fps", issues.value_of(tree, "/frames/fps"),
-                   "frames of " + g(frame) + " s: the largest time step " + g(largest) + " s is below " +
-                       floor_text + "; expected frames per second of simulated time (e.g. 24)");
+                   "frames of " + g(frame) + " s: the largest time step " + g(largest) +
+                       " s is below " + floor_text +
+                       "; expected frames per second of simulated time (e.g. 24)");
         return;
     }
-    issues.add(b.pointer, issues.value_of(tree, b.pointer),
-               "gives a stable time step of " + g(b.dt) + " s (" + b.why + "), below " + floor_text);
+    issues.add(
+        b.pointer, issues.value_of(tree, b.pointer),
+        "gives a stable time step of " + g(b.dt) + " s (" + b.why + "), below " + floor_text);
 }
 
 // what the sim grid spans: the explicit domain, else the source's extent (a mesh's is unknown here)
@@ -114,22 +116,26 @@ bool grid_extent(const InitParams& init, const SimModel& sim, Vec3& extent) {
     return false;
 }
 
-void check_cell_size(const json& tree, const InitParams& init, const SimModel& sim, Issues& issues) {
+void check_cell_size(const json& tree, const InitParams& init, const SimModel& sim,
+                     Issues& issues) {
     if (issues.has("/sim/h") || issues.has("/source") || issues.has("/colliders/domain")) return;
     if (sim.h < kMinCellSize) {
         issues.add("/sim/h", issues.value_of(tree, "/sim/h"),
-                   "must be >= " + g(kMinCellSize) + " (OpenVDB, which holds the caches, refuses voxels this small)",
+                   "must be >= " + g(kMinCellSize) +
+                       " (OpenVDB, which holds the caches, refuses voxels this small)",
                    "m");
         return;
     }
     Vec3 extent;
     if (!grid_extent(init, sim, extent)) return;
     double blocks = 1;
-    for (int d = 0; d < 3; ++d) blocks *= std::ceil((extent[d] / sim.h + 2 * sim.domain.padding) / 4) + 2;
+    for (int d = 0; d < 3; ++d)
+        blocks *= std::ceil((extent[d] / sim.h + 2 * sim.domain.padding) / 4) + 2;
     if (blocks >= kMaxGridBlocks)
         issues.add("/sim/h", issues.value_of(tree, "/sim/h"),
-                   "a grid over the domain's " + g(extent.x()) + " x " + g(extent.y()) + " x " + g(extent.z()) +
-                       " m needs " + g(blocks) + " blocks of 4^3 cells: must be < " + g(kMaxGridBlocks) +
+                   "a grid over the domain's " + g(extent.x()) + " x " + g(extent.y()) + " x " +
+                       g(extent.z()) + " m needs " + g(blocks) +
+                       " blocks of 4^3 cells: must be < " + g(kMaxGridBlocks) +
                        "; raise /sim/h or shrink the domain",
                    "m");
 }
@@ -146,35 +152,42 @@ void check_particle_memory(const json& tree, const InitParams& init, Issues& iss
     std::string pointer;
     if (init.type == SourceType::Box) {
         const Vec3 cells = (init.box.max - init.box.min) / init.box.spacing;
-        count = (std::round(cells.x()) + 1) * (std::round(cells.y()) + 1) * (std::round(cells.z()) + 1);
+        count =
+            (std::round(cells.x()) + 1) * (std::round(cells.y()) + 1) * (std::round(cells.z()) + 1);
         pointer = "/source/box/spacing";
     } else if (init.type == SourceType::Heightfield) {
         const HeightfieldSource& hf = init.heightfield;
         const Real height = hf.base + hf.amplitude + hf.image_height;
-        count = (hf.size.x() / hf.spacing + 1) * (hf.size.z() / hf.spacing + 1) * (height / hf.spacing + 1);
+        count = (hf.size.x() / hf.spacing + 1) * (hf.size.z() / hf.spacing + 1) *
+                (height / hf.spacing + 1);
         pointer = "/source/heightfield/spacing";
     }
     // past kMaxInitParticles mc-init refuses the count itself, naming it whole
     const double memory = physical_memory_bytes();
-    if (count == 0 || count > kMaxInitParticles || memory == 0 || count * kBytesPerParticle <= memory) return;
+    if (count == 0 || count > kMaxInitParticles || memory == 0 ||
+        count * kBytesPerParticle <= memory)
+        return;
     issues.add(pointer, issues.value_of(tree, pointer),
-               "makes about " + g(count) + " particles, which need about " + g(count * kBytesPerParticle / kGiB) +
-                   " GiB (" + g(kBytesPerParticle) + " bytes each) on a machine with " + g(memory / kGiB) +
-                   " GiB; raise the spacing",
+               "makes about " + g(count) + " particles, which need about " +
+                   g(count * kBytesPerParticle / kGiB) + " GiB (" + g(kBytesPerParticle) +
+                   " bytes each) on a machine with " + g(memory / kGiB) + " GiB; raise the spacing",
                "m");
 }
 
-void check_render_buffer(const json& tree, const std::optional<RenderParams>& render, Issues& issues) {
+void check_render_buffer(const json& tree, const std::optional<RenderParams>& render,
+                         Issues& issues) {
     if (!render || issues.has("/render")) return;
     // llvmpipe pads each side to its 64-pixel tiles
     const auto padded = [](int pixels) { return std::ceil(pixels / 64.0) * 64.0; };
     const double bytes = 4.0 * padded(render->width) * padded(render->height) * render->samples;
     if (bytes <= kMaxRenderBufferBytes) return;
-    issues.add("/render/resolution", issues.value_of(tree, "/render/resolution"),
-               "with /render/samples = " + std::to_string(render->samples) + ", the multisampled colour buffer needs " +
-                   g(bytes / kGiB) + " GiB; OSMesa (llvmpipe) allocates at most 1 GiB per buffer: lower "
-                   "the resolution or the samples (width x height x samples <= 268435456, each side padded to "
-                   "64 pixels)");
+    issues.add(
+        "/render/resolution", issues.value_of(tree, "/render/resolution"),
+        "with /render/samples = " + std::to_string(render->samples) +
+            ", the multisampled colour buffer needs " + g(bytes / kGiB) +
+            " GiB; OSMesa (llvmpipe) allocates at most 1 GiB per buffer: lower "
+            "the resolution or the samples (width x height x samples <= 268435456, each side padded to "
+            "64 pixels)");
 }
 
 // a camera placed by hand, as the renderer sees it: in single precision, looking somewhere
@@ -185,15 +198,17 @@ void check_camera(const json& tree, const std::optional<RenderParams>& render, I
                                          std::pair{"/render/camera/target", camera.target}}) {
         if (point.cast<float>().allFinite()) continue;
         issues.add(pointer, issues.value_of(tree, pointer),
-                   "beyond the renderer's single precision: expected coordinates below 3.4e+38", "m");
+                   "beyond the renderer's single precision: expected coordinates below 3.4e+38",
+                   "m");
         return;
     }
     // the view direction of a camera on its target is undefined: every pixel would show nothing
     if (!((camera.target.cast<float>() - camera.position.cast<float>()).norm() > 0))
-        issues.add("/render/camera/position", issues.value_of(tree, "/render/camera/position"),
-                   "is on /render/camera/target = " + issues.value_of(tree, "/render/camera/target") +
-                       ": the camera would look nowhere; expected a position away from the target",
-                   "m");
+        issues.add(
+            "/render/camera/position", issues.value_of(tree, "/render/camera/position"),
+            "is on /render/camera/target = " + issues.value_of(tree, "/render/camera/target") +
+                ": the camera would look nowhere; expected a position away from the target",
+            "m");
 }
 
 }  // namespace

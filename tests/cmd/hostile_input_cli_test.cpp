@@ -62,7 +62,8 @@ json tiny_shot() {
     std::ifstream is(kSource / "shots/fig8_a.json");
     json shot = json::parse(is, nullptr, true, /*ignore_comments=*/true);
     shot["name"] = "hostile";
-    shot["source"]["box"] = {{"min", {-0.1, 0.0, -0.1}}, {"max", {0.1, 0.1, 0.1}}, {"spacing", 0.05}};
+    shot["source"]["box"] = {
+        {"min", {-0.1, 0.0, -0.1}}, {"max", {0.1, 0.1, 0.1}}, {"spacing", 0.05}};
     shot["frames"]["end"] = 3;
     shot["render"] = {{"resolution", {48, 32}}, {"turntable", {{"views", 2}}}};
     return shot;
@@ -76,7 +77,8 @@ struct Result {
 // a stage binary run in the background, stderr into a file
 class Process {
 public:
-    Process(const std::string& program, const std::vector<std::string>& args, const fs::path& err_file)
+    Process(const std::string& program, const std::vector<std::string>& args,
+            const fs::path& err_file)
         : m_err_file(err_file) {
         std::vector<std::string> all = {(kBin / program).string()};
         all.insert(all.end(), args.begin(), args.end());
@@ -116,7 +118,8 @@ protected:
         std::string name = std::string(info->test_suite_name()) + "_" + info->name();
         for (char& c : name)
             if (c == '/') c = '_';
-        m_dir = fs::temp_directory_path() / ("mc_hostile_" + name + "_" + std::to_string(::getpid()));
+        m_dir =
+            fs::temp_directory_path() / ("mc_hostile_" + name + "_" + std::to_string(::getpid()));
         fs::remove_all(m_dir);
         fs::create_directories(m_dir);
     }
@@ -132,18 +135,22 @@ protected:
     fs::path out() const { return m_dir / "out"; }
 
     // --shot SHOT --out OUT, one thread unless `extra` says otherwise, then `extra`
-    std::vector<std::string> stage_args(const fs::path& shot, const std::vector<std::string>& extra) const {
+    std::vector<std::string> stage_args(const fs::path& shot,
+                                        const std::vector<std::string>& extra) const {
         std::vector<std::string> args = {"--shot", shot.string(), "--out", out().string()};
         if (std::find(extra.begin(), extra.end(), "--threads") == extra.end())
             args.insert(args.end(), {"--threads", "1"});
         args.insert(args.end(), extra.begin(), extra.end());
         return args;
     }
-    Result run(const std::string& stage, const fs::path& shot, const std::vector<std::string>& extra = {}) {
+    Result run(const std::string& stage, const fs::path& shot,
+               const std::vector<std::string>& extra = {}) {
         return Process("mc-" + stage, stage_args(shot, extra), m_dir / "stderr.txt").wait();
     }
-    Process start(const std::string& stage, const fs::path& shot, const std::vector<std::string>& extra = {}) {
-        return Process("mc-" + stage, stage_args(shot, extra), m_dir / ("stderr_" + stage + ".txt"));
+    Process start(const std::string& stage, const fs::path& shot,
+                  const std::vector<std::string>& extra = {}) {
+        return Process("mc-" + stage, stage_args(shot, extra),
+                       m_dir / ("stderr_" + stage + ".txt"));
     }
 
     // runs the stages before `stage` (they must succeed)
@@ -166,7 +173,8 @@ protected:
         }
     }
     // one error line, prefixed with the stage, holding every `needle`
-    static void expect_error(const Result& r, const std::string& stage, const std::vector<std::string>& needles) {
+    static void expect_error(const Result& r, const std::string& stage,
+                             const std::vector<std::string>& needles) {
         EXPECT_NE(r.err.find("mc-" + stage + ": error: "), std::string::npos) << r.err;
         for (const std::string& n : needles)
             EXPECT_NE(r.err.find(n), std::string::npos) << "no \"" << n << "\" in\n" << r.err;
@@ -214,7 +222,8 @@ const UsageCase kUsageCases[] = {
     {{"--no-such-flag"}, "--no-such-flag"},
 };
 
-class UsageErrors : public HostileInput, public ::testing::WithParamInterface<std::tuple<std::string, int>> {};
+class UsageErrors : public HostileInput,
+                    public ::testing::WithParamInterface<std::tuple<std::string, int>> {};
 
 TEST_P(UsageErrors, ExitTwoNamingTheFlag) {
     const auto& [stage, index] = GetParam();
@@ -231,7 +240,8 @@ INSTANTIATE_TEST_SUITE_P(AllStages, UsageErrors,
                          ::testing::Combine(::testing::ValuesIn(kStages),
                                             ::testing::Range(0, int(std::size(kUsageCases)))),
                          [](const auto& info) {
-                             return std::get<0>(info.param) + "_" + std::to_string(std::get<1>(info.param));
+                             return std::get<0>(info.param) + "_" +
+                                    std::to_string(std::get<1>(info.param));
                          });
 
 // a stage's own flags: an empty value or one the stage refuses is a usage error too
@@ -258,12 +268,13 @@ TEST_P(StageFlags, ExitTwoNamingTheFlag) {
 
 INSTANTIATE_TEST_SUITE_P(
     Stages, StageFlags,
-    ::testing::Values(StageFlagCase{"surface", {"--format", ""}, "--format = \"\": expected a value"},
-                      StageFlagCase{"surface", {"--format", "fbx"}, "--format fbx: fbx is not supported"},
-                      StageFlagCase{"surface", {"--format", "stl"}, "--format stl: "},
-                      StageFlagCase{"measure", {"--json", ""}, "--json = \"\": expected a value"},
-                      StageFlagCase{"sim", {"--seed", ""}, "--seed = \"\": expected a value"},
-                      StageFlagCase{"render", {"--log-level", ""}, "--log-level"}),
+    ::testing::Values(
+        StageFlagCase{"surface", {"--format", ""}, "--format = \"\": expected a value"},
+        StageFlagCase{"surface", {"--format", "fbx"}, "--format fbx: fbx is not supported"},
+        StageFlagCase{"surface", {"--format", "stl"}, "--format stl: "},
+        StageFlagCase{"measure", {"--json", ""}, "--json = \"\": expected a value"},
+        StageFlagCase{"sim", {"--seed", ""}, "--seed = \"\": expected a value"},
+        StageFlagCase{"render", {"--log-level", ""}, "--log-level"}),
     [](const auto& info) { return info.param.stage + "_" + std::to_string(info.index); });
 
 TEST_F(HostileInput, MissingOutIsAUsageErrorWithThePrefix) {
@@ -311,12 +322,13 @@ TEST_P(FramesPastTheShot, RefusedAsAUsageError) {
     const fs::path shot = write_shot(tiny_shot());
     run_before(stage, shot);
     const fs::path where = stage == "init" || stage == "sim" ? shot
-                           : stage == "render"              ? out() / "surface" / "manifest.json"
-                                                            : out() / "sim" / "manifest.json";
+                           : stage == "render"               ? out() / "surface" / "manifest.json"
+                                                             : out() / "sim" / "manifest.json";
     for (const std::string frames : {"99-100", "2-4", "3-9"}) {
         const Result r = run(stage, shot, {"--frames", frames});
         EXPECT_EQ(r.code, 2) << r.err;
-        expect_error(r, stage, {"--frames " + frames + ": outside the frames 1-3 of " + where.string()});
+        expect_error(r, stage,
+                     {"--frames " + frames + ": outside the frames 1-3 of " + where.string()});
         EXPECT_FALSE(fs::exists(out() / stage)) << "nothing written";
         expect_no_debris(out());
     }
@@ -348,29 +360,64 @@ struct ShotCase {
 
 const ShotCase kShotCases[] = {
     {"density_1e_300", [](json& s) { s["material"]["density"] = 1e-300; }, "/material/density"},
-    {"youngs_modulus_1e300", [](json& s) { s["material"]["youngs_modulus"] = 1e300; }, "/material/youngs_modulus"},
+    {"youngs_modulus_1e300", [](json& s) { s["material"]["youngs_modulus"] = 1e300; },
+     "/material/youngs_modulus"},
     {"dt_1e_300", [](json& s) { s["sim"]["dt"] = 1e-300; }, "/sim/dt"},
     {"dt_max_1e_300", [](json& s) { s["sim"]["dt_max"] = 1e-300; }, "/sim/dt_max"},
     {"fps_1e_300", [](json& s) { s["frames"]["fps"] = 1e-300; }, "/frames/fps"},
-    {"initial_velocity_1e30", [](json& s) { s["source"]["initial_velocity"] = {1e30, 0, 0}; },
+    {"initial_velocity_1e30",
+     [](json& s) {
+         s["source"]["initial_velocity"] = {1e30, 0, 0};
+     },
      "/source/initial_velocity"},
-    {"gravity_1e30", [](json& s) { s["sim"]["gravity"] = {0, -1e30, 0}; }, "/sim/gravity"},
+    {"gravity_1e30",
+     [](json& s) {
+         s["sim"]["gravity"] = {0, -1e30, 0};
+     },
+     "/sim/gravity"},
     {"h_1e_5", [](json& s) { s["sim"]["h"] = 1e-5; }, "/sim/h"},
     {"h_1e_300", [](json& s) { s["sim"]["h"] = 1e-300; }, "/sim/h"},
     {"domain_too_large_for_h",
-     [](json& s) { s["colliders"]["domain"] = {{"min", {-1e4, -1e4, -1e4}}, {"max", {1e4, 1e4, 1e4}}}; },
+     [](json& s) {
+         s["colliders"]["domain"] = {{"min", {-1e4, -1e4, -1e4}}, {"max", {1e4, 1e4, 1e4}}};
+     },
      "/sim/h"},
-    {"resolution_16384", [](json& s) { s["render"]["resolution"] = {16384, 16384}; }, "/render/resolution"},
-    {"resolution_16384x8192", [](json& s) { s["render"]["resolution"] = {16384, 8192}; }, "/render/resolution"},
-    {"samples_64_at_4k", [](json& s) { s["render"]["resolution"] = {4096, 2160}; s["render"]["samples"] = 64; },
+    {"resolution_16384",
+     [](json& s) {
+         s["render"]["resolution"] = {16384, 16384};
+     },
      "/render/resolution"},
-    {"camera_on_its_target", [](json& s) { s["render"]["camera"] = {{"position", {1, 2, 3}}, {"target", {1, 2, 3}}}; },
+    {"resolution_16384x8192",
+     [](json& s) {
+         s["render"]["resolution"] = {16384, 8192};
+     },
+     "/render/resolution"},
+    {"samples_64_at_4k",
+     [](json& s) {
+         s["render"]["resolution"] = {4096, 2160};
+         s["render"]["samples"] = 64;
+     },
+     "/render/resolution"},
+    {"camera_on_its_target",
+     [](json& s) {
+         s["render"]["camera"] = {{"position", {1, 2, 3}}, {"target", {1, 2, 3}}};
+     },
      "/render/camera/position = [1,2,3]: is on /render/camera/target"},
-    {"camera_beyond_float", [](json& s) { s["render"]["camera"] = {{"position", {1e300, 0, 0}}}; },
+    {"camera_beyond_float",
+     [](json& s) {
+         s["render"]["camera"] = {{"position", {1e300, 0, 0}}};
+     },
      "/render/camera/position"},
-    {"target_beyond_float", [](json& s) { s["render"]["camera"] = {{"target", {0, -1e39, 0}}}; },
+    {"target_beyond_float",
+     [](json& s) {
+         s["render"]["camera"] = {{"target", {0, -1e39, 0}}};
+     },
      "/render/camera/target"},
-    {"fov_1e_300", [](json& s) { s["render"]["camera"] = {{"fov", 1e-300}}; }, "/render/camera/fov"},
+    {"fov_1e_300",
+     [](json& s) {
+         s["render"]["camera"] = {{"fov", 1e-300}};
+     },
+     "/render/camera/fov"},
     {"render_fps_1e_300", [](json& s) { s["render"]["fps"] = 1e-300; }, "/render/fps"},
     {"render_fps_1e300", [](json& s) { s["render"]["fps"] = 1e300; }, "/render/fps"},
 };
@@ -381,7 +428,8 @@ struct OverflowCase {
 };
 const OverflowCase kOverflowCases[] = {
     {"density", "\"density\": 1,", "\"density\": 1e400,", "/material/density"},
-    {"negative_youngs", "\"youngs_modulus\": 2000", "\"youngs_modulus\": -1e400", "/material/youngs_modulus"},
+    {"negative_youngs", "\"youngs_modulus\": 2000", "\"youngs_modulus\": -1e400",
+     "/material/youngs_modulus"},
     {"array_element", "\"h\": 0.05", "\"h\": 0.05, \"gravity\": [0, -1e999, 0]", "/sim/gravity/1"},
     {"fps", "\"fps\": 24", "\"fps\": 24e500", "/frames/fps"},
 };
@@ -406,7 +454,8 @@ INSTANTIATE_TEST_SUITE_P(InitSimAndRender, ShotValues,
                          ::testing::Combine(::testing::Values("init", "sim", "render"),
                                             ::testing::Range(0, int(std::size(kShotCases)))),
                          [](const auto& info) {
-                             return std::get<0>(info.param) + "_" + kShotCases[std::get<1>(info.param)].name;
+                             return std::get<0>(info.param) + "_" +
+                                    kShotCases[std::get<1>(info.param)].name;
                          });
 
 // a lattice that fits mc-init's own limit (5e7 particles) but not this machine's memory, at the
@@ -435,17 +484,24 @@ struct SpacingCase {
     std::string key;
 };
 const SpacingCase kSpacingCases[] = {
-    {"box", [](json& s) { s["source"]["box"]["spacing"] = 1e-300; }, "/source/box/spacing = 1e-300: gives inf"},
+    {"box", [](json& s) { s["source"]["box"]["spacing"] = 1e-300; },
+     "/source/box/spacing = 1e-300: gives inf"},
     {"box_one_axis",
-     [](json& s) { s["source"]["box"] = {{"min", {0, 0, 0}}, {"max", {1e-299, 1e-299, 1}}, {"spacing", 1e-300}}; },
+     [](json& s) {
+         s["source"]["box"] = {
+             {"min", {0, 0, 0}}, {"max", {1e-299, 1e-299, 1}}, {"spacing", 1e-300}};
+     },
      "/source/box/spacing = 1e-300: gives"},
     {"heightfield_columns",
-     [](json& s) { s["source"] = {{"type", "heightfield"}, {"heightfield", {{"spacing", 1e-300}}}}; },
+     [](json& s) {
+         s["source"] = {{"type", "heightfield"}, {"heightfield", {{"spacing", 1e-300}}}};
+     },
      "/source/heightfield/spacing = 1e-300: gives inf columns"},
     {"heightfield_layers",
      [](json& s) {
          s["source"] = {{"type", "heightfield"},
-                        {"heightfield", {{"size", {1e-299, 1e-299}}, {"channel_depth", 0}, {"spacing", 1e-300}}}};
+                        {"heightfield",
+                         {{"size", {1e-299, 1e-299}}, {"channel_depth", 0}, {"spacing", 1e-300}}}};
      },
      "/source/heightfield/spacing = 1e-300: gives"},
 };
@@ -498,10 +554,12 @@ struct MeshCase {
 };
 const char* const kTetrahedronFaces = "f 1 3 2\nf 1 2 4\nf 2 3 4\nf 1 4 3\n";
 const MeshCase kMeshCases[] = {
-    {"obj_nan", "nan.obj", std::string("v 0 0 0\nv 1 0 0\nv nan 1 0\nv 0 0 1\n") + kTetrahedronFaces, "vertex 3"},
-    {"obj_inf", "inf.obj", std::string("v 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 -inf\n") + kTetrahedronFaces, "vertex 4"},
-    {"obj_overflow", "big.obj", std::string("v 0 0 0\nv 1e999 0 0\nv 0 1 0\nv 0 0 1\n") + kTetrahedronFaces,
-     "vertex 2"},
+    {"obj_nan", "nan.obj",
+     std::string("v 0 0 0\nv 1 0 0\nv nan 1 0\nv 0 0 1\n") + kTetrahedronFaces, "vertex 3"},
+    {"obj_inf", "inf.obj",
+     std::string("v 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 -inf\n") + kTetrahedronFaces, "vertex 4"},
+    {"obj_overflow", "big.obj",
+     std::string("v 0 0 0\nv 1e999 0 0\nv 0 1 0\nv 0 0 1\n") + kTetrahedronFaces, "vertex 2"},
     {"ply_nan", "nan.ply",
      "ply\nformat ascii 1.0\nelement vertex 4\nproperty float x\nproperty float y\nproperty float z\n"
      "element face 4\nproperty list uchar int vertex_indices\nend_header\n0 0 0\n1 0 0\n0 nan 0\n0 0 1\n"
@@ -549,7 +607,8 @@ private:
     int m_fd = -1;
 };
 
-const char* const kForeignHolder = "host=farmnode17\npid=424242\nprogram=mc-x\nstart=2026-11-25 17:30:02 UTC\n";
+const char* const kForeignHolder =
+    "host=farmnode17\npid=424242\nprogram=mc-x\nstart=2026-11-25 17:30:02 UTC\n";
 
 class SecondWriter : public HostileInput, public ::testing::WithParamInterface<std::string> {};
 
@@ -562,7 +621,8 @@ TEST_P(SecondWriter, RefusedNamingTheHolder) {
         HeldLock held(lock, LOCK_EX, kForeignHolder);
         const Result r = run(stage, shot);
         EXPECT_EQ(r.code, 1) << r.err;
-        expect_error(r, stage, {(out() / stage).string(), "farmnode17", "pid 424242", lock.string()});
+        expect_error(r, stage,
+                     {(out() / stage).string(), "farmnode17", "pid 424242", lock.string()});
         EXPECT_EQ(read_text(lock), kForeignHolder) << "the holder's record is left alone";
         EXPECT_FALSE(fs::exists(out() / ("." + stage + ".partial")));
         EXPECT_FALSE(fs::exists(out() / stage)) << "nothing written";
@@ -574,12 +634,14 @@ TEST_P(SecondWriter, RefusedNamingTheHolder) {
     expect_no_debris(out());
 }
 
-INSTANTIATE_TEST_SUITE_P(EveryStage, SecondWriter, ::testing::Values("init", "sim", "surface", "render"));
+INSTANTIATE_TEST_SUITE_P(EveryStage, SecondWriter,
+                         ::testing::Values("init", "sim", "surface", "render"));
 
 TEST_F(HostileInput, StaleLockOfADeadWriterIsRecovered) {
     const fs::path shot = write_shot(tiny_shot());
     fs::create_directories(out());
-    std::ofstream(out() / ".init.lock") << "host=localhost\npid=999999\nprogram=mc-init\nstart=yesterday\n";
+    std::ofstream(out() / ".init.lock")
+        << "host=localhost\npid=999999\nprogram=mc-init\nstart=yesterday\n";
     const Result r = run("init", shot);
     EXPECT_EQ(r.code, 0) << r.err;
     EXPECT_TRUE(fs::exists(out() / "init" / "manifest.json"));
@@ -647,7 +709,8 @@ TEST_F(HostileInput, RenderChunksShareTheFolderAFullRunDoesNot) {
 // ---- a stage folder that is a symbolic link: refused by every writer, the link and its target
 // left as they were ---------------------------------------------------------------------------
 
-class SymlinkedStageFolder : public HostileInput, public ::testing::WithParamInterface<std::string> {};
+class SymlinkedStageFolder : public HostileInput,
+                             public ::testing::WithParamInterface<std::string> {};
 
 TEST_P(SymlinkedStageFolder, IsRefusedAndLeftAlone) {
     const std::string stage = GetParam();
@@ -665,12 +728,14 @@ TEST_P(SymlinkedStageFolder, IsRefusedAndLeftAlone) {
     expect_error(r, stage, {link.string() + ": a symbolic link", "mc-" + stage});
     EXPECT_TRUE(fs::is_symlink(link)) << "the link is not replaced";
     EXPECT_EQ(read_text(target / "keep.txt"), "not the stage's\n");
-    EXPECT_EQ(std::distance(fs::directory_iterator(target), fs::directory_iterator()), 1) << "nothing written there";
+    EXPECT_EQ(std::distance(fs::directory_iterator(target), fs::directory_iterator()), 1)
+        << "nothing written there";
     expect_no_debris(out());
     expect_no_debris(m_dir / "elsewhere");
 }
 
-INSTANTIATE_TEST_SUITE_P(EveryStage, SymlinkedStageFolder, ::testing::Values("init", "sim", "surface", "render"));
+INSTANTIATE_TEST_SUITE_P(EveryStage, SymlinkedStageFolder,
+                         ::testing::Values("init", "sim", "surface", "render"));
 
 // ---- damaged files: any flipped byte is caught by every reader, naming the file and "damaged";
 // mc-sim --resume simulates a damaged frame again -------------------------------------------------
@@ -696,7 +761,8 @@ fs::path file_starting(const fs::path& dir, const std::string& prefix) {
 
 // each offset of `file` damaged in turn (the file restored after each), `read` run on it: it must
 // exit 1 naming the file and "damaged", and leave no output behind
-void expect_damage_refused(const fs::path& file, const std::string& stage, const std::function<Result()>& read,
+void expect_damage_refused(const fs::path& file, const std::string& stage,
+                           const std::function<Result()>& read,
                            const std::function<void()>& expect_nothing_written) {
     ASSERT_TRUE(fs::is_regular_file(file)) << file;
     const std::string clean = read_text(file);
@@ -705,7 +771,9 @@ void expect_damage_refused(const fs::path& file, const std::string& stage, const
         flip_byte(file, offset);
         const Result r = read();
         EXPECT_EQ(r.code, 1) << r.err;
-        EXPECT_NE(r.err.find("mc-" + stage + ": error: " + file.string() + ": damaged"), std::string::npos) << r.err;
+        EXPECT_NE(r.err.find("mc-" + stage + ": error: " + file.string() + ": damaged"),
+                  std::string::npos)
+            << r.err;
         expect_nothing_written();
         std::ofstream(file, std::ios::binary | std::ios::trunc) << clean;
     }
@@ -715,11 +783,14 @@ TEST_F(HostileInput, DamagedSimCacheIsRefusedBySurfaceAndMeasure) {
     const fs::path shot = write_shot(tiny_shot());
     run_before("surface", shot);
     const fs::path cache = out() / "sim" / "particles.0002.vdb";
-    expect_damage_refused(cache, "surface", [&] { return run("surface", shot); }, [&] {
-        EXPECT_FALSE(fs::exists(out() / "surface"));
-        expect_no_debris(out());
-    });
-    expect_damage_refused(cache, "measure", [&] { return run("measure", shot); }, [] {});
+    expect_damage_refused(
+        cache, "surface", [&] { return run("surface", shot); },
+        [&] {
+            EXPECT_FALSE(fs::exists(out() / "surface"));
+            expect_no_debris(out());
+        });
+    expect_damage_refused(
+        cache, "measure", [&] { return run("measure", shot); }, [] {});
 }
 
 TEST_F(HostileInput, DamagedInitFilesAreRefused) {
@@ -741,15 +812,19 @@ TEST_F(HostileInput, DamagedMeshIsRefusedByRenderAndMeasure) {
     const fs::path shot = write_shot(tiny_shot());
     run_before("render", shot);
     const fs::path mesh = file_starting(out() / "surface", "boundary.0002.");
-    expect_damage_refused(mesh, "render", [&] { return run("render", shot); }, [&] {
-        EXPECT_FALSE(fs::exists(out() / "render"));
-        expect_no_debris(out());
-    });
-    expect_damage_refused(mesh, "measure", [&] { return run("measure", shot); }, [] {});
+    expect_damage_refused(
+        mesh, "render", [&] { return run("render", shot); },
+        [&] {
+            EXPECT_FALSE(fs::exists(out() / "render"));
+            expect_no_debris(out());
+        });
+    expect_damage_refused(
+        mesh, "measure", [&] { return run("measure", shot); }, [] {});
     // the farm's merge checks what the chunks moved in with mc-shot verify
     flip_byte(mesh, 12);
     const Result v = Process("mc-shot", {"verify", (out() / "surface" / "manifest.json").string()},
-                             m_dir / "verify.txt").wait();
+                             m_dir / "verify.txt")
+                         .wait();
     EXPECT_EQ(v.code, 1) << v.err;
     expect_error(v, "shot", {mesh.string() + ": damaged"});
 }
@@ -760,15 +835,18 @@ TEST_F(HostileInput, DamagedImageIsRefusedByTheAssembly) {
     const Result chunk = run("render", shot, {"--frames", "1-3"});
     ASSERT_EQ(chunk.code, 0) << chunk.err;
     const fs::path image = out() / "render" / "frame.0002.png";
-    expect_damage_refused(image, "render", [&] { return run("render", shot, {"--assemble"}); }, [&] {
-        EXPECT_FALSE(fs::exists(out() / "render" / "manifest.json"));
-        EXPECT_FALSE(fs::exists(out() / "render" / "contact_sheet.png"));
-        expect_no_debris(out());
-    });
+    expect_damage_refused(
+        image, "render", [&] { return run("render", shot, {"--assemble"}); },
+        [&] {
+            EXPECT_FALSE(fs::exists(out() / "render" / "manifest.json"));
+            EXPECT_FALSE(fs::exists(out() / "render" / "contact_sheet.png"));
+            expect_no_debris(out());
+        });
     const Result assembled = run("render", shot, {"--assemble"});
     ASSERT_EQ(assembled.code, 0) << assembled.err;
     // a finished render folder: every image its manifest records, checked
-    const std::vector<std::string> verify = {"verify", (out() / "render" / "manifest.json").string()};
+    const std::vector<std::string> verify = {"verify",
+                                             (out() / "render" / "manifest.json").string()};
     EXPECT_EQ(Process("mc-shot", verify, m_dir / "verify.txt").wait().code, 0);
     flip_byte(out() / "render" / "turntable.0001.png", 30);
     const Result v = Process("mc-shot", verify, m_dir / "verify.txt").wait();
@@ -783,7 +861,9 @@ TEST_F(HostileInput, ResumeSimulatesADamagedFrameAgain) {
     const fs::path shot = write_shot(s);
     run_before("sim", shot);
     ASSERT_EQ(run("sim", shot).code, 0);
-    const auto cache = [&](int f) { return out() / "sim" / ("particles.000" + std::to_string(f) + ".vdb"); };
+    const auto cache = [&](int f) {
+        return out() / "sim" / ("particles.000" + std::to_string(f) + ".vdb");
+    };
     std::vector<std::string> clean;
     for (int f = 1; f <= 4; ++f) clean.push_back(read_text(cache(f)));
     const json clean_manifest = json::parse(read_text(out() / "sim" / "manifest.json"));
@@ -796,7 +876,8 @@ TEST_F(HostileInput, ResumeSimulatesADamagedFrameAgain) {
         EXPECT_EQ(r.code, 0) << r.err;
         EXPECT_NE(r.err.find(cache(damaged).string() + ": damaged"), std::string::npos) << r.err;
         for (int f = 1; f <= 4; ++f)
-            EXPECT_EQ(read_text(cache(f)), clean[size_t(f - 1)]) << "frame " << f << " differs from the clean run's";
+            EXPECT_EQ(read_text(cache(f)), clean[size_t(f - 1)])
+                << "frame " << f << " differs from the clean run's";
         const json manifest = json::parse(read_text(out() / "sim" / "manifest.json"));
         EXPECT_EQ(manifest["caches"], clean_manifest["caches"]);
         EXPECT_EQ(run("surface", shot).code, 0);
@@ -835,10 +916,11 @@ TEST_P(StoppedBySignal, CleansUpAndExits128PlusTheSignal) {
     Process p = start(c.stage, shot);
     // stopped while it writes: a frame written (sim), its partial folder made (init), a frame in
     // it (surface, render)
-    const std::map<std::string, fs::path> signs = {{"init", out() / ".init.partial"},
-                                                   {"sim", out() / "sim" / "particles.0002.vdb"},
-                                                   {"surface", out() / ".surface.partial" / "boundary.0001.glb"},
-                                                   {"render", out() / ".render.partial" / "frame.0001.png"}};
+    const std::map<std::string, fs::path> signs = {
+        {"init", out() / ".init.partial"},
+        {"sim", out() / "sim" / "particles.0002.vdb"},
+        {"surface", out() / ".surface.partial" / "boundary.0001.glb"},
+        {"render", out() / ".render.partial" / "frame.0001.png"}};
     const fs::path sign = signs.at(c.stage);
     ASSERT_TRUE(wait_for([&] { return fs::exists(sign); }, 60)) << sign;
     p.signal(c.signal);
@@ -852,13 +934,14 @@ TEST_P(StoppedBySignal, CleansUpAndExits128PlusTheSignal) {
         EXPECT_FALSE(fs::exists(out() / c.stage)) << "no stage folder from a stopped run";
 }
 
-INSTANTIATE_TEST_SUITE_P(Stages, StoppedBySignal,
-                         ::testing::Values(SignalCase{"init", SIGTERM}, SignalCase{"init", SIGINT},
-                                           SignalCase{"sim", SIGTERM}, SignalCase{"sim", SIGINT},
-                                           SignalCase{"surface", SIGTERM}, SignalCase{"surface", SIGINT},
-                                           SignalCase{"render", SIGTERM}, SignalCase{"render", SIGINT}),
-                         [](const auto& info) {
-                             return info.param.stage + (info.param.signal == SIGINT ? "_SIGINT" : "_SIGTERM");
-                         });
+INSTANTIATE_TEST_SUITE_P(
+    Stages, StoppedBySignal,
+    ::testing::Values(SignalCase{"init", SIGTERM}, SignalCase{"init", SIGINT},
+                      SignalCase{"sim", SIGTERM}, SignalCase{"sim", SIGINT},
+                      SignalCase{"surface", SIGTERM}, SignalCase{"surface", SIGINT},
+                      SignalCase{"render", SIGTERM}, SignalCase{"render", SIGINT}),
+    [](const auto& info) {
+        return info.param.stage + (info.param.signal == SIGINT ? "_SIGINT" : "_SIGTERM");
+    });
 
 }  // namespace
