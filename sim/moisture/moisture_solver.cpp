@@ -266,6 +266,9 @@ constexpr int kOperatorBatch = 32;
 // gather contracts the rows over y, then over x; the scatter builds the z-row profiles per y once
 // and combines them per x. Particles go in batches, all gathers then all scatters: one particle's
 // gather-reduce-scatter is a long dependency chain, and the batch's gathers are independent.
+// @note Longer than a page on purpose: it is the CG's hot loop, one call per iteration (measured
+// by mpm_bench's Moisture cases and tools/bench_moisture_cost.sh), its batch's gathers and
+// scatters sharing the window and the row weights in one pass.
 template <bool kImplicitRobin>
 void operator_pass(const MoistureParams& mp, const SparseGrid& grid, const MoistureParticles& pp,
                    const MoistureGrid& mg, const Real* x, Real* y,

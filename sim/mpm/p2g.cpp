@@ -21,6 +21,9 @@ namespace {
 constexpr int kMoistureStride = kWindowNodes + 8;
 using Lanes = Eigen::Array<Real, 4, 1>;
 
+// @note Longer than a page on purpose: its body is the step's per-particle scatter, a hot loop
+// (the P2G share of mpm_bench's particle-steps/s), each particle's weights, stress and moisture
+// terms sharing locals in one pass over its window.
 template <bool kMoisture>
 void p2g_impl(const SimState& state, const SymMat3* kirchhoff, SparseGrid& grid, MoistureGrid* mg,
               Real dt, std::vector<std::vector<Real>>& windows) {
