@@ -12,6 +12,7 @@
 
 #include <Eigen/LU>
 
+#include "pipeline/io/checksum.h"
 #include "surfacing/pieces.h"
 #include "surfacing/weld_classes.h"
 
@@ -26,12 +27,10 @@ struct Key3 {
         return a == o.a && b == o.b && c == o.c && piece == o.piece;
     }
 };
+static_assert(sizeof(Key3) == 16, "Key3Hash hashes the key's bytes: no padding");
 struct Key3Hash {
-    size_t operator()(const Key3& k) const {
-        uint64_t h = 1469598103934665603ull;
-        for (uint32_t w : {k.a, k.b, k.c, uint32_t(k.piece)}) h = (h ^ w) * 1099511628211ull;
-        return size_t(h);
-    }
+    // four 32-bit words, no padding: the key's bytes are its identity
+    size_t operator()(const Key3& k) const { return size_t(fnv1a64(&k, sizeof(Key3))); }
 };
 Key3 position_key(const Vec3f& p, int32_t piece) {
     Key3 k{};
