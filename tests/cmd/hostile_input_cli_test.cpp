@@ -373,6 +373,13 @@ const ShotCase kShotCases[] = {
     {"fov_1e_300", [](json& s) { s["render"]["camera"] = {{"fov", 1e-300}}; }, "/render/camera/fov"},
     {"render_fps_1e_300", [](json& s) { s["render"]["fps"] = 1e-300; }, "/render/fps"},
     {"render_fps_1e300", [](json& s) { s["render"]["fps"] = 1e300; }, "/render/fps"},
+    // frame names hold four digits (name.####.ext); an int holds the rest of the integers
+    {"frames_end_1e9", [](json& s) { s["frames"]["end"] = 1000000000; }, "/frames/end = 1000000000: must be in [1, 9999]"},
+    {"frames_end_10000", [](json& s) { s["frames"]["end"] = 10000; }, "/frames/end = 10000: must be in [1, 9999]"},
+    {"frames_end_beyond_int", [](json& s) { s["frames"]["end"] = 100000000000LL; }, "/frames/end = 100000000000"},
+    {"padding_beyond_int",
+     [](json& s) { s["colliders"]["domain"] = {{"min", {-1, -1, -1}}, {"max", {1, 1, 1}}, {"padding", 1000000000000LL}}; },
+     "/colliders/domain/padding = 1000000000000: must be <= 2147483647"},
 };
 
 // a number too large for a double, written into the shot's text
