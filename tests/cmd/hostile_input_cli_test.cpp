@@ -327,6 +327,31 @@ TEST_P(FramesPastTheShot, RefusedAsAUsageError) {
 
 INSTANTIATE_TEST_SUITE_P(EveryStage, FramesPastTheShot, ::testing::ValuesIn(kStages));
 
+// mc-sim's hidden testing flag is checked like --frames: a frame the run does not simulate is a
+// usage error, not a run that never fails
+TEST_F(HostileInput, InjectedNanFrameOutsideTheRunIsAUsageError) {
+    const fs::path shot = write_shot(tiny_shot());
+    run_before("sim", shot);
+    const std::vector<std::pair<std::vector<std::string>, std::string>> cases = {
+        {{"--inject-nan-at-frame", "4"}, "--inject-nan-at-frame 4: outside the frames 1-3 this run simulates (" +
+                                             shot.string() + " (/frames/start, /frames/end))"},
+        {{"--inject-nan-at-frame", "999999999"}, "--inject-nan-at-frame 999999999: outside the frames 1-3"},
+        {{"--inject-nan-at-frame", "-1"}, "--inject-nan-at-frame -1: outside the frames 1-3"},
+        {{"--frames", "1-2", "--inject-nan-at-frame", "3"},
+         "--inject-nan-at-frame 3: outside the frames 1-2 this run simulates (--frames 1-2 of " + shot.string()},
+        {{"--inject-nan-at-frame", "99999999999"}, "--inject-nan-at-frame = \"99999999999\": expected a frame number"},
+        {{"--inject-nan-at-frame", "3x"}, "--inject-nan-at-frame = \"3x\": expected a frame number"},
+        {{"--inject-nan-at-frame", ""}, "--inject-nan-at-frame = \"\": expected a value"},
+    };
+    for (const auto& [args, names] : cases) {
+        const Result r = run("sim", shot, args);
+        EXPECT_EQ(r.code, 2) << r.err;
+        expect_error(r, "sim", {names});
+        EXPECT_FALSE(fs::exists(out() / "sim")) << "nothing written";
+        expect_no_debris(out());
+    }
+}
+
 // the bounds are not the whole story: 0 (all cores) and the cap itself are accepted
 TEST_F(HostileInput, ThreadsZeroAndTheCapAreAccepted) {
     const fs::path shot = write_shot(tiny_shot());
