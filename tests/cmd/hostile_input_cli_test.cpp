@@ -14,8 +14,8 @@
 // - A stage folder that is a symbolic link: refused by every stage, the link and its target kept.
 // - Damaged files: a flipped byte anywhere in a sim cache, an init file, a mesh or an image stops
 //   its reader naming the file and "damaged" (FlippedByte: 26 offsets across the whole of every
-//   kind of file, each export format and the debris points included); mc-sim --resume simulates
-//   a damaged frame again.
+//   kind of file, each export format, obj's material files and the debris points included);
+//   mc-sim --resume simulates a damaged frame again.
 // - SIGTERM and SIGINT: the stage removes what it was writing and exits 128 + the signal.
 // Shots are tiny edits of shots/fig8_a.json (75 particles, 3 frames; longer or finer where a run
 // must be stopped midway).
@@ -875,6 +875,10 @@ const FlipCase kFlipCases[] = {
      "render", {"--frames", "2-2"}},
     {"obj_by_render", surfaced_as("obj"), kUpToSurface, {"surface/boundary.0002.obj", "surface/crack.0002.obj"},
      "render", {"--frames", "2-2"}},
+    // an obj's material file, which the mesh's readers load with it
+    {"obj_material_by_render", surfaced_as("obj"), kUpToSurface,
+     {"surface/boundary.0002.mtl", "surface/crack.0002.mtl"}, "render", {"--frames", "2-2"}},
+    {"obj_material_by_verify", surfaced_as("obj"), kUpToSurface, {"surface/crack.0002.mtl"}, "shot", {}},
     {"glb_by_measure", surfaced_as("glb"), kUpToSurface, {"surface/boundary.0002.glb"}, "measure", {}},
     {"obj_by_measure", surfaced_as("obj"), kUpToSurface, {"surface/crack.0002.obj"}, "measure", {}},
     {"ply_by_measure", surfaced_as("ply"), kUpToSurface, {"surface/boundary.0002.ply", "surface/crack.0002.ply"},
