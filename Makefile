@@ -22,11 +22,12 @@ CGAL_DATA  := /usr/share/doc/libcgal-dev/data.tar.gz
 BUNNY      := shots/assets/bunny00.off
 
 .PHONY: help deps test-deps configure build build-stages demo test bench clean assets shot shots gallery clean-shot \
-        blender-addon blender-still fuzz-deps fuzz-build fuzz sanitize
+        blender-addon blender-still fuzz-deps fuzz-build fuzz sanitize format format-check format-deps
 
-# What only `make test` needs: Debian's Blender 3.4 (the add-on's playback test runs it headless).
+# What only `make test` needs: Debian's Blender 3.4 (the add-on's playback test runs it headless)
+# and clang-format 14 (the format test, tools/check_format.sh).
 # `make demo` never installs it.
-TEST_PACKAGES := blender
+TEST_PACKAGES := blender clang-format
 
 # What only `make fuzz` needs: clang and libFuzzer's runtime (Debian 12: clang 14). `make demo`
 # and `make test` never install them.
@@ -45,6 +46,8 @@ help:
 	@echo "make report                accuracy against run time and the stability matrix (out/report)"
 	@echo "make bench                 build and run the benchmarks"
 	@echo "make fuzz                  libFuzzer on every input reader, FUZZ_SECONDS (60) each ($(BUILD_FUZZ))"
+	@echo "make format               format every C++ source as .clang-format says (docs/style.md)"
+	@echo "make format-check         fail on any source that differs from .clang-format (make test runs it too)"
 	@echo "make sanitize              the unit and stage tests under ASan + UBSan ($(BUILD_ASAN))"
 	@echo "make blender-addon         the Blender add-on as $(BUILD)/mudcrack_blender.zip (tools/blender)"
 	@echo "make blender-still         the demo's last frame rendered by Blender next to mc-render's (docs/blender)"
@@ -67,6 +70,16 @@ deps:
 
 test-deps: deps
 	$(call install_missing,$(TEST_PACKAGES))
+
+# the house format (.clang-format; docs/style.md): only clang-format is needed
+format-deps:
+	$(call install_missing,clang-format)
+
+format: format-deps
+	tools/check_format.sh --fix
+
+format-check: format-deps
+	tools/check_format.sh
 
 assets: $(BUNNY)
 $(BUNNY): | deps

@@ -17,7 +17,8 @@ const std::array<uint8_t, kGlyphHeight>* glyph(char c) {
         {0x0E, 0x11, 0x11, 0x0E, 0x11, 0x11, 0x0E}, {0x0E, 0x11, 0x11, 0x0F, 0x01, 0x02, 0x0C}};
     static const std::array<uint8_t, kGlyphHeight> space{}, dash{0, 0, 0, 0x1F, 0, 0, 0},
         dot{0, 0, 0, 0, 0, 0x0C, 0x0C}, colon{0, 0x0C, 0x0C, 0, 0x0C, 0x0C, 0},
-        slash{0x01, 0x01, 0x02, 0x04, 0x08, 0x10, 0x10}, hash{0x0A, 0x0A, 0x1F, 0x0A, 0x1F, 0x0A, 0x0A},
+        slash{0x01, 0x01, 0x02, 0x04, 0x08, 0x10, 0x10},
+        hash{0x0A, 0x0A, 0x1F, 0x0A, 0x1F, 0x0A, 0x0A},
         box{0x1F, 0x11, 0x11, 0x11, 0x11, 0x11, 0x1F};
     if (c >= '0' && c <= '9') return &digits[c - '0'];
     switch (c) {
@@ -38,8 +39,8 @@ int text_width(const std::string& text, int scale) {
     return (int(text.size()) * (kGlyphWidth + 1) - 1) * scale;
 }
 
-void fill_rect(RenderedImage& image, int x, int y, int w, int h, const std::array<uint8_t, 3>& color,
-               float opacity) {
+void fill_rect(RenderedImage& image, int x, int y, int w, int h,
+               const std::array<uint8_t, 3>& color, float opacity) {
     const int x0 = std::max(x, 0), x1 = std::min(x + w, image.width);
     const int y0 = std::max(y, 0), y1 = std::min(y + h, image.height);
     const float a = std::clamp(opacity, 0.0f, 1.0f);

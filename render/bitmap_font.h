@@ -21,7 +21,7 @@ void draw_text(RenderedImage& image, int x, int y, const std::string& text, int 
                const std::array<uint8_t, 3>& color);
 
 /// Fills the rectangle [x, x+w) x [y, y+h) (clipped) with `color` blended at `opacity` in [0, 1].
-void fill_rect(RenderedImage& image, int x, int y, int w, int h, const std::array<uint8_t, 3>& color,
-               float opacity = 1);
+void fill_rect(RenderedImage& image, int x, int y, int w, int h,
+               const std::array<uint8_t, 3>& color, float opacity = 1);
 
 }  // namespace mudcrack

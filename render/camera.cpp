@@ -65,8 +65,8 @@ Camera default_camera(float fov_deg) {
 
 /// A camera looking at `target` from the default direction, at the smallest distance at which
 /// every point of `points` fits in the frame with `fill` of the half-extent.
-Camera frame_points(const std::vector<Vec3f>& points, const Vec3f& target, float fov_deg, float aspect,
-                    float fill) {
+Camera frame_points(const std::vector<Vec3f>& points, const Vec3f& target, float fov_deg,
+                    float aspect, float fill) {
     Camera cam;
     cam.fov_deg = fov_deg;
     const float az = radians(kAutoAzimuthDeg), el = radians(kAutoElevationDeg);
@@ -106,7 +106,8 @@ Camera auto_frame_orbit(const Bounds& bounds, float fov_deg, float aspect, float
     // polygon of kSides sides drawn around the circle stands for it (it holds the circle).
     constexpr int kSides = 96;
     const Vec3f c = bounds.center();
-    const float r = 0.5f * std::hypot(bounds.max.x() - bounds.min.x(), bounds.max.z() - bounds.min.z()) /
+    const float r = 0.5f *
+                    std::hypot(bounds.max.x() - bounds.min.x(), bounds.max.z() - bounds.min.z()) /
                     std::cos(kPiF / kSides);
     std::vector<Vec3f> rims;
     for (int k = 0; k < kSides; ++k) {

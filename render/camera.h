@@ -8,9 +8,9 @@
 namespace mudcrack {
 
 struct Camera {
-    Vec3f position = Vec3f(3, 2, 3); // [m]
-    Vec3f target = Vec3f(0, 0, 0);   // [m]
-    float fov_deg = 35;              // vertical field of view [deg]
+    Vec3f position = Vec3f(3, 2, 3);  // [m]
+    Vec3f target = Vec3f(0, 0, 0);    // [m]
+    float fov_deg = 35;               // vertical field of view [deg]
 };
 
 /// Default viewing direction of automatic framing: from the front right, above.
@@ -30,7 +30,8 @@ Camera auto_frame_orbit(const Bounds& bounds, float fov_deg, float aspect, float
 
 /// The shot's camera: `params` as given, or auto-framed from `bounds` when params.is_auto (for a
 /// turntable's orbit when `orbit`).
-Camera resolve_camera(const CameraParams& params, const Bounds& bounds, float aspect, bool orbit = false);
+Camera resolve_camera(const CameraParams& params, const Bounds& bounds, float aspect,
+                      bool orbit = false);
 
 /// `camera` rotated by angle_rad about the vertical axis through its target (turntable view;
 /// right-hand rule about +y).

@@ -10,14 +10,15 @@
 namespace mudcrack {
 
 namespace {
-constexpr int kPadding = 6;                             // [px] around and between thumbnails
+constexpr int kPadding = 6;  // [px] around and between thumbnails
 constexpr std::array<uint8_t, 3> kSheetColor{24, 25, 27};
 constexpr std::array<uint8_t, 3> kLabelBox{0, 0, 0};
 constexpr std::array<uint8_t, 3> kLabelText{235, 235, 235};
 }  // namespace
 
 RenderedImage downscale(const RenderedImage& image, int width) {
-    if (width < 1) throw InputError("downscale: width = " + std::to_string(width) + ": expected >= 1");
+    if (width < 1)
+        throw InputError("downscale: width = " + std::to_string(width) + ": expected >= 1");
     RenderedImage out;
     out.width = width;
     out.height = std::max(1, int(std::lround(double(image.height) * width / image.width)));
@@ -25,13 +26,16 @@ RenderedImage downscale(const RenderedImage& image, int width) {
     const double sx = double(image.width) / out.width, sy = double(image.height) / out.height;
     // each output pixel averages the source pixels whose centers fall in its footprint
     for (int y = 0; y < out.height; ++y) {
-        const int y0 = int(y * sy), y1 = std::max(y0 + 1, std::min(image.height, int((y + 1) * sy)));
+        const int y0 = int(y * sy),
+                  y1 = std::max(y0 + 1, std::min(image.height, int((y + 1) * sy)));
         for (int x = 0; x < out.width; ++x) {
-            const int x0 = int(x * sx), x1 = std::max(x0 + 1, std::min(image.width, int((x + 1) * sx)));
+            const int x0 = int(x * sx),
+                      x1 = std::max(x0 + 1, std::min(image.width, int((x + 1) * sx)));
             double sum[3] = {0, 0, 0};
             for (int v = y0; v < y1; ++v)
                 for (int u = x0; u < x1; ++u)
-                    for (int k = 0; k < 3; ++k) sum[k] += image.rgba[(size_t(v) * image.width + u) * 4 + k];
+                    for (int k = 0; k < 3; ++k)
+                        sum[k] += image.rgba[(size_t(v) * image.width + u) * 4 + k];
             const double n = double((y1 - y0) * (x1 - x0));
             for (int k = 0; k < 3; ++k)
                 out.rgba[(size_t(y) * out.width + x) * 4 + k] = uint8_t(std::lround(sum[k] / n));
@@ -48,7 +52,8 @@ int contact_sheet_columns(int n, double thumb_aspect) {
 
 RenderedImage contact_sheet(const std::vector<std::pair<int, RenderedImage>>& frames, int columns) {
     if (frames.empty()) throw InputError("contact sheet: no frames");
-    if (columns < 1) throw InputError("contact sheet: columns = " + std::to_string(columns) + ": expected >= 1");
+    if (columns < 1)
+        throw InputError("contact sheet: columns = " + std::to_string(columns) + ": expected >= 1");
     const int tw = frames[0].second.width, th = frames[0].second.height;
     for (const auto& [frame, img] : frames)
         if (img.width != tw || img.height != th)
@@ -73,7 +78,8 @@ RenderedImage contact_sheet(const std::vector<std::pair<int, RenderedImage>>& fr
         char label[16];
         std::snprintf(label, sizeof label, "%04d", frames[i].first);
         const int lw = text_width(label, scale), lh = kGlyphHeight * scale;
-        fill_rect(sheet, ox, oy + th - lh - 2 * scale, lw + 2 * scale, lh + 2 * scale, kLabelBox, 0.6f);
+        fill_rect(sheet, ox, oy + th - lh - 2 * scale, lw + 2 * scale, lh + 2 * scale, kLabelBox,
+                  0.6f);
         draw_text(sheet, ox + scale, oy + th - lh - scale, label, scale, kLabelText);
     }
     return sheet;

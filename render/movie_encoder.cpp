@@ -1,15 +1,15 @@
 #include "render/movie_encoder.h"
 
-#include <cerrno>
-#include <csignal>
-#include <cstdlib>
-#include <cstring>
-#include <ctime>
 #include <pthread.h>
 #include <spawn.h>
 #include <sys/mman.h>
 #include <sys/wait.h>
 #include <unistd.h>
+#include <cerrno>
+#include <csignal>
+#include <cstdlib>
+#include <cstring>
+#include <ctime>
 #include <vector>
 
 #include "sim/core/error.h"
@@ -45,7 +45,8 @@ std::string last_line_of(int fd) {
     std::string text;
     char buf[4096];
     for (ssize_t n; (n = ::read(fd, buf, sizeof buf)) > 0;) text.append(buf, size_t(n));
-    while (!text.empty() && (text.back() == '\n' || text.back() == '\r' || text.back() == ' ')) text.pop_back();
+    while (!text.empty() && (text.back() == '\n' || text.back() == '\r' || text.back() == ' '))
+        text.pop_back();
     const size_t start = text.find_last_of("\r\n");
     return start == std::string::npos ? text : text.substr(start + 1);
 }
@@ -79,7 +80,9 @@ bool write_all(int fd, const uint8_t* data, size_t size) {
 }  // namespace
 
 MovieEncoder::MovieEncoder(fs::path path, int width, int height, double fps)
-    : m_path(std::move(path)), m_width(width), m_height(height) {
+    : m_path(std::move(path)),
+      m_width(width),
+      m_height(height) {
     if (width < 1 || height < 1 || !(fps > 0))
         throw InputError(m_path.string() + ": movie size " + std::to_string(width) + "x" +
                          std::to_string(height) + " at " + std::to_string(fps) +
@@ -93,17 +96,45 @@ MovieEncoder::MovieEncoder(fs::path path, int width, int height, double fps)
     const std::string size = std::to_string(width) + "x" + std::to_string(height);
     // H.264 needs even dimensions for yuv420p: pad odd sizes by one pixel. -xerror: without it
     // ffmpeg 5.1 exits 0 when it cannot write the file's end (a full disk), leaving a broken movie
-    const std::vector<std::string> args = {
-        ffmpeg, "-hide_banner", "-loglevel", "error", "-xerror", "-nostdin", "-y",
-        "-f", "rawvideo", "-pix_fmt", "rgba", "-s", size, "-framerate", rate, "-i", "pipe:0",
-        "-vf", "pad=ceil(iw/2)*2:ceil(ih/2)*2", "-c:v", "libx264", "-preset", "veryfast",
-        "-crf", "18", "-pix_fmt", "yuv420p", "-movflags", "+faststart", "-f", "mp4", m_tmp.string()};
+    const std::vector<std::string> args = {ffmpeg,
+                                           "-hide_banner",
+                                           "-loglevel",
+                                           "error",
+                                           "-xerror",
+                                           "-nostdin",
+                                           "-y",
+                                           "-f",
+                                           "rawvideo",
+                                           "-pix_fmt",
+                                           "rgba",
+                                           "-s",
+                                           size,
+                                           "-framerate",
+                                           rate,
+                                           "-i",
+                                           "pipe:0",
+                                           "-vf",
+                                           "pad=ceil(iw/2)*2:ceil(ih/2)*2",
+                                           "-c:v",
+                                           "libx264",
+                                           "-preset",
+                                           "veryfast",
+                                           "-crf",
+                                           "18",
+                                           "-pix_fmt",
+                                           "yuv420p",
+                                           "-movflags",
+                                           "+faststart",
+                                           "-f",
+                                           "mp4",
+                                           m_tmp.string()};
     std::vector<char*> argv;
     for (const std::string& a : args) argv.push_back(const_cast<char*>(a.c_str()));
     argv.push_back(nullptr);
 
     int pipe_fd[2];
-    if (pipe(pipe_fd) != 0) throw RuntimeError(m_path.string() + ": pipe() failed: " + std::strerror(errno));
+    if (pipe(pipe_fd) != 0)
+        throw RuntimeError(m_path.string() + ": pipe() failed: " + std::strerror(errno));
     posix_spawn_file_actions_t actions;
     posix_spawn_file_actions_init(&actions);
     posix_spawn_file_actions_adddup2(&actions, pipe_fd[0], 0);
@@ -135,7 +166,8 @@ void MovieEncoder::add_frame(const RenderedImage& image) {
 }
 
 std::string MovieEncoder::ffmpeg_reason() {
-    if (m_fd >= 0 || m_pid > 0) close_and_wait(nullptr);  // ffmpeg's message is complete once it exited
+    // ffmpeg's message is complete once it exited
+    if (m_fd >= 0 || m_pid > 0) close_and_wait(nullptr);
     const std::string line = last_line_of(m_log_fd);
     return line.empty() ? std::string() : ": " + line;
 }
@@ -158,11 +190,12 @@ void MovieEncoder::finish() {
     std::error_code ec;
     if (!WIFEXITED(status) || WEXITSTATUS(status) != 0 || m_frames == 0) {
         fs::remove(m_tmp, ec);
-        const std::string how = WIFEXITED(status)     ? "exit code " + std::to_string(WEXITSTATUS(status))
+        const std::string how = WIFEXITED(status)
+                                    ? "exit code " + std::to_string(WEXITSTATUS(status))
                                 : WIFSIGNALED(status) ? "signal " + std::to_string(WTERMSIG(status))
                                                       : "status " + std::to_string(status);
-        throw RuntimeError(m_path.string() + ": ffmpeg failed (" + how + ", " + std::to_string(m_frames) +
-                           " frames sent)" + ffmpeg_reason());
+        throw RuntimeError(m_path.string() + ": ffmpeg failed (" + how + ", " +
+                           std::to_string(m_frames) + " frames sent)" + ffmpeg_reason());
     }
     fs::rename(m_tmp, m_path, ec);
     if (ec) {

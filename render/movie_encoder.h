@@ -2,9 +2,9 @@
 /// Review movies through Debian's ffmpeg: rendered frames are streamed as raw RGBA into an
 /// `ffmpeg` child process (H.264 / libx264, yuv420p, odd sizes padded to even), so no
 /// intermediate files are needed and frames need not stay in memory.
+#include <sys/types.h>
 #include <filesystem>
 #include <string>
-#include <sys/types.h>
 
 #include "render/renderer.h"
 

@@ -8,7 +8,9 @@ namespace mudcrack {
 namespace {
 
 constexpr std::array<std::pair<ColorMode, const char*>, 3> kColorModes = {
-    {{ColorMode::Moisture, "moisture"}, {ColorMode::Hardening, "hardening"}, {ColorMode::Plain, "plain"}}};
+    {{ColorMode::Moisture, "moisture"},
+     {ColorMode::Hardening, "hardening"},
+     {ColorMode::Plain, "plain"}}};
 
 }  // namespace
 
@@ -35,7 +37,8 @@ std::string color_mode_glsl_defines() {
     for (const auto& [m, name] : kColorModes) {
         std::string upper = name;
         for (char& c : upper) c = char(std::toupper(static_cast<unsigned char>(c)));
-        lines += "#define MC_COLOR_MODE_" + upper + " " + std::to_string(static_cast<int>(m)) + "\n";
+        lines +=
+            "#define MC_COLOR_MODE_" + upper + " " + std::to_string(static_cast<int>(m)) + "\n";
     }
     return lines;
 }

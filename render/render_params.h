@@ -12,9 +12,9 @@ namespace mudcrack {
 /// (MC_COLOR_MODE_<NAME>, the enum's values) both come from one table, kColorModes
 /// (render_params.cpp).
 enum class ColorMode {
-    Moisture = 0,  // wetter is darker (the paper's convention), from per-vertex saturation
-    Hardening = 1, // alpha through a diverging colormap (the paper's Fig. 9)
-    Plain = 2,     // albedo only
+    Moisture = 0,   // wetter is darker (the paper's convention), from per-vertex saturation
+    Hardening = 1,  // alpha through a diverging colormap (the paper's Fig. 9)
+    Plain = 2,      // albedo only
 };
 
 /// The image sides /render/resolution accepts (the shot spec's bounds) and the renderer's
@@ -23,10 +23,10 @@ constexpr int kMinResolution = 16;
 constexpr int kMaxResolution = 16384;
 
 struct CameraParams {
-    bool is_auto = true;           // frame the bounds automatically
-    Vec3 position = Vec3(3, 2, 3); // [m]
-    Vec3 target = Vec3(0, 0, 0);   // [m]
-    Real fov_deg = 35;             // vertical field of view [deg]
+    bool is_auto = true;            // frame the bounds automatically
+    Vec3 position = Vec3(3, 2, 3);  // [m]
+    Vec3 target = Vec3(0, 0, 0);    // [m]
+    Real fov_deg = 35;              // vertical field of view [deg]
 };
 
 struct RenderParams {
@@ -34,13 +34,14 @@ struct RenderParams {
     int height = 540;
     ColorMode color_mode = ColorMode::Moisture;
     CameraParams camera;
-    int samples = 4;                // anti-aliasing samples per pixel (MSAA)
-    bool turntable = false;         // render a turntable orbit (on when the shot has /render/turntable)
-    int turntable_views = 36;       // views in the orbit
-    int turntable_frame = -1;       // frame to orbit; -1 = the last frame
-    Vec3 albedo = Vec3(0.55, 0.42, 0.30); // dry soil color (linear RGB)
-    Real alpha_range = 0.5;         // hardening colormap spans alpha0 -/+ this
-    Real fps = 24;                  // movie frame rate
+    int samples = 4;  // anti-aliasing samples per pixel (MSAA)
+    // render a turntable orbit (on when the shot has /render/turntable)
+    bool turntable = false;
+    int turntable_views = 36;              // views in the orbit
+    int turntable_frame = -1;              // frame to orbit; -1 = the last frame
+    Vec3 albedo = Vec3(0.55, 0.42, 0.30);  // dry soil color (linear RGB)
+    Real alpha_range = 0.5;                // hardening colormap spans alpha0 -/+ this
+    Real fps = 24;                         // movie frame rate
 };
 
 }  // namespace mudcrack

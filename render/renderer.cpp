@@ -1,9 +1,9 @@
 #include "render/renderer.h"
 
 #define GL_GLEXT_PROTOTYPES
-#include <GL/osmesa.h>
 #include <GL/gl.h>
 #include <GL/glext.h>
+#include <GL/osmesa.h>
 
 #include <algorithm>
 #include <cmath>
@@ -37,10 +37,10 @@ constexpr float kFillColor[3] = {0.26f, 0.30f, 0.38f};
 constexpr float kRimColor[3] = {1.10f, 1.10f, 1.15f};
 constexpr float kSkyColor[3] = {0.26f, 0.29f, 0.34f};
 constexpr float kBounceColor[3] = {0.10f, 0.09f, 0.08f};
-constexpr float kCrackTint[3] = {0.62f, 0.50f, 0.42f};   // darker, warmer interior soil
-constexpr float kGroundColor[3] = {0.16f, 0.16f, 0.16f}; // neutral grey, linear
-constexpr float kBackgroundTop[3] = {0.40f, 0.43f, 0.47f};    // display space
-constexpr float kBackgroundBottom[3] = {0.15f, 0.16f, 0.17f}; // display space
+constexpr float kCrackTint[3] = {0.62f, 0.50f, 0.42f};         // darker, warmer interior soil
+constexpr float kGroundColor[3] = {0.16f, 0.16f, 0.16f};       // neutral grey, linear
+constexpr float kBackgroundTop[3] = {0.40f, 0.43f, 0.47f};     // display space
+constexpr float kBackgroundBottom[3] = {0.15f, 0.16f, 0.17f};  // display space
 constexpr float kExposure = 0.6f;
 constexpr float kShadowRadiusTexels = 3.5f;
 
@@ -97,8 +97,8 @@ struct Program {
         GLint ok = 0;
         glGetProgramiv(id, GL_LINK_STATUS, &ok);
         if (!ok)
-            throw RuntimeError(std::string("render: program ") + name + " does not link: " +
-                               info_log(id, glGetProgramInfoLog));
+            throw RuntimeError(std::string("render: program ") + name +
+                               " does not link: " + info_log(id, glGetProgramInfoLog));
     }
     GLint loc(const char* name) {
         auto it = locations.find(name);
@@ -110,7 +110,9 @@ struct Program {
     void set(const char* n, const Vec3f& v) { glUniform3f(loc(n), v.x(), v.y(), v.z()); }
     void set(const char* n, const float (&v)[3]) { glUniform3f(loc(n), v[0], v[1], v[2]); }
     void set(const char* n, float a, float b) { glUniform2f(loc(n), a, b); }
-    void set(const char* n, const Eigen::Matrix4f& m) { glUniformMatrix4fv(loc(n), 1, GL_FALSE, m.data()); }
+    void set(const char* n, const Eigen::Matrix4f& m) {
+        glUniformMatrix4fv(loc(n), 1, GL_FALSE, m.data());
+    }
 };
 
 /// One uploaded mesh.
@@ -125,7 +127,8 @@ struct GpuMesh {
 std::vector<Vec3f> vertex_normals(const TriMesh& m) {
     std::vector<Vec3f> n(m.positions.size(), Vec3f::Zero());
     for (const Tri& f : m.faces) {
-        const Vec3f fn = (m.positions[f[1]] - m.positions[f[0]]).cross(m.positions[f[2]] - m.positions[f[0]]);
+        const Vec3f fn =
+            (m.positions[f[1]] - m.positions[f[0]]).cross(m.positions[f[2]] - m.positions[f[0]]);
         for (int k = 0; k < 3; ++k) n[f[k]] += fn;
     }
     for (Vec3f& v : n) {
@@ -193,23 +196,33 @@ struct Renderer::Impl {
     void create_framebuffers();
     void release_scene();
     void draw_shadow_pass(const Eigen::Matrix4f& light_view, const Eigen::Matrix4f& light_proj);
-    void set_shading_uniforms(Program& p, const Camera& camera, const Eigen::Matrix4f& light_view_proj,
-                              const Vec3f& key, const Vec3f& fill, const Vec3f& rim);
+    void set_shading_uniforms(Program& p, const Camera& camera,
+                              const Eigen::Matrix4f& light_view_proj, const Vec3f& key,
+                              const Vec3f& fill, const Vec3f& rim);
     /// The particles as sphere impostors (when there are any).
-    void draw_sprites(const Camera& camera, const Eigen::Matrix4f& view, const Eigen::Matrix4f& proj,
-                      const Eigen::Matrix4f& light_view_proj, const Vec3f& key, const Vec3f& fill, const Vec3f& rim);
+    void draw_sprites(const Camera& camera, const Eigen::Matrix4f& view,
+                      const Eigen::Matrix4f& proj, const Eigen::Matrix4f& light_view_proj,
+                      const Vec3f& key, const Vec3f& fill, const Vec3f& rim);
     /// The ground plane under the stage, blended into the background.
-    void draw_ground(const Camera& camera, const Eigen::Matrix4f& view_proj, const Eigen::Matrix4f& light_view_proj,
-                     const Vec3f& key, const Vec3f& fill, const Vec3f& rim, const Vec3f& center, float radius,
-                     float ground_radius);
+    void draw_ground(const Camera& camera, const Eigen::Matrix4f& view_proj,
+                     const Eigen::Matrix4f& light_view_proj, const Vec3f& key, const Vec3f& fill,
+                     const Vec3f& rim, const Vec3f& center, float radius, float ground_radius);
     /// Resolves the multisampled buffers and reads the image back, top row first.
     RenderedImage read_back(int w, int h);
 };
 
 void Renderer::Impl::create_context() {
-    const int attribs[] = {OSMESA_FORMAT, OSMESA_RGBA, OSMESA_DEPTH_BITS, 24, OSMESA_PROFILE,
-                           OSMESA_CORE_PROFILE, OSMESA_CONTEXT_MAJOR_VERSION, 3,
-                           OSMESA_CONTEXT_MINOR_VERSION, 3, 0};
+    const int attribs[] = {OSMESA_FORMAT,
+                           OSMESA_RGBA,
+                           OSMESA_DEPTH_BITS,
+                           24,
+                           OSMESA_PROFILE,
+                           OSMESA_CORE_PROFILE,
+                           OSMESA_CONTEXT_MAJOR_VERSION,
+                           3,
+                           OSMESA_CONTEXT_MINOR_VERSION,
+                           3,
+                           0};
     context = OSMesaCreateContextAttribs(attribs, nullptr);
     if (!context) throw RuntimeError("render: OSMesaCreateContextAttribs (GL 3.3 core) failed");
     dummy_buffer.assign(16 * 16 * 4, 0);
@@ -243,8 +256,9 @@ void Renderer::Impl::create_framebuffers() {
     const GLenum both[2] = {GL_COLOR_ATTACHMENT0, GL_COLOR_ATTACHMENT1};
     glDrawBuffers(2, both);
     if (glCheckFramebufferStatus(GL_FRAMEBUFFER) != GL_FRAMEBUFFER_COMPLETE)
-        throw RuntimeError("render: the multisampled framebuffer is incomplete (" + std::to_string(w) +
-                           "x" + std::to_string(h) + ", " + std::to_string(samples) + " samples)");
+        throw RuntimeError("render: the multisampled framebuffer is incomplete (" +
+                           std::to_string(w) + "x" + std::to_string(h) + ", " +
+                           std::to_string(samples) + " samples)");
 
     // single-sample resolve target
     glGenRenderbuffers(1, &resolve_color);
@@ -256,7 +270,8 @@ void Renderer::Impl::create_framebuffers() {
     glGenFramebuffers(1, &resolve_fbo);
     glBindFramebuffer(GL_FRAMEBUFFER, resolve_fbo);
     glFramebufferRenderbuffer(GL_FRAMEBUFFER, GL_COLOR_ATTACHMENT0, GL_RENDERBUFFER, resolve_color);
-    glFramebufferRenderbuffer(GL_FRAMEBUFFER, GL_COLOR_ATTACHMENT1, GL_RENDERBUFFER, resolve_coverage);
+    glFramebufferRenderbuffer(GL_FRAMEBUFFER, GL_COLOR_ATTACHMENT1, GL_RENDERBUFFER,
+                              resolve_coverage);
     if (glCheckFramebufferStatus(GL_FRAMEBUFFER) != GL_FRAMEBUFFER_COMPLETE)
         throw RuntimeError("render: the resolve framebuffer is incomplete");
 
@@ -310,15 +325,19 @@ Renderer::Renderer(const RenderParams& params, const ShadingOptions& options)
     if (params.samples < 1)
         throw InputError("render: samples = " + std::to_string(params.samples) + ": expected >= 1");
     if (!(params.alpha_range > 0))
-        throw InputError("render: alpha_range = " + std::to_string(params.alpha_range) + ": expected > 0");
+        throw InputError("render: alpha_range = " + std::to_string(params.alpha_range) +
+                         ": expected > 0");
     r.params = params;
     r.options = options;
     r.create_context();
-    r.background.build("background", shaders::kBackgroundVertex, shaders::kBackgroundFragment, false);
+    r.background.build("background", shaders::kBackgroundVertex, shaders::kBackgroundFragment,
+                       false);
     r.mesh.build("mesh", shaders::kMeshVertex, shaders::kMeshFragment, true);
-    r.mesh_shadow.build("mesh_shadow", shaders::kMeshShadowVertex, shaders::kDepthOnlyFragment, false);
+    r.mesh_shadow.build("mesh_shadow", shaders::kMeshShadowVertex, shaders::kDepthOnlyFragment,
+                        false);
     r.sprite.build("sprite", shaders::kSpriteVertex, shaders::kSpriteFragment, true);
-    r.sprite_shadow.build("sprite_shadow", shaders::kSpriteShadowVertex, shaders::kSpriteShadowFragment, false);
+    r.sprite_shadow.build("sprite_shadow", shaders::kSpriteShadowVertex,
+                          shaders::kSpriteShadowFragment, false);
     r.ground.build("ground", shaders::kGroundVertex, shaders::kGroundFragment, true);
     glGenVertexArrays(1, &r.empty_vao);
     r.create_framebuffers();
@@ -340,11 +359,13 @@ void Renderer::set_scene(const Scene& scene, const Bounds& stage) {
     const ParticleSprites& ps = scene.particles;
     if ((!ps.saturation.empty() && ps.saturation.size() != ps.size()) ||
         (!ps.alpha.empty() && ps.alpha.size() != ps.size()))
-        throw InputError("render: particles: saturation/alpha have " + std::to_string(ps.saturation.size()) +
-                         "/" + std::to_string(ps.alpha.size()) + " entries, expected 0 or " +
+        throw InputError("render: particles: saturation/alpha have " +
+                         std::to_string(ps.saturation.size()) + "/" +
+                         std::to_string(ps.alpha.size()) + " entries, expected 0 or " +
                          std::to_string(ps.size()));
     if (ps.size() > 0 && !(ps.radius > 0))
-        throw InputError("render: particles: radius = " + std::to_string(ps.radius) + ": expected > 0");
+        throw InputError("render: particles: radius = " + std::to_string(ps.radius) +
+                         ": expected > 0");
     r.make_current();
     r.release_scene();
     r.stage = stage.is_empty() ? scene_bounds(scene) : stage;
@@ -410,7 +431,8 @@ void Renderer::set_scene(const Scene& scene, const Bounds& stage) {
     check_gl("scene upload");
 }
 
-void Renderer::Impl::draw_shadow_pass(const Eigen::Matrix4f& light_view, const Eigen::Matrix4f& light_proj) {
+void Renderer::Impl::draw_shadow_pass(const Eigen::Matrix4f& light_view,
+                                      const Eigen::Matrix4f& light_proj) {
     glBindFramebuffer(GL_FRAMEBUFFER, shadow_fbo);
     glViewport(0, 0, kShadowMapSize, kShadowMapSize);
     glEnable(GL_DEPTH_TEST);
@@ -465,7 +487,8 @@ void Renderer::Impl::set_shading_uniforms(Program& p, const Camera& camera,
     p.set("u_shadow_radius", kShadowRadiusTexels);
     const float texel_world = 2.0f * std::max(stage.radius(), 1e-6f) * 1.1f / kShadowMapSize;
     p.set("u_shadow_offset", 1.5f * texel_world);
-    p.set("u_stage_y", stage.is_empty() ? 0.0f : stage.min.y(), stage.is_empty() ? 1.0f : stage.max.y());
+    p.set("u_stage_y", stage.is_empty() ? 0.0f : stage.min.y(),
+          stage.is_empty() ? 1.0f : stage.max.y());
 }
 
 RenderedImage Renderer::render(const Camera& camera) {
@@ -491,8 +514,8 @@ RenderedImage Renderer::render(const Camera& camera) {
     // shadow map: orthographic view of the stage's bounding sphere from the key light
     const float shadow_r = radius * 1.1f;
     const Eigen::Matrix4f light_view = look_at(center + key * 2.0f * shadow_r, center, up);
-    const Eigen::Matrix4f light_proj = ortho_matrix(-shadow_r, shadow_r, -shadow_r, shadow_r,
-                                                    0.5f * shadow_r, 3.5f * shadow_r);
+    const Eigen::Matrix4f light_proj =
+        ortho_matrix(-shadow_r, shadow_r, -shadow_r, shadow_r, 0.5f * shadow_r, 3.5f * shadow_r);
     const Eigen::Matrix4f light_view_proj = light_proj * light_view;
     r.draw_shadow_pass(light_view, light_proj);
 
@@ -500,7 +523,8 @@ RenderedImage Renderer::render(const Camera& camera) {
     const float ground_radius = 3.0f * radius;
     const float dist = (camera.position - center).norm();
     const float far = dist + 1.5f * ground_radius + radius;
-    const float near = std::max(far * 1e-4f, std::min(0.05f * dist, std::max(dist - radius, 1e-4f) * 0.5f));
+    const float near =
+        std::max(far * 1e-4f, std::min(0.05f * dist, std::max(dist - radius, 1e-4f) * 0.5f));
     const Eigen::Matrix4f view = view_matrix(camera);
     const Eigen::Matrix4f proj = perspective_matrix(camera.fov_deg, aspect, near, far);
     const Eigen::Matrix4f view_proj = proj * view;
@@ -538,14 +562,16 @@ RenderedImage Renderer::render(const Camera& camera) {
     // particles as ray-cast sphere impostors, the ground plane, then the image
     r.draw_sprites(camera, view, proj, light_view_proj, key, fill, rim);
     if (r.options.has_ground && has_stage)
-        r.draw_ground(camera, view_proj, light_view_proj, key, fill, rim, center, radius, ground_radius);
+        r.draw_ground(camera, view_proj, light_view_proj, key, fill, rim, center, radius,
+                      ground_radius);
     return r.read_back(w, h);
 }
 
 // particles as ray-cast sphere impostors, silhouettes anti-aliased by alpha-to-coverage
-void Renderer::Impl::draw_sprites(const Camera& camera, const Eigen::Matrix4f& view, const Eigen::Matrix4f& proj,
-                                  const Eigen::Matrix4f& light_view_proj, const Vec3f& key, const Vec3f& fill,
-                                  const Vec3f& rim) {
+void Renderer::Impl::draw_sprites(const Camera& camera, const Eigen::Matrix4f& view,
+                                  const Eigen::Matrix4f& proj,
+                                  const Eigen::Matrix4f& light_view_proj, const Vec3f& key,
+                                  const Vec3f& fill, const Vec3f& rim) {
     if (sprite_count == 0) return;
     glUseProgram(sprite.id);
     set_shading_uniforms(sprite, camera, light_view_proj, key, fill, rim);
@@ -553,7 +579,8 @@ void Renderer::Impl::draw_sprites(const Camera& camera, const Eigen::Matrix4f& v
     sprite.set("u_proj", proj);
     sprite.set("u_world_from_view", Eigen::Matrix4f(view.inverse()));
     sprite.set("u_radius", sprite_radius);
-    const float pixel_angle = 2.0f * std::tan(0.5f * camera.fov_deg * float(kPi) / 180.0f) / float(params.height);
+    const float pixel_angle =
+        2.0f * std::tan(0.5f * camera.fov_deg * float(kPi) / 180.0f) / float(params.height);
     sprite.set("u_pixel_angle", pixel_angle);
     glBindVertexArray(sprite_vao);
     if (!sprite_has_saturation) glVertexAttrib1f(1, 0.0f);
@@ -565,8 +592,9 @@ void Renderer::Impl::draw_sprites(const Camera& camera, const Eigen::Matrix4f& v
 
 // ground plane at the stage's lowest point, blended into the background, no coverage
 void Renderer::Impl::draw_ground(const Camera& camera, const Eigen::Matrix4f& view_proj,
-                                 const Eigen::Matrix4f& light_view_proj, const Vec3f& key, const Vec3f& fill,
-                                 const Vec3f& rim, const Vec3f& center, float radius, float ground_radius) {
+                                 const Eigen::Matrix4f& light_view_proj, const Vec3f& key,
+                                 const Vec3f& fill, const Vec3f& rim, const Vec3f& center,
+                                 float radius, float ground_radius) {
     glUseProgram(ground.id);
     set_shading_uniforms(ground, camera, light_view_proj, key, fill, rim);
     ground.set("u_view_proj", view_proj);
@@ -590,7 +618,8 @@ RenderedImage Renderer::Impl::read_back(int w, int h) {
     glBindFramebuffer(GL_DRAW_FRAMEBUFFER, resolve_fbo);
     for (int a = 0; a < 2; ++a) {
         const GLenum attachment = GLenum(GL_COLOR_ATTACHMENT0 + a);
-        const GLenum draw[2] = {a == 0 ? attachment : GLenum(GL_NONE), a == 1 ? attachment : GLenum(GL_NONE)};
+        const GLenum draw[2] = {a == 0 ? attachment : GLenum(GL_NONE),
+                                a == 1 ? attachment : GLenum(GL_NONE)};
         glReadBuffer(attachment);
         glDrawBuffers(2, draw);
         glBlitFramebuffer(0, 0, w, h, 0, 0, w, h, GL_COLOR_BUFFER_BIT, GL_NEAREST);

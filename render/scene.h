@@ -20,10 +20,10 @@ struct SceneMesh {
 
 /// Particles drawn as shaded spheres of one radius.
 struct ParticleSprites {
-    std::vector<Vec3f> positions;  // centers [m], (n)
-    std::vector<float> saturation; // s in [0,1], (n) or empty (dry)
-    std::vector<float> alpha;      // hardening state, (n) or empty (alpha0: neutral)
-    float radius = 0.01f;          // [m]
+    std::vector<Vec3f> positions;   // centers [m], (n)
+    std::vector<float> saturation;  // s in [0,1], (n) or empty (dry)
+    std::vector<float> alpha;       // hardening state, (n) or empty (alpha0: neutral)
+    float radius = 0.01f;           // [m]
     size_t size() const { return positions.size(); }
 };
 

@@ -13,9 +13,9 @@ namespace mudcrack {
 
 /// Neo-Hookean solid (Tu et al. 2023 Eq. 4-5).
 struct ElasticParams {
-    Real density = 1;           // rho_s, solid density [kg/m^3]
-    Real youngs_modulus = 2000; // E [Pa]
-    Real poisson_ratio = 0.35;  // nu [-]
+    Real density = 1;            // rho_s, solid density [kg/m^3]
+    Real youngs_modulus = 2000;  // E [Pa]
+    Real poisson_ratio = 0.35;   // nu [-]
     Real mu() const { return youngs_modulus / (2 * (1 + poisson_ratio)); }
     Real lambda() const {
         return youngs_modulus * poisson_ratio / ((1 + poisson_ratio) * (1 - 2 * poisson_ratio));
@@ -28,12 +28,12 @@ struct ElasticParams {
 
 /// Non-associated Cam-Clay (Wolper et al. 2019; Tu et al. 2023 Eq. 7-9, 12).
 struct NaccParams {
-    Real alpha0 = 0;       // initial hardening state (ziran's logJp) [-]
-    Real beta0 = 1;        // cohesion when dry (s = 0) [-]
-    Real beta1 = 1;        // cohesion when saturated (s = 1) [-]
-    Real xi = 1;           // hardening factor in p0 = kappa sinh(xi max(-alpha, 0)) [-]
-    Real M = 1.87;         // critical-state slope (friction) [-]
-    bool hardening = true; // update alpha in the return mapping
+    Real alpha0 = 0;        // initial hardening state (ziran's logJp) [-]
+    Real beta0 = 1;         // cohesion when dry (s = 0) [-]
+    Real beta1 = 1;         // cohesion when saturated (s = 1) [-]
+    Real xi = 1;            // hardening factor in p0 = kappa sinh(xi max(-alpha, 0)) [-]
+    Real M = 1.87;          // critical-state slope (friction) [-]
+    bool hardening = true;  // update alpha in the return mapping
     /// Tensile damage (docs/physics.md §6.2): the softening returns' alpha increments,
     /// divided by this, add to a particle's damage d in [0, 1], and its cohesion is beta (1 - d).
     /// 0: no damage (no array, no cost).
@@ -42,36 +42,38 @@ struct NaccParams {
 
 /// Pore water (Tu et al. 2023 Sections 4.1, 5.2; docs/physics.md §3-4).
 struct MoistureParams {
-    Real eta = 0.5;          // porosity: theta in [0, eta], Jw = 1 - eta (1 - s) [-]
-    Real k_r = 1;            // rho_s / rho_w [-]
-    Real eps = 0.5;          // saturation hardening rate, alpha += eps log(Jw ratio) [-]
-    Real D = 0.02;           // diffusivity [m^2/s]
-    Real lambda = 0.1;       // evaporation coefficient [m/s]
-    Real theta0 = 0;         // ambient moisture [-]
-    Real theta_init = -1;    // initial moisture; < 0 means eta (fully saturated) [-]
+    Real eta = 0.5;            // porosity: theta in [0, eta], Jw = 1 - eta (1 - s) [-]
+    Real k_r = 1;              // rho_s / rho_w [-]
+    Real eps = 0.5;            // saturation hardening rate, alpha += eps log(Jw ratio) [-]
+    Real D = 0.02;             // diffusivity [m^2/s]
+    Real lambda = 0.1;         // evaporation coefficient [m/s]
+    Real theta0 = 0;           // ambient moisture [-]
+    Real theta_init = -1;      // initial moisture; < 0 means eta (fully saturated) [-]
     Real cg_tolerance = 1e-6;  // relative residual [-]
     int cg_max_iterations = 50;
-    bool seal_colliders = true;  // faces against the ground/walls do not evaporate
-    bool implicit_robin = false; // evaporation term in the matrix instead of the rhs
+    bool seal_colliders = true;   // faces against the ground/walls do not evaporate
+    bool implicit_robin = false;  // evaporation term in the matrix instead of the rhs
     /// Grid: the paper's r term scattered from the particles whose stencil touches a surface node.
     /// Surface: the particles of the exposed layer lose water themselves, exactly (an exponential
     /// decay towards theta0), and the CG carries only diffusion (docs/physics.md §6.3).
     enum class Evaporation { Grid, Surface } evaporation = Evaporation::Grid;
-    int interval = 1;            // solve moisture every k MPM steps with dt_m = k dt
-    Real max_log_jw_step = 1e-3; // cap on |log(Jw^n/Jw^{n+1})| per step (docs/physics.md §3.2)
+    int interval = 1;             // solve moisture every k MPM steps with dt_m = k dt
+    Real max_log_jw_step = 1e-3;  // cap on |log(Jw^n/Jw^{n+1})| per step (docs/physics.md §3.2)
     /// The particles' starting moisture: theta_init, or eta (fully saturated, paper Section 7.1)
     /// when theta_init < 0; clamped to [0, eta] (min, then max: no precondition on eta, which the
     /// shot loader reads before it reports a bad one).
-    Real initial_theta() const { return std::max(Real(0), std::min(theta_init < 0 ? eta : theta_init, eta)); }
+    Real initial_theta() const {
+        return std::max(Real(0), std::min(theta_init < 0 ? eta : theta_init, eta));
+    }
 };
 
 enum class ColliderMode { Sticky, Slip, Separate };
 
 /// A horizontal ground plane y = height with outward normal +y.
 struct GroundParams {
-    Real height = 0;                       // [m]
+    Real height = 0;  // [m]
     ColliderMode mode = ColliderMode::Sticky;
-    Real friction = 0;                     // Coulomb coefficient (slip/separate) [-]
+    Real friction = 0;  // Coulomb coefficient (slip/separate) [-]
 };
 
 /// Axis-aligned simulation box: nodes within `padding` cells of a wall lose their outward
@@ -84,13 +86,14 @@ struct DomainParams {
 };
 
 struct TimeParams {
-    Real dt_max = 1e-3;        // [s]
-    Real dt_fixed = 0;         // > 0 forces this dt (refused at load if above the elastic bound) [s]
-    Real cfl_velocity = 0.6;   // C_v: dt <= C_v h / max|v|
-    Real cfl_elastic = 0.5;    // C_E: dt <= C_E h / c_p
-    Real fps = 24;             // frames per second
-    int frame_start = 1;       // first frame (1-based)
-    int frame_end = 24;        // last frame, inclusive
+    Real dt_max = 1e-3;  // [s]
+    // > 0 forces this dt (refused at load if above the elastic bound) [s]
+    Real dt_fixed = 0;
+    Real cfl_velocity = 0.6;  // C_v: dt <= C_v h / max|v|
+    Real cfl_elastic = 0.5;   // C_E: dt <= C_E h / c_p
+    Real fps = 24;            // frames per second
+    int frame_start = 1;      // first frame (1-based)
+    int frame_end = 24;       // last frame, inclusive
 };
 
 struct SimModel {
@@ -98,12 +101,12 @@ struct SimModel {
     Vec3 gravity = Vec3(0, -9.81, 0);      // [m/s^2]
     Vec3 initial_velocity = Vec3::Zero();  // of every particle at t = 0 [m/s]
     ElasticParams elastic;
-    std::optional<NaccParams> nacc;        // nullopt: pure elasticity
-    std::optional<MoistureParams> moisture;// nullopt: no theta arrays, no moisture grid, no CG
+    std::optional<NaccParams> nacc;          // nullopt: pure elasticity
+    std::optional<MoistureParams> moisture;  // nullopt: no theta arrays, no moisture grid, no CG
     std::optional<GroundParams> ground;
     DomainParams domain;
     TimeParams time;
-    int checkpoint_every = 10;             // frames between full-precision checkpoints (0: off)
+    int checkpoint_every = 10;  // frames between full-precision checkpoints (0: off)
     CacheAttributes cache;
 };
 

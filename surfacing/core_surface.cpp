@@ -27,9 +27,9 @@ struct PointOwners {
     WeldReps rep{};                  // class representative of each owner slot
     Vec3 y0 = Vec3::Zero();          // rest position [m]
     RestPointKind kind = RestPointKind::Particle;
-    int32_t point = 0;               // the rest point's particle, edge, face or tet id
-    int n_edges = 0;                 // edges between owners: 0, 1 (edge), 3 (face), 6 (tet)
-    std::array<int32_t, 6> edge{};   // their ids, in the order of the weld tables' mask bits
+    int32_t point = 0;              // the rest point's particle, edge, face or tet id
+    int n_edges = 0;                // edges between owners: 0, 1 (edge), 3 (face), 6 (tet)
+    std::array<int32_t, 6> edge{};  // their ids, in the order of the weld tables' mask bits
 
     /// The weld classes under a mask of cut edges (bit k: edge[k]).
     WeldReps reps_under(unsigned mask) const {
@@ -50,14 +50,16 @@ struct PointOwners {
 
 /// What the plates mode adds to a frame's cores (docs/physics.md §5.7).
 struct PlateCores {
-    const WallRestPositions* walls = nullptr;   // smoothed rest points of the crack walls
-    const WallGraph* wall_graph = nullptr;       // the shot's walls, smoothed where they are
-    const WallDeformation* wall_motion = nullptr; // smoothed motion of the particles along them
-    int wall_steps = 0;                          // Taubin steps over wall_graph
-    const std::vector<int32_t>* piece = nullptr; // piece of each particle (kDebris: none)
-    Real close_gap = 0;                          // [m] sides closer than this meet
-    const std::vector<int32_t>* cut_frame = nullptr; // the frame each edge is cut from (ShotFracture)
-    Real open_speed = 0;                         // [m per frame] how fast a fresh crack's sides part
+    const WallRestPositions* walls = nullptr;      // smoothed rest points of the crack walls
+    const WallGraph* wall_graph = nullptr;         // the shot's walls, smoothed where they are
+    const WallDeformation* wall_motion = nullptr;  // smoothed motion of the particles along them
+    int wall_steps = 0;                            // Taubin steps over wall_graph
+    const std::vector<int32_t>* piece = nullptr;   // piece of each particle (kDebris: none)
+    Real close_gap = 0;                            // [m] sides closer than this meet
+    // the frame each edge is cut from (ShotFracture)
+    const std::vector<int32_t>* cut_frame = nullptr;
+    // [m per frame] how fast a fresh crack's sides part
+    Real open_speed = 0;
 };
 
 /// [particle spacings per frame] A fresh crack whose sides were welded apart from each other
@@ -80,9 +82,14 @@ Real smoothstep(Real a, Real b, Real x) {
 /// Eq. 13, broken edges, and the shading attributes.
 class FrameCores {
 public:
-    FrameCores(const CoreTopology& topo, const ParticleFrame& frame, const std::vector<uint8_t>& is_broken,
-               const SurfaceParams& params, const PlateCores& plates = {})
-        : m_topo(topo), m_frame(frame), m_broken(is_broken), m_plates(plates), m_x(topo.n_particles),
+    FrameCores(const CoreTopology& topo, const ParticleFrame& frame,
+               const std::vector<uint8_t>& is_broken, const SurfaceParams& params,
+               const PlateCores& plates = {})
+        : m_topo(topo),
+          m_frame(frame),
+          m_broken(is_broken),
+          m_plates(plates),
+          m_x(topo.n_particles),
           m_A(topo.n_particles) {
         const bool has_jw = !frame.Jw.empty() && params.mode == SurfaceMode::Ours;
         const bool has_fe = !frame.Fe.empty();
@@ -115,7 +122,8 @@ public:
         o.n = 2;
         o.owner = {m_topo.edges[e][0], m_topo.edges[e][1], 0, 0};
         o.rep = {0, int8_t(m_broken[e] ? 1 : 0), 2, 3};
-        o.y0 = rest(RestPointKind::EdgeMidpoint, e, (m_topo.X[o.owner[0]] + m_topo.X[o.owner[1]]) / 2);
+        o.y0 =
+            rest(RestPointKind::EdgeMidpoint, e, (m_topo.X[o.owner[0]] + m_topo.X[o.owner[1]]) / 2);
         o.kind = RestPointKind::EdgeMidpoint;
         o.point = e;
         o.n_edges = 1;
@@ -153,13 +161,16 @@ public:
         o.n = 4;
         o.owner = tet;
         o.rep = tet_weld_reps(mask);
-        o.y0 = rest(RestPointKind::TetCentroid, t,
-                    (m_topo.X[tet[0]] + m_topo.X[tet[1]] + m_topo.X[tet[2]] + m_topo.X[tet[3]]) / 4);
+        o.y0 =
+            rest(RestPointKind::TetCentroid, t,
+                 (m_topo.X[tet[0]] + m_topo.X[tet[1]] + m_topo.X[tet[2]] + m_topo.X[tet[3]]) / 4);
         return o;
     }
 
     /// Eq. 13: y = x_p + J_w,p^(1/3) R_p (y0 - X_p).
-    Vec3 extrapolate(int32_t p, const Vec3& y0) const { return m_x[p] + m_A[p] * (y0 - m_topo.X[p]); }
+    Vec3 extrapolate(int32_t p, const Vec3& y0) const {
+        return m_x[p] + m_A[p] * (y0 - m_topo.X[p]);
+    }
 
     struct Welded {
         Vec3 position = Vec3::Zero();
@@ -204,8 +215,9 @@ private:
         parallel_for(static_cast<int64_t>(graph.points.size()), [&](int64_t i) {
             const WallGraph::Point& w = graph.points[i];
             const PointOwners o = w.kind == RestPointKind::EdgeMidpoint ? edge_point(w.id)
-                                  : w.kind == RestPointKind::FaceCentroid ? face_point(w.tet, w.corner)
-                                                                          : tet_point(w.id);
+                                  : w.kind == RestPointKind::FaceCentroid
+                                      ? face_point(w.tet, w.corner)
+                                      : tet_point(w.id);
             std::array<int, 4> members{};
             for (int j = 0; j < o.n; ++j) {
                 node[w.first_node + w.reps[j]] += extrapolate(o.owner[j], o.y0);
@@ -243,7 +255,8 @@ private:
         int n_ages = 0;
         for (int k = 0; k < o.n_edges; ++k) {
             const int age = now - cut_frame[o.edge[k]] + 1;
-            if (age >= 1 && age < kOpeningFrames && std::find(ages.begin(), ages.begin() + n_ages, age) == ages.begin() + n_ages)
+            if (age >= 1 && age < kOpeningFrames &&
+                std::find(ages.begin(), ages.begin() + n_ages, age) == ages.begin() + n_ages)
                 ages[n_ages++] = age;
         }
         if (n_ages == 0) return;
@@ -272,7 +285,8 @@ private:
             const Real a = Real(ages[i]);
             c[i + 1] = welded_at_age(ages[i]);
             length += (c[i + 1] - c[i]).norm();
-            arc = std::max(arc, std::min(length - a * m_plates.open_speed, length * (kOpeningFrames - a) / kOpeningFrames));
+            arc = std::max(arc, std::min(length - a * m_plates.open_speed,
+                                         length * (kOpeningFrames - a) / kOpeningFrames));
         }
         for (int i = 0; i < n_ages && arc > 0; ++i) {
             const Real segment = (c[i + 1] - c[i]).norm();
@@ -307,15 +321,16 @@ private:
         const Vec3 far_side = others / n_others;
         const Real gap = (side - far_side).norm();
         const Vec3 middle = (side + far_side) / 2;
-        side = middle + smoothstep(m_plates.close_gap, 3 * m_plates.close_gap, gap) * (side - middle);
+        side =
+            middle + smoothstep(m_plates.close_gap, 3 * m_plates.close_gap, gap) * (side - middle);
     }
 
     const CoreTopology& m_topo;
     const ParticleFrame& m_frame;
     const std::vector<uint8_t>& m_broken;
     PlateCores m_plates;
-    std::vector<Vec3> m_x;  // current positions [m], (n_particles)
-    std::vector<Mat3> m_A;  // core transforms s_p R_p, (n_particles)
+    std::vector<Vec3> m_x;           // current positions [m], (n_particles)
+    std::vector<Mat3> m_A;           // core transforms s_p R_p, (n_particles)
     std::vector<Vec3f> m_wall_node;  // plates mode: the smoothed wall nodes (WallGraph), (n_nodes)
 };
 
@@ -340,8 +355,8 @@ struct Numbered {
     int32_t n_welds = 0;
 };
 
-Numbered number_vertices(const std::vector<SlotTri>& tris, int64_t n_out_slots, int64_t n_weld_slots,
-                         const Fragments& frag, TriMesh& mesh) {
+Numbered number_vertices(const std::vector<SlotTri>& tris, int64_t n_out_slots,
+                         int64_t n_weld_slots, const Fragments& frag, TriMesh& mesh) {
     Numbered num;
     std::vector<int32_t> vertex_of(n_out_slots, -1);
     num.weld_of_slot.assign(n_weld_slots, -1);
@@ -353,7 +368,8 @@ Numbered number_vertices(const std::vector<SlotTri>& tris, int64_t n_out_slots, 
         for (int k = 0; k < 3; ++k) {
             if (vertex_of[t.out_slot[k]] >= 0) continue;
             vertex_of[t.out_slot[k]] = nv++;
-            if (num.weld_of_slot[t.weld_slot[k]] < 0) num.weld_of_slot[t.weld_slot[k]] = num.n_welds++;
+            if (num.weld_of_slot[t.weld_slot[k]] < 0)
+                num.weld_of_slot[t.weld_slot[k]] = num.n_welds++;
         }
     }
     num.vertex_slot.resize(nv);
@@ -386,7 +402,8 @@ Numbered number_vertices(const std::vector<SlotTri>& tris, int64_t n_out_slots, 
 /// of its own: the quilted tops a close-up showed at the particle spacing. Interpolated from the
 /// particles, the shading is as smooth as the soil. Only classes welded to the corner count, so a
 /// crack's rim stays sharp.
-void interpolate_skin_normals(const std::vector<SlotTri>& skin, const Numbered& num, std::vector<Vec3>& weld_normal) {
+void interpolate_skin_normals(const std::vector<SlotTri>& skin, const Numbered& num,
+                              std::vector<Vec3>& weld_normal) {
     std::vector<Vec3> from_corners(weld_normal.size(), Vec3::Zero());
     for (const SlotTri& t : skin) {
         if (t.owner < 0) continue;
@@ -427,8 +444,8 @@ void compute_normals(const std::vector<Vec3>& position, const Numbered& num, Tri
 
 /// Positions, UVs and shading attributes of the numbered vertices, from a per-vertex evaluator.
 template <class Eval>
-std::vector<Vec3> fill_vertices(const FrameCores& cores, const Numbered& num, Eval&& eval, TriMesh& mesh,
-                                std::vector<uint64_t>& keys) {
+std::vector<Vec3> fill_vertices(const FrameCores& cores, const Numbered& num, Eval&& eval,
+                                TriMesh& mesh, std::vector<uint64_t>& keys) {
     const size_t nv = num.vertex_slot.size();
     std::vector<Vec3> position(nv);
     mesh.positions.resize(nv);
@@ -455,7 +472,8 @@ PointOwners skin_point(const FrameCores& cores, const SkinFace& sf, int j) {
     return cores.face_point(sf.tet, sf.opposite);
 }
 
-void build_boundary(const CoreTopology& topo, const FrameCores& cores, const Fragments& frag, SurfacedFrame& out) {
+void build_boundary(const CoreTopology& topo, const FrameCores& cores, const Fragments& frag,
+                    SurfacedFrame& out) {
     TriMesh& mesh = out.boundary;
     const int64_t nb = static_cast<int64_t>(topo.skin_faces.size());
     // six skin triangles per boundary face, two per corner, owned by the corner particle
@@ -478,7 +496,8 @@ void build_boundary(const CoreTopology& topo, const FrameCores& cores, const Fra
             }
         }
     });
-    const Numbered num = number_vertices(tris, topo.n_skin_out_slots, topo.n_skin_weld_slots, frag, mesh);
+    const Numbered num =
+        number_vertices(tris, topo.n_skin_out_slots, topo.n_skin_weld_slots, frag, mesh);
 
     // out slot -> (skin face, rest point j) of some triangle using it, to evaluate the vertex
     std::vector<std::array<int32_t, 2>> slot_source(topo.n_skin_out_slots, {-1, -1});
@@ -486,7 +505,8 @@ void build_boundary(const CoreTopology& topo, const FrameCores& cores, const Fra
         for (int j = 0; j < 7; ++j) {
             const SkinUvVertex& uvv = topo.skin_uv_vertices[topo.skin_faces[i].uv_vertex[j]];
             for (int r = 0; r <= static_cast<int>(uvv.kind); ++r)
-                if (slot_source[uvv.out_slot + r][0] < 0) slot_source[uvv.out_slot + r] = {int32_t(i), j};
+                if (slot_source[uvv.out_slot + r][0] < 0)
+                    slot_source[uvv.out_slot + r] = {int32_t(i), j};
         }
     auto eval = [&](int32_t slot, Vec2& uv, uint64_t& key) {
         const auto [i, j] = slot_source[slot];
@@ -568,19 +588,24 @@ CrackRanks rank_crack_elements(const CoreTopology& topo, const std::vector<int32
 /// dual cells put them. Decided on the frame's own walls, not the last frame's: a wall hidden at
 /// the end can be joined to a visible one earlier, while the cuts between them are still to come,
 /// and culling it then would leave a hole in the visible one. Sequential, hence deterministic.
-void hide_unseen_walls(const CoreTopology& topo, const std::vector<int32_t>& broken, const CrackRanks& ranks,
-                       int64_t face0, int64_t n_weld, std::vector<SlotTri>& tris) {
+void hide_unseen_walls(const CoreTopology& topo, const std::vector<int32_t>& broken,
+                       const CrackRanks& ranks, int64_t face0, int64_t n_weld,
+                       std::vector<SlotTri>& tris) {
     UnionFind walls(static_cast<int32_t>(n_weld));
     for (const SlotTri& t : tris)
-        if (t.owner >= 0) walls.unite(t.weld_slot[0], t.weld_slot[1]), walls.unite(t.weld_slot[0], t.weld_slot[2]);
+        if (t.owner >= 0)
+            walls.unite(t.weld_slot[0], t.weld_slot[1]),
+                walls.unite(t.weld_slot[0], t.weld_slot[2]);
     std::vector<uint8_t> seen(n_weld, 0);  // by root
     auto see = [&](int64_t first_slot, int n_slots) {
-        for (int k = 0; k < n_slots; ++k) seen[walls.find(static_cast<int32_t>(first_slot + k))] = 1;
+        for (int k = 0; k < n_slots; ++k)
+            seen[walls.find(static_cast<int32_t>(first_slot + k))] = 1;
     };
     for (const SkinFace& sf : topo.skin_faces) {
         if (ranks.face_rank[sf.face] >= 0) see(face0 + 3 * int64_t(ranks.face_rank[sf.face]), 3);
         for (int32_t e : sf.edge) {
-            const auto r = std::lower_bound(broken.begin(), broken.end(), e);  // broken is ascending
+            // broken is ascending
+            const auto r = std::lower_bound(broken.begin(), broken.end(), e);
             if (r != broken.end() && *r == e) see(2 * int64_t(r - broken.begin()), 2);
         }
     }
@@ -620,7 +645,8 @@ void build_crack(const CoreTopology& topo, const FrameCores& cores, const Fragme
             for (int q = 0; q < 4; ++q)
                 if (q != i && q != j) (k < 0 ? k : l) = q;
             // c_ijk is the face opposite l, c_ijl the face opposite k
-            const PointOwners ck = cores.face_point(t, l), cl = cores.face_point(t, k), g = cores.tet_point(t);
+            const PointOwners ck = cores.face_point(t, l), cl = cores.face_point(t, k),
+                              g = cores.tet_point(t);
             const int64_t wck = face0 + 3 * int64_t(face_rank[topo.tet_faces[t][l]]);
             const int64_t wcl = face0 + 3 * int64_t(face_rank[topo.tet_faces[t][k]]);
             const int64_t wg = tet0 + 4 * int64_t(tet_rank[t]);
@@ -631,7 +657,8 @@ void build_crack(const CoreTopology& topo, const FrameCores& cores, const Fragme
             int64_t out_index = tri_begin[r] + 4 * int64_t(c - topo.edge_tet_begin[e]);
             for (int side = 0; side < 2; ++side) {
                 const int32_t owner = topo.tets[t][side == 0 ? i : j];
-                auto corner = [&](const PointOwners& o, int64_t w0, int axis, SlotTri& tri, int slot) {
+                auto corner = [&](const PointOwners& o, int64_t w0, int axis, SlotTri& tri,
+                                  int slot) {
                     const int rep = o.rep[o.slot_of(owner)];
                     axis = canonical_axis(o.y0, axis, topo.uv_per_meter);
                     tri.weld_slot[slot] = static_cast<int32_t>(w0 + rep);
@@ -657,7 +684,8 @@ void build_crack(const CoreTopology& topo, const FrameCores& cores, const Fragme
     std::vector<SlotTri>().swap(tris);
     std::vector<int32_t>().swap(face_rank);
     std::vector<int32_t>().swap(tet_rank);
-    std::vector<int32_t>().swap(num.weld_of_slot);  // the skin's corner normals need it, the walls not
+    // the skin's corner normals need it, the walls not
+    std::vector<int32_t>().swap(num.weld_of_slot);
 
     auto eval = [&](int32_t slot, Vec2& uv, uint64_t& key) {
         const int64_t w = slot / 3;
@@ -687,14 +715,16 @@ void build_crack(const CoreTopology& topo, const FrameCores& cores, const Fragme
 }
 
 /// The plates mode's debris (DebrisOutput::Points): the particles that tore loose.
-DebrisPoints collect_debris(const CoreTopology& topo, const ParticleFrame& frame, const Pieces& pieces, Real spacing) {
+DebrisPoints collect_debris(const CoreTopology& topo, const ParticleFrame& frame,
+                            const Pieces& pieces, Real spacing) {
     DebrisPoints d;
     const Real radius = spacing / 2;
     for (int32_t p = 0; p < topo.n_particles; ++p) {
         if (pieces.id[p] != kDebris) continue;
         d.position.push_back(frame.P[p]);
         d.velocity.push_back(frame.v.empty() ? Vec3f::Zero() : frame.v[p]);
-        d.radius.push_back(float(radius * (frame.Jw.empty() ? 1.0 : std::cbrt(double(frame.Jw[p])))));
+        d.radius.push_back(
+            float(radius * (frame.Jw.empty() ? 1.0 : std::cbrt(double(frame.Jw[p])))));
         d.id.push_back(p);
         d.piece.push_back(pieces.root[p] >= 0 ? pieces.id[pieces.root[p]] : -1);
     }
@@ -704,8 +734,9 @@ DebrisPoints collect_debris(const CoreTopology& topo, const ParticleFrame& frame
 /// The plates mode: the frame's pieces and walls from the shot's fracture, close gaps, then the
 /// same meshing as the other modes. With `in_sequence`, the frame is one of a shot's frames and
 /// fresh cracks part at kOpenSpeed; else (a frame on its own) they show at once.
-void surface_plates(const CoreTopology& topo, const ParticleFrame& frame, const ShotFracture& fracture,
-                    const SurfaceParams& params, bool in_sequence, SurfacedFrame& out) {
+void surface_plates(const CoreTopology& topo, const ParticleFrame& frame,
+                    const ShotFracture& fracture, const SurfaceParams& params, bool in_sequence,
+                    SurfacedFrame& out) {
     Pieces pieces = pieces_at_frame(topo, fracture, frame.frame);
     Fragments frag;
     frag.id = pieces.id;  // kDebris is a culled fragment's -1
@@ -713,7 +744,8 @@ void surface_plates(const CoreTopology& topo, const ParticleFrame& frame, const 
     out.fragments = pieces.count;
     out.debris_particles = pieces.debris;
     const Real spacing = mean_particle_spacing(topo);
-    if (params.debris == DebrisOutput::Points) out.debris = collect_debris(topo, frame, pieces, spacing);
+    if (params.debris == DebrisOutput::Points)
+        out.debris = collect_debris(topo, frame, pieces, spacing);
 
     out.wall_points_smoothed = static_cast<int64_t>(fracture.walls.size());
     PlateCores plates;
@@ -729,14 +761,14 @@ void surface_plates(const CoreTopology& topo, const ParticleFrame& frame, const 
     }
     const FrameCores cores(topo, frame, pieces.is_cut, params, plates);
     build_boundary(topo, cores, frag, out);
-    if (params.cracks)
-        build_crack(topo, cores, frag, pieces.is_cut, out);
+    if (params.cracks) build_crack(topo, cores, frag, pieces.is_cut, out);
     out.particle_piece = std::move(pieces.id);
     if (in_sequence) {
         out.edge_settled.assign(topo.edges.size(), 0);
         const int settled_by = frame.frame - kOpeningFrames + 1;
-        parallel_for(topo.n_edges(),
-                     [&](int64_t e) { out.edge_settled[e] = fracture.cut_frame[e] <= settled_by ? 1 : 0; });
+        parallel_for(topo.n_edges(), [&](int64_t e) {
+            out.edge_settled[e] = fracture.cut_frame[e] <= settled_by ? 1 : 0;
+        });
     } else {
         out.edge_settled = pieces.is_cut;
     }
@@ -759,13 +791,15 @@ SurfacedFrame surface_frame(const CoreTopology& topo, const ParticleFrame& frame
 
     // Eq. 14 with the permanent broken state: broken at n iff it first broke at some t <= n
     std::vector<uint8_t> is_broken(topo.edges.size());
-    parallel_for(topo.n_edges(), [&](int64_t e) { is_broken[e] = first_break[e] <= frame.frame ? 1 : 0; });
+    parallel_for(topo.n_edges(),
+                 [&](int64_t e) { is_broken[e] = first_break[e] <= frame.frame ? 1 : 0; });
     out.broken_edges = count_broken_edges(first_break, frame.frame);
     if (params.mode == SurfaceMode::Plates) {
         if (fracture) {
             surface_plates(topo, frame, *fracture, params, true, out);
         } else {
-            surface_plates(topo, frame, plan_shot_fracture(topo, frame, first_break, params), params, false, out);
+            surface_plates(topo, frame, plan_shot_fracture(topo, frame, first_break, params),
+                           params, false, out);
         }
         return out;
     }

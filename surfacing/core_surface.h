@@ -22,24 +22,24 @@ inline uint64_t weld_key(RestPointKind kind, int32_t point, int rep) {
 }
 
 struct SurfacedFrame {
-    TriMesh boundary;                       // skin of the original boundary faces, "boundary"
-    TriMesh crack;                          // both sides of broken interfaces, "crack"
-    std::vector<uint64_t> boundary_weld_key; // weld_key of each boundary vertex
-    std::vector<uint64_t> crack_weld_key;    // weld_key of each crack vertex
-    int64_t broken_edges = 0;               // edges with first_break <= frame
-    int32_t fragments = 0;                  // fragments kept
-    int32_t culled_fragments = 0;           // fragments below min_fragment_particles
+    TriMesh boundary;                         // skin of the original boundary faces, "boundary"
+    TriMesh crack;                            // both sides of broken interfaces, "crack"
+    std::vector<uint64_t> boundary_weld_key;  // weld_key of each boundary vertex
+    std::vector<uint64_t> crack_weld_key;     // weld_key of each crack vertex
+    int64_t broken_edges = 0;                 // edges with first_break <= frame
+    int32_t fragments = 0;                    // fragments kept
+    int32_t culled_fragments = 0;             // fragments below min_fragment_particles
     // plates mode (docs/physics.md §5.7): fragments are its pieces, face_fragment their ids
-    int32_t debris_particles = 0;           // particles that tore loose (not meshed)
-    int64_t wall_points_smoothed = 0;       // crack-wall rest points moved by the smoothing
-    DebrisPoints debris;                    // filled when params.debris == DebrisOutput::Points
-    std::vector<int32_t> particle_piece;    // piece of each particle (kDebris: none), (n_particles)
-    std::vector<uint8_t> edge_cut;          // the edges the surface separates (broken, or in the
-                                            // plates mode cut), which set the weld classes, (n_edges)
-    std::vector<uint8_t> edge_settled;      // the cut edges whose sides have finished parting: a
-                                            // vertex's position is made from the owners of its
-                                            // class under these (plates mode in a sequence: cut
-                                            // kOpeningFrames or more frames ago; else edge_cut)
+    int32_t debris_particles = 0;         // particles that tore loose (not meshed)
+    int64_t wall_points_smoothed = 0;     // crack-wall rest points moved by the smoothing
+    DebrisPoints debris;                  // filled when params.debris == DebrisOutput::Points
+    std::vector<int32_t> particle_piece;  // piece of each particle (kDebris: none), (n_particles)
+    std::vector<uint8_t> edge_cut;        // the edges the surface separates (broken, or in the
+                                          // plates mode cut), which set the weld classes, (n_edges)
+    std::vector<uint8_t> edge_settled;    // the cut edges whose sides have finished parting: a
+                                          // vertex's position is made from the owners of its
+                                          // class under these (plates mode in a sequence: cut
+                                          // kOpeningFrames or more frames ago; else edge_cut)
 };
 
 /// Surfaces one frame. Deterministic: the result depends only on the arguments, never on the
@@ -53,8 +53,8 @@ struct SurfacedFrame {
 /// In SurfaceMode::Plates the shot's fracture (shot_fracture.h) gives the frame its pieces and
 /// cuts: face_fragment holds each face's piece id; crack walls are placed smoothly in rest space
 /// and smoothed where they are over the shot's wall graph, their rims along the rim
-/// (wall_smoothing.h, params.wall_smoothing steps each); the particles along the walls move by their
-/// neighbourhood's fitted affine motion (wall_deformation.h); cores follow their particles'
+/// (wall_smoothing.h, params.wall_smoothing steps each); the particles along the walls move by
+/// their neighbourhood's fitted affine motion (wall_deformation.h); cores follow their particles'
 /// rotation without the Jw scaling (a crack is as wide as the particles moved apart); a wall
 /// vertex closer than close_gaps spacings to its far side in another piece meets it half way,
 /// blending to its own position by 3 close_gaps, so a closed crack between pieces shows no gap

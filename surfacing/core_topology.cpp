@@ -28,11 +28,14 @@ std::vector<int64_t> offsets_from_counts(const std::vector<int32_t>& count) {
 struct FaceEntry {
     int32_t b, c;  // the two larger corners (the smallest is the bucket)
     int32_t ref;   // 4 * tet + opposite local corner
-    bool operator<(const FaceEntry& o) const { return std::tie(b, c, ref) < std::tie(o.b, o.c, o.ref); }
+    bool operator<(const FaceEntry& o) const {
+        return std::tie(b, c, ref) < std::tie(o.b, o.c, o.ref);
+    }
 };
 
 void validate_tets(const TetMesh& mesh) {
-    if (mesh.X.empty() || mesh.tets.empty()) fail("no particles or no tets; expected a non-empty tet mesh");
+    if (mesh.X.empty() || mesh.tets.empty())
+        fail("no particles or no tets; expected a non-empty tet mesh");
     const int64_t n = static_cast<int64_t>(mesh.X.size());
     if (n >= std::numeric_limits<int32_t>::max() ||
         static_cast<int64_t>(mesh.tets.size()) * 6 >= std::numeric_limits<int32_t>::max())
@@ -42,8 +45,10 @@ void validate_tets(const TetMesh& mesh) {
         for (int k = 0; k < 4; ++k)
             if (tet[k] < 0 || tet[k] >= n)
                 fail("tet " + std::to_string(t) + " corner " + std::to_string(k) + " = " +
-                     std::to_string(tet[k]) + ": expected a particle id in [0, " + std::to_string(n) + ")");
-        const Real v = signed_tet_volume(mesh.X[tet[0]], mesh.X[tet[1]], mesh.X[tet[2]], mesh.X[tet[3]]);
+                     std::to_string(tet[k]) + ": expected a particle id in [0, " +
+                     std::to_string(n) + ")");
+        const Real v =
+            signed_tet_volume(mesh.X[tet[0]], mesh.X[tet[1]], mesh.X[tet[2]], mesh.X[tet[3]]);
         if (!(v > 0)) {
             std::ostringstream os;
             os << "tet " << t << " (" << tet[0] << "," << tet[1] << "," << tet[2] << "," << tet[3]
@@ -52,8 +57,9 @@ void validate_tets(const TetMesh& mesh) {
         }
     }
     if (!mesh.boundary_uv.empty() && mesh.boundary_uv.size() != mesh.boundary.size())
-        fail("boundary_uv has " + std::to_string(mesh.boundary_uv.size()) + " entries; expected 0 or " +
-             std::to_string(mesh.boundary.size()) + " (one per boundary face)");
+        fail("boundary_uv has " + std::to_string(mesh.boundary_uv.size()) +
+             " entries; expected 0 or " + std::to_string(mesh.boundary.size()) +
+             " (one per boundary face)");
 }
 
 /// Unique edges bucketed by their smaller particle id; fills edges, rest_length, tet_edges and
@@ -138,7 +144,9 @@ FaceBuckets build_faces(const TetMesh& mesh, CoreTopology& topo) {
             const auto f = sorted_face(mesh.tets[t], l);
             fb.entry[cursor[f[0]]++] = {f[1], f[2], int32_t(4 * t + l)};
         }
-    auto same = [&](int64_t i, int64_t j) { return fb.entry[i].b == fb.entry[j].b && fb.entry[i].c == fb.entry[j].c; };
+    auto same = [&](int64_t i, int64_t j) {
+        return fb.entry[i].b == fb.entry[j].b && fb.entry[i].c == fb.entry[j].c;
+    };
     std::vector<int32_t> n_unique(n, 0);
     std::vector<uint8_t> bad(n, 0);
     parallel_for(n, [&](int64_t p) {
@@ -154,8 +162,9 @@ FaceBuckets build_faces(const TetMesh& mesh, CoreTopology& topo) {
         n_unique[p] = u;
     });
     for (int32_t p = 0; p < n; ++p)
-        if (bad[p]) fail("a face with corner particle " + std::to_string(p) +
-                         " is shared by more than two tets; expected a manifold tet mesh");
+        if (bad[p])
+            fail("a face with corner particle " + std::to_string(p) +
+                 " is shared by more than two tets; expected a manifold tet mesh");
     const std::vector<int64_t> face_base = offsets_from_counts(n_unique);
     topo.n_faces = static_cast<int32_t>(face_base[n]);
     topo.tet_faces.resize(n_tets);
@@ -185,24 +194,31 @@ void match_skin_faces(const TetMesh& mesh, const FaceBuckets& fb, CoreTopology& 
     for (uint8_t s : fb.is_single) n_single += s;
     for (size_t i = 0; i < nb; ++i) {
         const Tri& tri = mesh.boundary[i];
-        auto where = [&] { return "boundary face " + std::to_string(i) + " (" + std::to_string(tri[0]) + "," +
-                                  std::to_string(tri[1]) + "," + std::to_string(tri[2]) + ")"; };
+        auto where = [&] {
+            return "boundary face " + std::to_string(i) + " (" + std::to_string(tri[0]) + "," +
+                   std::to_string(tri[1]) + "," + std::to_string(tri[2]) + ")";
+        };
         for (int k = 0; k < 3; ++k)
-            if (tri[k] < 0 || tri[k] >= topo.n_particles) fail(where() + ": particle id out of range");
+            if (tri[k] < 0 || tri[k] >= topo.n_particles)
+                fail(where() + ": particle id out of range");
         std::array<int32_t, 3> s = tri;
         std::sort(s.begin(), s.end());
         const FaceEntry probe{s[1], s[2], -1};
-        const auto first = fb.entry.begin() + fb.off[s[0]], last = fb.entry.begin() + fb.off[s[0] + 1];
+        const auto first = fb.entry.begin() + fb.off[s[0]],
+                   last = fb.entry.begin() + fb.off[s[0] + 1];
         const auto it = std::lower_bound(first, last, probe);
-        if (it == last || it->b != s[1] || it->c != s[2]) fail(where() + " is not a face of any tet");
+        if (it == last || it->b != s[1] || it->c != s[2])
+            fail(where() + " is not a face of any tet");
         const int32_t face = fb.id_of_entry[it - fb.entry.begin()];
-        if (!fb.is_single[face]) fail(where() + " is shared by two tets; expected a face of exactly one tet");
+        if (!fb.is_single[face])
+            fail(where() + " is shared by two tets; expected a face of exactly one tet");
         if (matched[face]++) fail(where() + " is listed twice");
         const int32_t t = it->ref / 4, l = it->ref % 4;
         const Tet& tet = topo.tets[t];
         const auto& of = kTetOutwardFace[l];
         const std::array<int32_t, 3> out = {tet[of[0]], tet[of[1]], tet[of[2]]};
-        const bool is_rotation = (out[0] == tri[0] && out[1] == tri[1]) || (out[1] == tri[0] && out[2] == tri[1]) ||
+        const bool is_rotation = (out[0] == tri[0] && out[1] == tri[1]) ||
+                                 (out[1] == tri[0] && out[2] == tri[1]) ||
                                  (out[2] == tri[0] && out[0] == tri[1]);
         if (!is_rotation) fail(where() + " is oriented inward; expected CCW seen from outside");
         SkinFace& sf = topo.skin_faces[i];
@@ -219,11 +235,13 @@ void match_skin_faces(const TetMesh& mesh, const FaceBuckets& fb, CoreTopology& 
             sf.edge[k] = topo.tet_edges[t][kTetLocalEdge[local(tri[k])][local(tri[(k + 1) % 3])]];
     }
     if (static_cast<int64_t>(nb) != n_single)
-        fail("boundary lists " + std::to_string(nb) + " faces but the tets have " + std::to_string(n_single) +
+        fail("boundary lists " + std::to_string(nb) + " faces but the tets have " +
+             std::to_string(n_single) +
              " faces with a single tet; expected the boundary to be exactly those faces");
 }
 
-/// The texture density of the given UVs (uv length per rest length); else 1 per bounding-box extent.
+/// The texture density of the given UVs (uv length per rest length); else 1 per bounding-box
+/// extent.
 void set_uv_density(const TetMesh& mesh, CoreTopology& topo) {
     const size_t nb = mesh.boundary.size();
     Real uv_len = 0, x_len = 0;
@@ -231,7 +249,8 @@ void set_uv_density(const TetMesh& mesh, CoreTopology& topo) {
         for (size_t i = 0; i < nb; ++i)
             for (int k = 0; k < 3; ++k) {
                 uv_len += (mesh.boundary_uv[i][(k + 1) % 3] - mesh.boundary_uv[i][k]).norm();
-                x_len += (topo.X[mesh.boundary[i][(k + 1) % 3]] - topo.X[mesh.boundary[i][k]]).norm();
+                x_len +=
+                    (topo.X[mesh.boundary[i][(k + 1) % 3]] - topo.X[mesh.boundary[i][k]]).norm();
             }
     topo.has_boundary_uv = uv_len > 0 && x_len > 0;
     if (topo.has_boundary_uv) {
@@ -276,8 +295,10 @@ void layout_skin_uv_vertices(const TetMesh& mesh, CoreTopology& topo) {
             const int axis = dominant_axis((x0[1] - x0[0]).cross(x0[2] - x0[0]));
             for (int k = 0; k < 7; ++k) uv[k] = triplanar_uv(x0[k], axis, topo.uv_per_meter);
         }
-        for (int k = 0; k < 3; ++k) rec.push_back({RestPointKind::Particle, sf.corner[k], uv[k], int32_t(i), k});
-        for (int k = 0; k < 3; ++k) rec.push_back({RestPointKind::EdgeMidpoint, sf.edge[k], uv[3 + k], int32_t(i), 3 + k});
+        for (int k = 0; k < 3; ++k)
+            rec.push_back({RestPointKind::Particle, sf.corner[k], uv[k], int32_t(i), k});
+        for (int k = 0; k < 3; ++k)
+            rec.push_back({RestPointKind::EdgeMidpoint, sf.edge[k], uv[3 + k], int32_t(i), 3 + k});
         rec.push_back({RestPointKind::FaceCentroid, sf.face, uv[6], int32_t(i), 6});
     }
     std::sort(rec.begin(), rec.end(), [](const Record& a, const Record& b) {
@@ -288,13 +309,16 @@ void layout_skin_uv_vertices(const TetMesh& mesh, CoreTopology& topo) {
     // a rest point of kind k has 1 + k owners, hence 1 + k weld slots and output slots
     int32_t weld_slot = 0, out_slot = 0;
     for (size_t r = 0; r < rec.size(); ++r) {
-        const bool new_point = r == 0 || rec[r].kind != rec[r - 1].kind || rec[r].point != rec[r - 1].point;
+        const bool new_point =
+            r == 0 || rec[r].kind != rec[r - 1].kind || rec[r].point != rec[r - 1].point;
         if (new_point || rec[r].uv != rec[r - 1].uv) {
             if (new_point && r > 0) weld_slot += 1 + static_cast<int>(rec[r - 1].kind);
-            topo.skin_uv_vertices.push_back({rec[r].kind, rec[r].point, weld_slot, out_slot, rec[r].uv});
+            topo.skin_uv_vertices.push_back(
+                {rec[r].kind, rec[r].point, weld_slot, out_slot, rec[r].uv});
             out_slot += 1 + static_cast<int>(rec[r].kind);
         }
-        topo.skin_faces[rec[r].face].uv_vertex[rec[r].slot] = static_cast<int32_t>(topo.skin_uv_vertices.size() - 1);
+        topo.skin_faces[rec[r].face].uv_vertex[rec[r].slot] =
+            static_cast<int32_t>(topo.skin_uv_vertices.size() - 1);
     }
     if (!rec.empty()) weld_slot += 1 + static_cast<int>(rec.back().kind);
     topo.n_skin_weld_slots = weld_slot;
@@ -325,8 +349,9 @@ Vec2 triplanar_uv(const Vec3& x, int axis, Real uv_per_meter) {
 
 size_t CoreTopology::memory_bytes() const {
     const int64_t vectors = capacity_bytes(X) + capacity_bytes(tets) + capacity_bytes(edges) +
-                            capacity_bytes(rest_length) + capacity_bytes(tet_edges) + capacity_bytes(tet_faces) +
-                            capacity_bytes(edge_tet_begin) + capacity_bytes(edge_tet) + capacity_bytes(skin_faces) +
+                            capacity_bytes(rest_length) + capacity_bytes(tet_edges) +
+                            capacity_bytes(tet_faces) + capacity_bytes(edge_tet_begin) +
+                            capacity_bytes(edge_tet) + capacity_bytes(skin_faces) +
                             capacity_bytes(skin_uv_vertices);
     return sizeof(*this) + static_cast<size_t>(vectors);
 }
@@ -356,7 +381,8 @@ FaceOwners face_owners(const CoreTopology& topo, int32_t tet, int l) {
     FaceOwners f;
     for (int k = 0; k < 3; ++k) {
         f.owner[k] = corners[local[k]];
-        f.edge[k] = topo.tet_edges[tet][kTetLocalEdge[local[kFaceEdgeOwners[k][0]]][local[kFaceEdgeOwners[k][1]]]];
+        f.edge[k] = topo.tet_edges[tet][kTetLocalEdge[local[kFaceEdgeOwners[k][0]]]
+                                                     [local[kFaceEdgeOwners[k][1]]]];
     }
     return f;
 }

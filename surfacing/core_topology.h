@@ -29,28 +29,33 @@ constexpr std::array<std::array<int, 3>, 4> kTetOutwardFace = {
     {{1, 2, 3}, {0, 3, 2}, {0, 1, 3}, {0, 2, 1}}};
 
 /// Kinds of rest points; the owners of a rest point are the corners of its simplex.
-enum class RestPointKind : uint8_t { Particle = 0, EdgeMidpoint = 1, FaceCentroid = 2, TetCentroid = 3 };
+enum class RestPointKind : uint8_t {
+    Particle = 0,
+    EdgeMidpoint = 1,
+    FaceCentroid = 2,
+    TetCentroid = 3
+};
 
 /// A vertex of the boundary skin with its own UV: one rest point (a boundary particle, a
 /// boundary-edge midpoint or a boundary-face centroid) split by distinct UVs at texture seams.
 struct SkinUvVertex {
     RestPointKind kind;
-    int32_t point;        // particle, edge or face id
-    int32_t weld_slot;    // first of its owner slots in the boundary weld-slot space
-    int32_t out_slot;     // first of its owner slots in the boundary output-vertex slot space
-    Vec2 uv;              // interpolated from TetMesh::boundary_uv (or the fallback projection)
+    int32_t point;      // particle, edge or face id
+    int32_t weld_slot;  // first of its owner slots in the boundary weld-slot space
+    int32_t out_slot;   // first of its owner slots in the boundary output-vertex slot space
+    Vec2 uv;            // interpolated from TetMesh::boundary_uv (or the fallback projection)
 };
 
 /// One boundary face as the skin sees it: its tet, its corners in TetMesh::boundary order
 /// (outward), and the SkinUvVertex of each of its 7 rest points: corners 0-2, midpoints of
 /// corner pairs (0,1), (1,2), (2,0) at 3-5, the centroid at 6.
 struct SkinFace {
-    int32_t tet;                          // the tet that owns the face
-    int8_t opposite;                      // local corner of `tet` not on the face
-    std::array<int32_t, 3> corner;        // particle ids, outward order
-    std::array<int32_t, 3> edge;          // edge ids of (0,1), (1,2), (2,0)
-    int32_t face;                         // unique face id
-    std::array<int32_t, 7> uv_vertex;     // SkinUvVertex ids
+    int32_t tet;                       // the tet that owns the face
+    int8_t opposite;                   // local corner of `tet` not on the face
+    std::array<int32_t, 3> corner;     // particle ids, outward order
+    std::array<int32_t, 3> edge;       // edge ids of (0,1), (1,2), (2,0)
+    int32_t face;                      // unique face id
+    std::array<int32_t, 7> uv_vertex;  // SkinUvVertex ids
 };
 
 /// Two skin triangles per corner of a boundary face, in SkinFace rest-point indices; the first
@@ -60,21 +65,22 @@ constexpr std::array<std::array<int, 3>, 6> kSkinTriangles = {
 
 struct CoreTopology {
     int32_t n_particles = 0;
-    int32_t n_faces = 0;                              // unique triangle faces of the tets
-    std::vector<Vec3> X;                              // rest positions [m], (n_particles)
-    std::vector<Tet> tets;                            // positively oriented, (n_tets)
-    std::vector<std::array<int32_t, 2>> edges;        // (p < q), sorted, (n_edges)
-    std::vector<Real> rest_length;                    // |X_p - X_q| [m], (n_edges)
-    std::vector<std::array<int32_t, 6>> tet_edges;    // edge id of local edge k, (n_tets)
-    std::vector<std::array<int32_t, 4>> tet_faces;    // face id opposite local corner l, (n_tets)
-    std::vector<int32_t> edge_tet_begin;              // CSR offsets into edge_tet, (n_edges + 1)
-    std::vector<int32_t> edge_tet;                    // 6 * tet + local edge, grouped by edge
-    std::vector<SkinFace> skin_faces;                 // (n_boundary faces of TetMesh)
-    std::vector<SkinUvVertex> skin_uv_vertices;       // boundary vertices split by UV
-    int32_t n_skin_weld_slots = 0;                    // sum of owner counts of boundary rest points
-    int32_t n_skin_out_slots = 0;                     // sum of owner counts of skin UV vertices
-    Real uv_per_meter = 1;                            // texture density of the boundary UVs [1/m]
-    bool has_boundary_uv = false;                     // false: boundary UVs come from the projection
+    int32_t n_faces = 0;                            // unique triangle faces of the tets
+    std::vector<Vec3> X;                            // rest positions [m], (n_particles)
+    std::vector<Tet> tets;                          // positively oriented, (n_tets)
+    std::vector<std::array<int32_t, 2>> edges;      // (p < q), sorted, (n_edges)
+    std::vector<Real> rest_length;                  // |X_p - X_q| [m], (n_edges)
+    std::vector<std::array<int32_t, 6>> tet_edges;  // edge id of local edge k, (n_tets)
+    std::vector<std::array<int32_t, 4>> tet_faces;  // face id opposite local corner l, (n_tets)
+    std::vector<int32_t> edge_tet_begin;            // CSR offsets into edge_tet, (n_edges + 1)
+    std::vector<int32_t> edge_tet;                  // 6 * tet + local edge, grouped by edge
+    std::vector<SkinFace> skin_faces;               // (n_boundary faces of TetMesh)
+    std::vector<SkinUvVertex> skin_uv_vertices;     // boundary vertices split by UV
+    int32_t n_skin_weld_slots = 0;                  // sum of owner counts of boundary rest points
+    int32_t n_skin_out_slots = 0;                   // sum of owner counts of skin UV vertices
+    Real uv_per_meter = 1;                          // texture density of the boundary UVs [1/m]
+    // false: boundary UVs come from the projection
+    bool has_boundary_uv = false;
 
     int32_t n_tets() const { return static_cast<int32_t>(tets.size()); }
     int32_t n_edges() const { return static_cast<int32_t>(edges.size()); }

@@ -11,7 +11,8 @@ namespace mudcrack {
 
 Real break_threshold(Real jw_p, Real jw_q, const SurfaceParams& params) {
     if (params.mode == SurfaceMode::Wang2019) return params.zeta;
-    if (params.length_consistent) return Real(0.5) * (std::cbrt(jw_p) + std::cbrt(jw_q)) * params.zeta;
+    if (params.length_consistent)
+        return Real(0.5) * (std::cbrt(jw_p) + std::cbrt(jw_q)) * params.zeta;
     return Real(0.5) * (jw_p + jw_q) * params.zeta;
 }
 
@@ -19,8 +20,9 @@ void check_frame_fits(const CoreTopology& topo, const ParticleFrame& frame) {
     const std::string where = "frame " + std::to_string(frame.frame) + ": ";
     const size_t n = static_cast<size_t>(topo.n_particles);
     if (frame.P.size() != n)
-        throw InputError(where + "has " + std::to_string(frame.P.size()) + " particles; the tet mesh has " +
-                         std::to_string(n) + " (a cache from another shot?)");
+        throw InputError(where + "has " + std::to_string(frame.P.size()) +
+                         " particles; the tet mesh has " + std::to_string(n) +
+                         " (a cache from another shot?)");
     auto check = [&](const char* name, size_t size) {
         if (size != 0 && size != n)
             throw InputError(where + "attribute " + name + " has " + std::to_string(size) +
@@ -36,12 +38,12 @@ std::vector<int32_t> no_edge_breaks(const CoreTopology& topo) {
     return std::vector<int32_t>(topo.edges.size(), kNeverBroken);
 }
 
-int64_t record_edge_breaks(const CoreTopology& topo, const ParticleFrame& frame, const SurfaceParams& params,
-                           std::vector<int32_t>& first_break) {
+int64_t record_edge_breaks(const CoreTopology& topo, const ParticleFrame& frame,
+                           const SurfaceParams& params, std::vector<int32_t>& first_break) {
     check_frame_fits(topo, frame);
     if (first_break.size() != topo.edges.size())
-        throw InputError("edge break history has " + std::to_string(first_break.size()) + " edges; the tet mesh has " +
-                         std::to_string(topo.edges.size()));
+        throw InputError("edge break history has " + std::to_string(first_break.size()) +
+                         " edges; the tet mesh has " + std::to_string(topo.edges.size()));
     const bool has_jw = !frame.Jw.empty();
     const int32_t n = frame.frame;
     return parallel_reduce(
@@ -49,7 +51,8 @@ int64_t record_edge_breaks(const CoreTopology& topo, const ParticleFrame& frame,
         [&](int64_t e) -> int64_t {
             const auto [p, q] = topo.edges[e];
             const Real length = (frame.P[p].cast<Real>() - frame.P[q].cast<Real>()).norm();
-            const Real jw_p = has_jw ? Real(frame.Jw[p]) : Real(1), jw_q = has_jw ? Real(frame.Jw[q]) : Real(1);
+            const Real jw_p = has_jw ? Real(frame.Jw[p]) : Real(1),
+                       jw_q = has_jw ? Real(frame.Jw[q]) : Real(1);
             if (!(length > break_threshold(jw_p, jw_q, params) * topo.rest_length[e])) return 0;
             first_break[e] = std::min(first_break[e], n);
             return 1;
@@ -59,8 +62,8 @@ int64_t record_edge_breaks(const CoreTopology& topo, const ParticleFrame& frame,
 
 void merge_edge_breaks(std::vector<int32_t>& into, const std::vector<int32_t>& from) {
     if (into.size() != from.size())
-        throw RuntimeError("merge_edge_breaks: " + std::to_string(into.size()) + " vs " + std::to_string(from.size()) +
-                           " edges");
+        throw RuntimeError("merge_edge_breaks: " + std::to_string(into.size()) + " vs " +
+                           std::to_string(from.size()) + " edges");
     for (size_t e = 0; e < into.size(); ++e) into[e] = std::min(into[e], from[e]);
 }
 

@@ -31,8 +31,8 @@ std::vector<int32_t> no_edge_breaks(const CoreTopology& topo);
 /// Applies Eq. 14 to every edge at frame.frame: first_break[e] = min(first_break[e], frame.frame)
 /// for each edge stretched past its threshold. Commutes across frames. Returns the number of
 /// edges over the threshold in this frame.
-int64_t record_edge_breaks(const CoreTopology& topo, const ParticleFrame& frame, const SurfaceParams& params,
-                           std::vector<int32_t>& first_break);
+int64_t record_edge_breaks(const CoreTopology& topo, const ParticleFrame& frame,
+                           const SurfaceParams& params, std::vector<int32_t>& first_break);
 
 /// into[e] = min(into[e], from[e]): combines histories recorded from disjoint sets of frames.
 void merge_edge_breaks(std::vector<int32_t>& into, const std::vector<int32_t>& from);

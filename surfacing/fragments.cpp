@@ -4,7 +4,8 @@
 
 namespace mudcrack {
 
-Fragments find_fragments(const CoreTopology& topo, const std::vector<uint8_t>& is_broken, int min_particles) {
+Fragments find_fragments(const CoreTopology& topo, const std::vector<uint8_t>& is_broken,
+                         int min_particles) {
     const int32_t n = topo.n_particles;
     // each root is its component's smallest particle, so fragment ids follow the particles' order
     UnionFind components(n);

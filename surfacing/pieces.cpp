@@ -18,7 +18,9 @@ namespace {
 struct ParticleEdges {
     std::vector<int32_t> begin, edge;
 
-    explicit ParticleEdges(const CoreTopology& topo) : begin(topo.n_particles + 1, 0), edge(2 * topo.edges.size()) {
+    explicit ParticleEdges(const CoreTopology& topo)
+        : begin(topo.n_particles + 1, 0),
+          edge(2 * topo.edges.size()) {
         for (const auto& pq : topo.edges) {
             ++begin[pq[0] + 1];
             ++begin[pq[1] + 1];
@@ -79,9 +81,13 @@ void grow_from_roots(const CoreTopology& topo, const ParticleEdges& adj, std::ve
 /// about kSideHops / 2 particles of where it ends: there the wall closes, as a crack tapers.
 class SameSide {
 public:
-    SameSide(const CoreTopology& topo, const ParticleEdges& adj, const std::vector<uint8_t>& is_band,
-             const std::vector<uint8_t>& edge_off)
-        : m_topo(topo), m_adj(adj), m_band(is_band), m_off(edge_off), m_stamp(topo.n_particles, 0) {}
+    SameSide(const CoreTopology& topo, const ParticleEdges& adj,
+             const std::vector<uint8_t>& is_band, const std::vector<uint8_t>& edge_off)
+        : m_topo(topo),
+          m_adj(adj),
+          m_band(is_band),
+          m_off(edge_off),
+          m_stamp(topo.n_particles, 0) {}
 
     bool operator()(int32_t a, int32_t b) {
         if (a == b) return true;
@@ -131,19 +137,23 @@ Real piece_width(const Vec3& sum, const Mat3& sum_outer, int64_t count, Real spa
     const Vec3 mean = sum / Real(count);
     const Mat3 cov = sum_outer / Real(count) - mean * mean.transpose();
     const Eigen::SelfAdjointEigenSolver<Mat3> eig(cov, Eigen::EigenvaluesOnly);
-    const Real lambda2 = std::max(Real(0), eig.eigenvalues()[1]);  // ascending: [1] is the middle one
+    // ascending: [1] is the middle one
+    const Real lambda2 = std::max(Real(0), eig.eigenvalues()[1]);
     return std::sqrt(12 * lambda2 + spacing * spacing);
 }
 
 Real mean_particle_spacing(const CoreTopology& topo) {
     Real volume = 0;
     for (const Tet& t : topo.tets)
-        volume += (topo.X[t[1]] - topo.X[t[0]]).cross(topo.X[t[2]] - topo.X[t[0]]).dot(topo.X[t[3]] - topo.X[t[0]]) / 6;
+        volume += (topo.X[t[1]] - topo.X[t[0]])
+                      .cross(topo.X[t[2]] - topo.X[t[0]])
+                      .dot(topo.X[t[3]] - topo.X[t[0]]) /
+                  6;
     return topo.n_particles > 0 ? std::cbrt(volume / topo.n_particles) : Real(0);
 }
 
-Pieces find_pieces(const CoreTopology& topo, const ParticleFrame& frame, const std::vector<uint8_t>& is_broken,
-                   const PieceParams& params) {
+Pieces find_pieces(const CoreTopology& topo, const ParticleFrame& frame,
+                   const std::vector<uint8_t>& is_broken, const PieceParams& params) {
     const int32_t n = topo.n_particles;
     // plate cores: the soil no crack touched, i.e. the particles without a broken edge, joined
     // through their edges (a damaged particle is band, however it still hangs together)
@@ -151,7 +161,8 @@ Pieces find_pieces(const CoreTopology& topo, const ParticleFrame& frame, const s
     for (int32_t e = 0; e < topo.n_edges(); ++e)
         if (is_broken[e]) is_damaged[topo.edges[e][0]] = is_damaged[topo.edges[e][1]] = 1;
     parallel_for(topo.n_edges(), [&](int64_t e) {
-        core_edge_off[e] = is_broken[e] || is_damaged[topo.edges[e][0]] || is_damaged[topo.edges[e][1]];
+        core_edge_off[e] =
+            is_broken[e] || is_damaged[topo.edges[e][0]] || is_damaged[topo.edges[e][1]];
     });
     const Fragments frag = find_fragments(topo, core_edge_off, 1);
 
@@ -169,7 +180,8 @@ Pieces find_pieces(const CoreTopology& topo, const ParticleFrame& frame, const s
     }
     std::vector<uint8_t> is_plate(frag.count);
     for (int32_t f = 0; f < frag.count; ++f)
-        is_plate[f] = !is_damaged[smallest[f]] && piece_width(sum[f], sum_outer[f], count[f], spacing) >= params.min_width;
+        is_plate[f] = !is_damaged[smallest[f]] &&
+                      piece_width(sum[f], sum_outer[f], count[f], spacing) >= params.min_width;
 
     Pieces pieces;
     pieces.root.assign(n, -1);
@@ -186,11 +198,13 @@ Pieces find_pieces(const CoreTopology& topo, const ParticleFrame& frame, const s
     std::vector<Real> opening(topo.edges.size());
     parallel_for(topo.n_edges(), [&](int64_t e) {
         const auto [p, q] = topo.edges[e];
-        opening[e] = std::max(Real(0), Real((frame.P[p] - frame.P[q]).norm()) - topo.rest_length[e]);
+        opening[e] =
+            std::max(Real(0), Real((frame.P[p] - frame.P[q]).norm()) - topo.rest_length[e]);
     });
     const Real max_opening = params.debris_gap * spacing;
-    grow_from_roots(topo, adj, pieces.root, is_band, max_opening,
-                    [&](int32_t e) { return opening[e] + kRestLengthWeight * topo.rest_length[e]; });
+    grow_from_roots(topo, adj, pieces.root, is_band, max_opening, [&](int32_t e) {
+        return opening[e] + kRestLengthWeight * topo.rest_length[e];
+    });
     pieces.id.assign(n, kDebris);
     std::vector<uint8_t> is_debris(n, 0);
     for (int32_t p = 0; p < n; ++p) {

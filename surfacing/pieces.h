@@ -21,9 +21,9 @@
 namespace mudcrack {
 
 struct PieceParams {
-    Real min_width = 0;         // [m] a fragment this wide (piece_width) or wider is a plate
-    Real debris_gap = 0.5;      // [particle spacings] a band particle whose every path to a plate
-                                // opened more than this is debris
+    Real min_width = 0;     // [m] a fragment this wide (piece_width) or wider is a plate
+    Real debris_gap = 0.5;  // [particle spacings] a band particle whose every path to a plate
+                            // opened more than this is debris
 };
 
 /// The piece a particle belongs to when it belongs to none.
@@ -60,7 +60,7 @@ Real mean_particle_spacing(const CoreTopology& topo);
 /// is cut when its ends hang from plate particles on two sides of that crack: plate particles
 /// that no path of three plate edges joins. So each band has one wall, where its two sides meet,
 /// and the torn edges on either side are welded.
-Pieces find_pieces(const CoreTopology& topo, const ParticleFrame& frame, const std::vector<uint8_t>& is_broken,
-                   const PieceParams& params);
+Pieces find_pieces(const CoreTopology& topo, const ParticleFrame& frame,
+                   const std::vector<uint8_t>& is_broken, const PieceParams& params);
 
 }  // namespace mudcrack

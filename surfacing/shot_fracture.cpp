@@ -18,7 +18,8 @@ constexpr Real kWallMotionRadius = 3;
 }  // namespace
 
 ShotFracture plan_shot_fracture(const CoreTopology& topo, const ParticleFrame& last_frame,
-                                const std::vector<int32_t>& first_break, const SurfaceParams& params) {
+                                const std::vector<int32_t>& first_break,
+                                const SurfaceParams& params) {
     const int last = last_frame.frame;
     std::vector<uint8_t> is_broken(topo.edges.size());
     parallel_for(topo.n_edges(), [&](int64_t e) { is_broken[e] = first_break[e] <= last ? 1 : 0; });
@@ -36,14 +37,16 @@ ShotFracture plan_shot_fracture(const CoreTopology& topo, const ParticleFrame& l
     parallel_for(topo.n_edges(), [&](int64_t e) {
         if (!fracture.last.is_cut[e]) return;
         const auto [p, q] = topo.edges[e];
-        fracture.cut_frame[e] = is_broken[e] ? first_break[e]
-                                             : std::min(last, std::max(first_damage[p], first_damage[q]));
+        fracture.cut_frame[e] = is_broken[e]
+                                    ? first_break[e]
+                                    : std::min(last, std::max(first_damage[p], first_damage[q]));
     });
     fracture.walls = smooth_walls(topo, fracture.last.is_cut, params.wall_smoothing);
     if (params.wall_smoothing > 0) {
         fracture.wall_graph = plan_wall_graph(topo, fracture.last.is_cut);
-        fracture.wall_motion = plan_wall_deformation(topo, fracture.last.is_cut, fracture.last.id,
-                                                     kWallMotionRadius * mean_particle_spacing(topo));
+        fracture.wall_motion =
+            plan_wall_deformation(topo, fracture.last.is_cut, fracture.last.id,
+                                  kWallMotionRadius * mean_particle_spacing(topo));
     }
     return fracture;
 }
@@ -52,7 +55,8 @@ Pieces pieces_at_frame(const CoreTopology& topo, const ShotFracture& fracture, i
     const Pieces& last = fracture.last;
     Pieces pieces;
     pieces.is_cut.resize(topo.edges.size());
-    parallel_for(topo.n_edges(), [&](int64_t e) { pieces.is_cut[e] = fracture.cut_frame[e] <= frame ? 1 : 0; });
+    parallel_for(topo.n_edges(),
+                 [&](int64_t e) { pieces.is_cut[e] = fracture.cut_frame[e] <= frame ? 1 : 0; });
     const Fragments joined = find_fragments(topo, pieces.is_cut, 1);
     // each joined part takes the smallest id of the last frame's pieces in it
     std::vector<int32_t> part_id(joined.count, kDebris);

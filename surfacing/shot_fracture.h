@@ -34,7 +34,8 @@ struct ShotFracture {
 /// one that never broke (between two band particles that joined different sides) from the frame
 /// both its particles are damaged, at the latest the last frame. Deterministic.
 ShotFracture plan_shot_fracture(const CoreTopology& topo, const ParticleFrame& last_frame,
-                                const std::vector<int32_t>& first_break, const SurfaceParams& params);
+                                const std::vector<int32_t>& first_break,
+                                const SurfaceParams& params);
 
 /// The pieces of frame `frame` (at most the last frame): the particles joined through the edges
 /// not yet cut. Each such piece holds one or more of the last frame's pieces and takes the

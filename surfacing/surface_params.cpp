@@ -7,7 +7,9 @@ namespace mudcrack {
 namespace {
 
 constexpr std::array<std::pair<SurfaceMode, const char*>, 3> kModeNames = {
-    {{SurfaceMode::Ours, "ours"}, {SurfaceMode::Wang2019, "wang2019"}, {SurfaceMode::Plates, "plates"}}};
+    {{SurfaceMode::Ours, "ours"},
+     {SurfaceMode::Wang2019, "wang2019"},
+     {SurfaceMode::Plates, "plates"}}};
 
 }  // namespace
 

@@ -27,19 +27,23 @@ bool debris_needs_plates(const SurfaceParams& params);
 
 struct SurfaceParams {
     SurfaceMode mode = SurfaceMode::Ours;
-    Real zeta = 2;                  // edge-stretch threshold of Eq. 14 [-]
-    bool length_consistent = false; // threshold 0.5 (Jw_p^(1/3) + Jw_q^(1/3)) zeta (docs/physics.md §5.5)
-    bool cracks = true;             // mesh crack surfaces (false: boundary only, no crack mesh)
-    std::string format = "glb";     // glb | obj | ply | dae
-    int min_fragment_particles = 1; // fragments smaller than this are culled as debris
+    Real zeta = 2;  // edge-stretch threshold of Eq. 14 [-]
+    // threshold 0.5 (Jw_p^(1/3) + Jw_q^(1/3)) zeta (docs/physics.md §5.5)
+    bool length_consistent = false;
+    bool cracks = true;              // mesh crack surfaces (false: boundary only, no crack mesh)
+    std::string format = "glb";      // glb | obj | ply | dae
+    int min_fragment_particles = 1;  // fragments smaller than this are culled as debris
     // plates mode (docs/physics.md §5.7)
-    Real min_piece_size = 2;        // [cells of /sim/h] a fragment this wide across is a plate
-    Real debris_gap = 0.5;          // [particle spacings] band particles that every path to a plate opens
-                                    // more than this are debris
-    Real close_gaps = 0.25;         // [particle spacings] walls closer than this meet (no hairline gaps)
-    int wall_smoothing = 25;        // Taubin steps of the crack walls, in rest space and where they are (0: off)
+    Real min_piece_size = 2;  // [cells of /sim/h] a fragment this wide across is a plate
+    // [particle spacings] band particles that every path to a plate opens more than this are debris
+    Real debris_gap = 0.5;
+    // [particle spacings] walls closer than this meet (no hairline gaps)
+    Real close_gaps = 0.25;
+    // Taubin steps of the crack walls, in rest space and where they are (0: off)
+    int wall_smoothing = 25;
     DebrisOutput debris = DebrisOutput::None;
-    Real cell_size = 0;             // [m] the shot's /sim/h (set by load_shot): min_piece_size's unit
+    // [m] the shot's /sim/h (set by load_shot): min_piece_size's unit
+    Real cell_size = 0;
 };
 
 /// "ours" | "wang2019" | "plates".

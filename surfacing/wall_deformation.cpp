@@ -16,7 +16,9 @@ constexpr Real kMinFlatness = 0.02;   // least / largest principal rest variance
 /// The edges at each particle: CSR over topo.edges.
 struct ParticleEdges {
     std::vector<int32_t> begin, edge;
-    explicit ParticleEdges(const CoreTopology& topo) : begin(topo.n_particles + 1, 0), edge(2 * topo.edges.size()) {
+    explicit ParticleEdges(const CoreTopology& topo)
+        : begin(topo.n_particles + 1, 0),
+          edge(2 * topo.edges.size()) {
         for (const auto& pq : topo.edges)
             for (int32_t p : pq) ++begin[p + 1];
         for (int32_t p = 0; p < topo.n_particles; ++p) begin[p + 1] += begin[p];
@@ -44,8 +46,8 @@ std::vector<int32_t> wall_particles(const CoreTopology& topo, const std::vector<
 /// The particles within `radius` of p in the rest state reached from it through uncut edges
 /// within its piece, ascending.
 std::vector<int32_t> neighbourhood(const CoreTopology& topo, const ParticleEdges& adjacency,
-                                   const std::vector<uint8_t>& is_cut, const std::vector<int32_t>& piece,
-                                   int32_t p, Real radius) {
+                                   const std::vector<uint8_t>& is_cut,
+                                   const std::vector<int32_t>& piece, int32_t p, Real radius) {
     // which particles this search has met: marked with a number of its own
     thread_local std::vector<uint64_t> met;
     thread_local uint64_t search = 0;
@@ -58,7 +60,9 @@ std::vector<int32_t> neighbourhood(const CoreTopology& topo, const ParticleEdges
         for (int32_t c = adjacency.begin[q]; c < adjacency.begin[q + 1]; ++c) {
             const int32_t e = adjacency.edge[c];
             const int32_t r = topo.edges[e][0] == q ? topo.edges[e][1] : topo.edges[e][0];
-            if (met[r] == mark || is_cut[e] || piece[r] != piece[p] || (topo.X[r] - topo.X[p]).norm() > radius) continue;
+            if (met[r] == mark || is_cut[e] || piece[r] != piece[p] ||
+                (topo.X[r] - topo.X[p]).norm() > radius)
+                continue;
             met[r] = mark;
             near.push_back(r);
         }
@@ -70,8 +74,9 @@ std::vector<int32_t> neighbourhood(const CoreTopology& topo, const ParticleEdges
 }  // namespace
 
 size_t WallDeformation::memory_bytes() const {
-    return (particle.size() + begin.size() + neighbour.size()) * sizeof(int32_t) + weight.size() * sizeof(float) +
-           rest_centre.size() * sizeof(Vec3) + rest_inverse.size() * sizeof(Mat3);
+    return (particle.size() + begin.size() + neighbour.size()) * sizeof(int32_t) +
+           weight.size() * sizeof(float) + rest_centre.size() * sizeof(Vec3) +
+           rest_inverse.size() * sizeof(Mat3);
 }
 
 WallDeformation plan_wall_deformation(const CoreTopology& topo, const std::vector<uint8_t>& is_cut,
@@ -81,9 +86,12 @@ WallDeformation plan_wall_deformation(const CoreTopology& topo, const std::vecto
     const int64_t n = static_cast<int64_t>(d.particle.size());
     const ParticleEdges adjacency(topo);
     std::vector<std::vector<int32_t>> found(n);
-    parallel_for(n, [&](int64_t i) { found[i] = neighbourhood(topo, adjacency, is_cut, piece, d.particle[i], radius); });
+    parallel_for(n, [&](int64_t i) {
+        found[i] = neighbourhood(topo, adjacency, is_cut, piece, d.particle[i], radius);
+    });
     d.begin.assign(n + 1, 0);
-    for (int64_t i = 0; i < n; ++i) d.begin[i + 1] = d.begin[i] + static_cast<int32_t>(found[i].size());
+    for (int64_t i = 0; i < n; ++i)
+        d.begin[i + 1] = d.begin[i] + static_cast<int32_t>(found[i].size());
     d.neighbour.resize(d.begin[n]);
     d.weight.resize(d.begin[n]);
     d.rest_centre.resize(n);
@@ -95,7 +103,8 @@ WallDeformation plan_wall_deformation(const CoreTopology& topo, const std::vecto
         Vec3 centre = Vec3::Zero();
         for (size_t k = 0; k < found[i].size(); ++k) {
             const int32_t q = found[i][k];
-            const float w = float(std::exp(-(topo.X[q] - topo.X[p]).squaredNorm() / (2 * sigma * sigma)));
+            const float w =
+                float(std::exp(-(topo.X[q] - topo.X[p]).squaredNorm() / (2 * sigma * sigma)));
             d.neighbour[d.begin[i] + k] = q;
             d.weight[d.begin[i] + k] = w;
             total += w;
@@ -110,14 +119,15 @@ WallDeformation plan_wall_deformation(const CoreTopology& topo, const std::vecto
         d.rest_centre[i] = centre;
         d.rest_inverse[i] = Mat3::Zero();
         const Eigen::SelfAdjointEigenSolver<Mat3> eig(cov);
-        if (found[i].size() >= kMinNeighbours && eig.eigenvalues()[0] > kMinFlatness * eig.eigenvalues()[2])
+        if (found[i].size() >= kMinNeighbours &&
+            eig.eigenvalues()[0] > kMinFlatness * eig.eigenvalues()[2])
             d.rest_inverse[i] = cov.inverse();
     });
     return d;
 }
 
-void smooth_wall_motion(const CoreTopology& topo, const WallDeformation& d, const ParticleFrame& frame,
-                        std::vector<Vec3>& x, std::vector<Mat3>& A) {
+void smooth_wall_motion(const CoreTopology& topo, const WallDeformation& d,
+                        const ParticleFrame& frame, std::vector<Vec3>& x, std::vector<Mat3>& A) {
     parallel_for(static_cast<int64_t>(d.particle.size()), [&](int64_t i) {
         if (d.rest_inverse[i].isZero()) return;
         Real total = 0;
@@ -130,7 +140,8 @@ void smooth_wall_motion(const CoreTopology& topo, const WallDeformation& d, cons
         Mat3 cross = Mat3::Zero();
         for (int32_t k = d.begin[i]; k < d.begin[i + 1]; ++k) {
             const int32_t q = d.neighbour[k];
-            cross += Real(d.weight[k]) * (frame.P[q].cast<Real>() - centre) * (topo.X[q] - d.rest_centre[i]).transpose();
+            cross += Real(d.weight[k]) * (frame.P[q].cast<Real>() - centre) *
+                     (topo.X[q] - d.rest_centre[i]).transpose();
         }
         const int32_t p = d.particle[i];
         A[p] = cross * d.rest_inverse[i];

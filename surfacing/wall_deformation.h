@@ -43,7 +43,7 @@ WallDeformation plan_wall_deformation(const CoreTopology& topo, const std::vecto
 /// The smoothed motion of the wall particles in `frame`: x[p] and A[p] such that a rest point y0
 /// of p's core goes to x[p] + A[p] (y0 - X_p), A the fitted affine map's linear part. Only the
 /// wall particles of `deformation` that were fitted are written.
-void smooth_wall_motion(const CoreTopology& topo, const WallDeformation& deformation, const ParticleFrame& frame,
-                        std::vector<Vec3>& x, std::vector<Mat3>& A);
+void smooth_wall_motion(const CoreTopology& topo, const WallDeformation& deformation,
+                        const ParticleFrame& frame, std::vector<Vec3>& x, std::vector<Mat3>& A);
 
 }  // namespace mudcrack

@@ -33,7 +33,7 @@ struct CutEdgeGraph {
     std::vector<std::vector<int32_t>> neighbours;  // nodes whose edges share a face with this one
                                                    // (a rim node: a boundary face)
     std::vector<std::vector<int32_t>> all_neighbours;  // nodes whose edges share any face
-    std::vector<uint8_t> is_rim;                   // on the boundary: its neighbours are rim nodes
+    std::vector<uint8_t> is_rim;  // on the boundary: its neighbours are rim nodes
 };
 
 /// The edges of face f (opposite local corner l of tet t).
@@ -134,19 +134,21 @@ std::vector<Real> fitted_crossings(const CoreTopology& topo, const CutEdgeGraph&
         const Vec3 centre = mid[i] + offset;
         const Mat3 cov = outer - weight * offset * offset.transpose();
         const Eigen::SelfAdjointEigenSolver<Mat3> eig(cov);
-        if (near.size() < 4 || !(eig.eigenvalues()[1] > 1e-6 * eig.eigenvalues()[2])) continue;  // no plane
+        // no plane
+        if (near.size() < 4 || !(eig.eigenvalues()[1] > 1e-6 * eig.eigenvalues()[2])) continue;
         const Vec3 normal = eig.eigenvectors().col(0);
         const auto [p, q] = topo.edges[g.edge[i]];
         const Real along = normal.dot(topo.X[q] - topo.X[p]);
-        if (std::abs(along) > 1e-9 * topo.rest_length[g.edge[i]]) t[i] = normal.dot(centre - topo.X[p]) / along;
+        if (std::abs(along) > 1e-9 * topo.rest_length[g.edge[i]])
+            t[i] = normal.dot(centre - topo.X[p]) / along;
     }
     return t;
 }
 
 /// The mass point of a face or a tet: the mean of its cut edges' crossings, pulled halfway to its
 /// centroid when only one edge is cut (a crack tip), so no wall triangle degenerates.
-Vec3 mass_point(const std::vector<Vec3>& crossing, const CutEdgeGraph& g, const int32_t* edges, int n_edges,
-                const Vec3& centroid) {
+Vec3 mass_point(const std::vector<Vec3>& crossing, const CutEdgeGraph& g, const int32_t* edges,
+                int n_edges, const Vec3& centroid) {
     Vec3 sum = Vec3::Zero();
     int n = 0;
     for (int k = 0; k < n_edges; ++k)
@@ -186,10 +188,12 @@ void find_hidden_walls(WallGraph& g) {
     }
 }
 
-}  // namespace
-
-WallGraph plan_wall_graph(const CoreTopology& topo, const std::vector<uint8_t>& is_cut) {
-    WallGraph g;
+/// The graph's points (each cut edge's midpoint, its tets' centroids and their faces' centroids
+/// that hold the edge) and nodes into g; returns the links of the last frame's wall triangles
+/// (as build_crack makes them), both ways, each joining two nodes.
+std::vector<std::array<int32_t, 2>> add_wall_points(const CoreTopology& topo,
+                                                    const std::vector<uint8_t>& is_cut,
+                                                    WallGraph& g) {
     g.point_of = {std::vector<int32_t>(topo.n_edges(), -1), std::vector<int32_t>(topo.n_faces, -1),
                   std::vector<int32_t>(topo.n_tets(), -1)};
     // the points, in order of first use: each cut edge's midpoint, then around it its tets'
@@ -227,43 +231,63 @@ WallGraph plan_wall_graph(const CoreTopology& topo, const std::vector<uint8_t>& 
         g.points.push_back(point);
         return index;
     };
-    auto node = [&](int32_t point, int slot) { return g.points[point].first_node + g.points[point].reps[slot]; };
+    auto node = [&](int32_t point, int slot) {
+        return g.points[point].first_node + g.points[point].reps[slot];
+    };
     auto face_slot = [&](int32_t tet, int corner, int32_t particle) {
         const FaceOwners f = face_owners(topo, tet, corner);
         return int(std::find(f.owner.begin(), f.owner.end(), particle) - f.owner.begin());
     };
-    // the last frame's wall triangles (as build_crack makes them), each joining its three nodes
     std::vector<std::array<int32_t, 2>> links;
     for (int32_t e = 0; e < topo.n_edges(); ++e) {
         if (!is_cut[e]) continue;
         const int32_t m = add_point(RestPointKind::EdgeMidpoint, e, 0, 0);
         for (int32_t c = topo.edge_tet_begin[e]; c < topo.edge_tet_begin[e + 1]; ++c) {
             const int32_t t = topo.edge_tet[c] / 6;
-            const int i = kTetEdgeCorners[topo.edge_tet[c] % 6][0], j = kTetEdgeCorners[topo.edge_tet[c] % 6][1];
+            const int i = kTetEdgeCorners[topo.edge_tet[c] % 6][0],
+                      j = kTetEdgeCorners[topo.edge_tet[c] % 6][1];
             int k = -1, l = -1;
             for (int q = 0; q < 4; ++q)
                 if (q != i && q != j) (k < 0 ? k : l) = q;
             const int32_t tet_point = add_point(RestPointKind::TetCentroid, t, t, 0);
-            const int32_t face_k = add_point(RestPointKind::FaceCentroid, topo.tet_faces[t][l], t, l);  // opposite l
-            const int32_t face_l = add_point(RestPointKind::FaceCentroid, topo.tet_faces[t][k], t, k);  // opposite k
+            // opposite l
+            const int32_t face_k =
+                add_point(RestPointKind::FaceCentroid, topo.tet_faces[t][l], t, l);
+            // opposite k
+            const int32_t face_l =
+                add_point(RestPointKind::FaceCentroid, topo.tet_faces[t][k], t, k);
             for (int corner : {i, j}) {
                 const int32_t owner = topo.tets[t][corner];
-                const int32_t nm = node(m, owner == topo.edges[e][0] ? 0 : 1), ng = node(tet_point, corner);
-                const int32_t nk = node(face_k, face_slot(g.points[face_k].tet, g.points[face_k].corner, owner));
-                const int32_t nl = node(face_l, face_slot(g.points[face_l].tet, g.points[face_l].corner, owner));
-                for (const auto& [a, b] : {std::array<int32_t, 2>{nm, nk}, {nk, ng}, {ng, nm}, {nm, nl}, {nl, ng}})
+                const int32_t nm = node(m, owner == topo.edges[e][0] ? 0 : 1),
+                              ng = node(tet_point, corner);
+                const int32_t nk =
+                    node(face_k, face_slot(g.points[face_k].tet, g.points[face_k].corner, owner));
+                const int32_t nl =
+                    node(face_l, face_slot(g.points[face_l].tet, g.points[face_l].corner, owner));
+                for (const auto& [a, b] :
+                     {std::array<int32_t, 2>{nm, nk}, {nk, ng}, {ng, nm}, {nm, nl}, {nl, ng}})
                     links.push_back({a, b}), links.push_back({b, a});
             }
         }
     }
+    return links;
+}
+
+/// g's neighbours (CSR) from the links: sorted, without repeats.
+void link_wall_nodes(std::vector<std::array<int32_t, 2>> links, WallGraph& g) {
     std::sort(links.begin(), links.end());
     links.erase(std::unique(links.begin(), links.end()), links.end());
     g.begin.assign(g.n_nodes + 1, 0);
     for (const auto& [a, b] : links) ++g.begin[a + 1];
     for (int32_t n = 0; n < g.n_nodes; ++n) g.begin[n + 1] += g.begin[n];
     g.neighbour.resize(links.size());
-    for (size_t k = 0; k < links.size(); ++k) g.neighbour[k] = links[k][1];  // links are sorted by node
-    // the rim: nodes of points on the boundary (skin edges' midpoints, skin faces' centroids)
+    // links are sorted by node
+    for (size_t k = 0; k < links.size(); ++k) g.neighbour[k] = links[k][1];
+}
+
+/// The nodes held by the wall's smoothing: those of points on the boundary (skin edges'
+/// midpoints, skin faces' centroids) and of hidden walls; the rest with neighbours are free.
+void hold_wall_boundary(const CoreTopology& topo, WallGraph& g) {
     g.held.assign(g.n_nodes, 0);
     auto hold = [&](RestPointKind kind, int32_t id) {
         const int32_t point = g.find(kind, id);
@@ -278,6 +302,10 @@ WallGraph plan_wall_graph(const CoreTopology& topo, const std::vector<uint8_t>& 
     find_hidden_walls(g);
     for (int32_t n = 0; n < g.n_nodes; ++n)
         if (!g.held[n] && g.begin[n] < g.begin[n + 1]) g.free_nodes.push_back(n);
+}
+
+/// The rim nodes that lie on a curve of the rim (exactly two rim neighbours).
+void trace_rim(WallGraph& g) {
     // the rim: held for the wall's smoothing, which would pull it off the skin, but a curve of
     // its own. Held where its particles put it, it showed every particle's own motion along a
     // plate's edge: a scalloped rim, and flutes down the wall below it.
@@ -291,6 +319,15 @@ WallGraph plan_wall_graph(const CoreTopology& topo, const std::vector<uint8_t>& 
         g.rim_nodes.push_back(n);
         g.rim_neighbours.push_back({along[0], along[1]});
     }
+}
+
+}  // namespace
+
+WallGraph plan_wall_graph(const CoreTopology& topo, const std::vector<uint8_t>& is_cut) {
+    WallGraph g;
+    link_wall_nodes(add_wall_points(topo, is_cut, g), g);
+    hold_wall_boundary(topo, g);
+    trace_rim(g);
     // kept for the whole shot: without the slack push_back left (up to half of each)
     g.points.shrink_to_fit();
     g.free_nodes.shrink_to_fit();
@@ -321,12 +358,15 @@ void smooth_wall_nodes(const WallGraph& g, int steps, std::vector<Vec3>& positio
         });
         std::swap(y, next);
     }
-    auto keep_input = [&](int32_t n) { position[n] += (1 - kKeptInput) * (y[n].cast<Real>() - position[n]); };
+    auto keep_input = [&](int32_t n) {
+        position[n] += (1 - kKeptInput) * (y[n].cast<Real>() - position[n]);
+    };
     parallel_for(n_free, [&](int64_t i) { keep_input(g.free_nodes[i]); });
     parallel_for(n_rim, [&](int64_t i) { keep_input(g.rim_nodes[i]); });
 }
 
-WallRestPositions smooth_walls(const CoreTopology& topo, const std::vector<uint8_t>& is_cut, int iterations) {
+WallRestPositions smooth_walls(const CoreTopology& topo, const std::vector<uint8_t>& is_cut,
+                               int iterations) {
     if (iterations <= 0) return WallRestPositions();
     WallRestPositions out(topo.n_edges(), topo.n_faces, topo.n_tets());
     const CutEdgeGraph g = build_graph(topo, is_cut);
@@ -351,7 +391,8 @@ WallRestPositions smooth_walls(const CoreTopology& topo, const std::vector<uint8
             const Vec3 target = crossing[i] + step * (mean / Real(nb.size()) - crossing[i]);
             const auto [p, q] = topo.edges[g.edge[i]];
             const Vec3 d = topo.X[q] - topo.X[p];
-            next[i] = std::clamp(d.dot(target - topo.X[p]) / d.squaredNorm(), kMinCrossing, kMaxCrossing);
+            next[i] =
+                std::clamp(d.dot(target - topo.X[p]) / d.squaredNorm(), kMinCrossing, kMaxCrossing);
         });
         std::swap(t, next);
         parallel_for(n, [&](int64_t i) { crossing[i] = point(i, t[i]); });
@@ -360,16 +401,20 @@ WallRestPositions smooth_walls(const CoreTopology& topo, const std::vector<uint8
     for (int64_t i = 0; i < n; ++i) out.set(RestPointKind::EdgeMidpoint, g.edge[i], crossing[i]);
     for (int32_t tet = 0; tet < topo.n_tets(); ++tet) {
         const auto& te = topo.tet_edges[tet];
-        if (std::none_of(te.begin(), te.end(), [&](int32_t e) { return g.node_of[e] >= 0; })) continue;
+        if (std::none_of(te.begin(), te.end(), [&](int32_t e) { return g.node_of[e] >= 0; }))
+            continue;
         const Tet& c = topo.tets[tet];
         out.set(RestPointKind::TetCentroid, tet,
-                mass_point(crossing, g, te.data(), 6, (topo.X[c[0]] + topo.X[c[1]] + topo.X[c[2]] + topo.X[c[3]]) / 4));
+                mass_point(crossing, g, te.data(), 6,
+                           (topo.X[c[0]] + topo.X[c[1]] + topo.X[c[2]] + topo.X[c[3]]) / 4));
         for (int l = 0; l < 4; ++l) {
             const auto fe = face_edges(topo, tet, l);
-            if (std::none_of(fe.begin(), fe.end(), [&](int32_t e) { return g.node_of[e] >= 0; })) continue;
+            if (std::none_of(fe.begin(), fe.end(), [&](int32_t e) { return g.node_of[e] >= 0; }))
+                continue;
             const auto& fc = kTetOutwardFace[l];
             out.set(RestPointKind::FaceCentroid, topo.tet_faces[tet][l],
-                    mass_point(crossing, g, fe.data(), 3, (topo.X[c[fc[0]]] + topo.X[c[fc[1]]] + topo.X[c[fc[2]]]) / 3));
+                    mass_point(crossing, g, fe.data(), 3,
+                               (topo.X[c[fc[0]]] + topo.X[c[fc[1]]] + topo.X[c[fc[2]]]) / 3));
         }
     }
     out.shrink_to_fit();

@@ -69,11 +69,11 @@ private:
 struct WallGraph {
     struct Point {
         RestPointKind kind = RestPointKind::EdgeMidpoint;
-        int32_t id = 0;           // edge, face or tet id
-        int32_t tet = 0;          // a face: a tet holding it, and its corner opposite it
+        int32_t id = 0;   // edge, face or tet id
+        int32_t tet = 0;  // a face: a tet holding it, and its corner opposite it
         int8_t corner = 0;
-        WeldReps reps{};          // its owners' classes under the last frame's cuts
-        int32_t first_node = 0;   // node of owner slot j's class: first_node + reps[j]
+        WeldReps reps{};         // its owners' classes under the last frame's cuts
+        int32_t first_node = 0;  // node of owner slot j's class: first_node + reps[j]
     };
     std::vector<Point> points;                     // the rest points of the walls
     std::array<std::vector<int32_t>, 3> point_of;  // edge, face, tet id -> index into points, or -1
@@ -81,7 +81,8 @@ struct WallGraph {
     std::vector<uint8_t> held;                     // a node on the boundary (the rim) or hidden:
                                                    // not smoothed over the wall
     std::vector<uint8_t> hidden;                   // a node of a wall that reaches no surface
-    std::vector<int32_t> free_nodes;               // the nodes smoothing moves: not held, with neighbours
+    // the nodes smoothing moves: not held, with neighbours
+    std::vector<int32_t> free_nodes;
     /// The rim nodes smoothed along the rim: each has exactly two neighbours on the rim, so the rim
     /// is a curve through it (its ends, and where three cracks meet on the surface, stay put).
     /// Both the wall and the skin use a rim node, so the skin follows it.
@@ -109,6 +110,7 @@ void smooth_wall_nodes(const WallGraph& graph, int steps, std::vector<Vec3>& pos
 /// Places the walls through the edges with is_cut[e] != 0, with `iterations` Taubin steps
 /// (lambda 0.67, mu -0.72: a low-pass filter that does not shrink the wall) on the crossings.
 /// 0 iterations moves nothing (the dual-cell walls of the other modes). Deterministic.
-WallRestPositions smooth_walls(const CoreTopology& topo, const std::vector<uint8_t>& is_cut, int iterations);
+WallRestPositions smooth_walls(const CoreTopology& topo, const std::vector<uint8_t>& is_cut,
+                               int iterations);
 
 }  // namespace mudcrack

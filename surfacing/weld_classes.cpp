@@ -9,7 +9,8 @@ namespace {
 
 /// Union-find over n owners joined by the unbroken pairs, reduced to smallest-member reps.
 template <size_t NPairs>
-WeldReps reps_for(int n, const std::array<std::array<int, 2>, NPairs>& pairs, unsigned broken_mask) {
+WeldReps reps_for(int n, const std::array<std::array<int, 2>, NPairs>& pairs,
+                  unsigned broken_mask) {
     WeldReps rep = {0, 1, 2, 3};
     auto find = [&](int i) {
         while (rep[i] != i) i = rep[i];

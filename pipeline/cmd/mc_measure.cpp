@@ -14,10 +14,12 @@ int main(int argc, char** argv) {
         "into --out)",
         argc, argv,
         [&](CLI::App& app) {
-            app.add_option("--json", measure_options.json_file, "also write the table to this JSON file");
-            app.add_flag("--motion", measure_options.motion,
-                         "re-surface every frame: vertex jumps between frames beyond the particles' moves, and "
-                         "particles that change piece");
+            app.add_option("--json", measure_options.json_file,
+                           "also write the table to this JSON file");
+            app.add_flag(
+                "--motion", measure_options.motion,
+                "re-surface every frame: vertex jumps between frames beyond the particles' moves, and "
+                "particles that change piece");
         },
         [&](const StageOptions& options) { return run_measure_stage(options, measure_options); },
         [](const StageOptions&) { return std::optional<LockMode>(); });  // writes no stage folder

@@ -13,11 +13,13 @@ int main(int argc, char** argv) {
         "frame PNGs (a farm chunk), --assemble makes the rest from them",
         argc, argv,
         [&](CLI::App& app) {
-            app.add_flag("--turntable", render_options.force_turntable,
-                         "also render the turntable when the shot has no /render/turntable section");
-            app.add_flag("--assemble", render_options.assemble,
-                         "from the frame PNGs already in DIR/render/ (rendered by --frames chunks), render the "
-                         "turntable and write contact_sheet.png, the movies and manifest.json");
+            app.add_flag(
+                "--turntable", render_options.force_turntable,
+                "also render the turntable when the shot has no /render/turntable section");
+            app.add_flag(
+                "--assemble", render_options.assemble,
+                "from the frame PNGs already in DIR/render/ (rendered by --frames chunks), render the "
+                "turntable and write contact_sheet.png, the movies and manifest.json");
         },
         [&](const StageOptions& options) { return run_render_stage(options, render_options); },
         // --frames chunks of one shot write their own frames into one folder side by side

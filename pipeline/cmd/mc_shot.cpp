@@ -20,11 +20,11 @@ namespace {
 constexpr const char* kProgram = "mc-shot";
 }  // namespace
 
-
 int main(int argc, char** argv) {
     using namespace mudcrack;
     log::set_program(kProgram);
-    CLI::App app{"mudcrack shot files: check a shot, print the key spec, write a stage's slice", kProgram};
+    CLI::App app{"mudcrack shot files: check a shot, print the key spec, write a stage's slice",
+                 kProgram};
     app.set_version_flag("--version", std::string(kProgram) + " (mudcrack) " MUDCRACK_VERSION);
     app.require_subcommand(1);
     std::string file, stage, out;
@@ -33,8 +33,8 @@ int main(int argc, char** argv) {
         app.add_subcommand("validate", "check a shot; prints \"ok: FILE\" and what it turns on");
     validate->add_option("FILE", file, "shot file (JSON with comments)")->required();
 
-    CLI::App* keys =
-        app.add_subcommand("keys", "print every shot key: pointer, type, default, range, units, doc");
+    CLI::App* keys = app.add_subcommand(
+        "keys", "print every shot key: pointer, type, default, range, units, doc");
 
     CLI::App* slice = app.add_subcommand(
         "slice",
@@ -43,12 +43,14 @@ int main(int argc, char** argv) {
     slice->add_option("STAGE", stage, "init|sim|surface|render")
         ->required()
         ->check(CLI::IsMember({"init", "sim", "surface", "render"}));
-    slice->add_option("--out", out, "write here, only if the content changed (keeps the mtime for make)");
+    slice->add_option("--out", out,
+                      "write here, only if the content changed (keeps the mtime for make)");
 
     CLI::App* stages = app.add_subcommand("stages", "print the stages FILE turns on, in run order");
     stages->add_option("FILE", file, "shot file (JSON with comments)")->required();
 
-    CLI::App* reuse = app.add_subcommand("reuse", "print the shot FILE's /reuse names (nothing when unset)");
+    CLI::App* reuse =
+        app.add_subcommand("reuse", "print the shot FILE's /reuse names (nothing when unset)");
     reuse->add_option("FILE", file, "shot file (JSON with comments)")->required();
 
     std::string out_dir;
@@ -56,12 +58,16 @@ int main(int argc, char** argv) {
         app.add_subcommand("summary", "print what each stage wrote under OUT (from its manifest)");
     summary_cmd->add_option("OUT", out_dir, "a shot's output folder, e.g. out/demo")->required();
     bool summary_json = false;
-    summary_cmd->add_flag("--json", summary_json, "print one JSON object instead of the table (for scripts)");
+    summary_cmd->add_flag("--json", summary_json,
+                          "print one JSON object instead of the table (for scripts)");
 
     std::string manifest_file;
     CLI::App* verify = app.add_subcommand(
-        "verify", "check every file a stage manifest records against its checksum (exit 1 naming a damaged one)");
-    verify->add_option("MANIFEST", manifest_file, "a stage's manifest, e.g. out/demo/surface/manifest.json")
+        "verify",
+        "check every file a stage manifest records against its checksum (exit 1 naming a damaged one)");
+    verify
+        ->add_option("MANIFEST", manifest_file,
+                     "a stage's manifest, e.g. out/demo/surface/manifest.json")
         ->required();
 
     try {

@@ -13,9 +13,10 @@ int main(int argc, char** argv) {
         "particle-core surfacing: boundary and crack meshes per frame from OUT/init/ and OUT/sim/ into OUT/surface/",
         argc, argv,
         [&](CLI::App& app) {
-            app.add_option("--mode", surface_options.mode,
-                           "ours (moisture-aware Eq. 13/14), wang2019 (the baseline) or plates (clean plates for "
-                           "close-ups); default: the shot's")
+            app.add_option(
+                   "--mode", surface_options.mode,
+                   "ours (moisture-aware Eq. 13/14), wang2019 (the baseline) or plates (clean plates for "
+                   "close-ups); default: the shot's")
                 ->check(CLI::IsMember(surface_mode_names()));
             app.add_option("--format", surface_options.format,
                            "glb, obj, ply or dae (fbx is refused); default: the shot's");

@@ -55,7 +55,8 @@ std::string filesystem_error_line(const std::filesystem::filesystem_error& e) {
             what.erase(what.size() - suffix.size());
     }
     if (e.path1().empty()) return what;
-    return e.path1().string() + (e.path2().empty() ? "" : " -> " + e.path2().string()) + ": " + what;
+    return e.path1().string() + (e.path2().empty() ? "" : " -> " + e.path2().string()) + ": " +
+           what;
 }
 
 // the stage a program writes: "mc-render" -> "render"
@@ -93,14 +94,14 @@ void set_stop_signal_action(void (*handler)(int)) {
         // an exclusive holder's folder holds no one else's temporaries (ffmpeg's movie among them)
         std::error_code ec;
         if (lock->mode() == LockMode::Exclusive)
-            for (auto it = fs::directory_iterator(lock->stage_dir(), ec); !ec && it != fs::directory_iterator();
-                 it.increment(ec))
+            for (auto it = fs::directory_iterator(lock->stage_dir(), ec);
+                 !ec && it != fs::directory_iterator(); it.increment(ec))
                 if (it->path().extension() == ".tmp") fs::remove(it->path(), ec);
         lock->release();
         what += " in " + lock->stage_dir().parent_path().string();
     }
-    log::error(std::string("stopped by ") + (signal_number == SIGINT ? "SIGINT" : "SIGTERM") + ": " + what +
-               "; exit " + std::to_string(128 + signal_number));
+    log::error(std::string("stopped by ") + (signal_number == SIGINT ? "SIGINT" : "SIGTERM") +
+               ": " + what + "; exit " + std::to_string(128 + signal_number));
     std::fflush(stderr);
     _exit(128 + signal_number);
 }
@@ -129,7 +130,9 @@ int run_locked_body(const StageOptions& opt, const std::function<int(const Stage
     int code = kExitFailure;
     try {
         const std::optional<LockMode> mode = lock_mode ? lock_mode(opt) : LockMode::Exclusive;
-        if (mode) lock = std::make_unique<StageLock>(fs::path(opt.out) / stage_of(opt.program), opt.program, *mode);
+        if (mode)
+            lock = std::make_unique<StageLock>(fs::path(opt.out) / stage_of(opt.program),
+                                               opt.program, *mode);
         // writers sharing a folder: temporary names unique to this one
         if (mode == LockMode::Shared)
             set_temporary_suffix("." + lock_host_name() + "." + std::to_string(getpid()) + ".tmp");
@@ -166,7 +169,8 @@ std::string flag_name(const CLI::Option& option) {
 
 void refuse_empty_values(const CLI::App& app) {
     for (const CLI::Option* option : app.get_options()) {
-        if (option->count() == 0 || option->get_expected_min() == 0) continue;  // not given, or a switch
+        // not given, or a switch
+        if (option->count() == 0 || option->get_expected_min() == 0) continue;
         for (const std::string& value : option->results())
             if (value.empty()) throw UsageError(flag_name(*option) + " = \"\": expected a value");
     }
@@ -202,15 +206,18 @@ int max_thread_count() {
 int parse_thread_count(const std::string& text) {
     static const std::regex number(R"(^\s*(-?\d{1,12})\s*$)");
     const int hardware = std::max(1, int(std::thread::hardware_concurrency()));
-    const std::string expected = "expected 0 (all " + std::to_string(hardware) + " hardware threads) or 1 to " +
-                                 std::to_string(max_thread_count()) + " (" +
-                                 std::to_string(kMaxThreadsPerHardwareThread) + " x the hardware threads)";
+    const std::string expected =
+        "expected 0 (all " + std::to_string(hardware) + " hardware threads) or 1 to " +
+        std::to_string(max_thread_count()) + " (" + std::to_string(kMaxThreadsPerHardwareThread) +
+        " x the hardware threads)";
     std::smatch m;
-    if (!std::regex_match(text, m, number)) throw UsageError("--threads = \"" + text + "\": " + expected);
+    if (!std::regex_match(text, m, number))
+        throw UsageError("--threads = \"" + text + "\": " + expected);
     const long long n = std::stoll(m[1]);
     if (n < 0) throw UsageError("--threads = " + std::to_string(n) + ": " + expected);
     if (n > max_thread_count())
-        throw UsageError("--threads = " + std::to_string(n) + ": more threads than a stage can use here: " + expected);
+        throw UsageError("--threads = " + std::to_string(n) +
+                         ": more threads than a stage can use here: " + expected);
     return int(n);
 }
 
@@ -224,7 +231,8 @@ void report_error_lines(const std::string& message) {
     size_t begin = 0;
     while (begin <= message.size()) {
         const size_t end = message.find('\n', begin);
-        const std::string line = message.substr(begin, end == std::string::npos ? std::string::npos : end - begin);
+        const std::string line =
+            message.substr(begin, end == std::string::npos ? std::string::npos : end - begin);
         if (!line.empty()) log::error(line);
         if (end == std::string::npos) break;
         begin = end + 1;
@@ -244,8 +252,10 @@ int run_stage(const std::string& program, const std::string& description, int ar
     std::string threads_text;
     app.set_version_flag("--version", std::string(program) + " (mudcrack) " MUDCRACK_VERSION);
     app.add_option("--shot", opt.shot, "shot file (JSON)")->required()->check(CLI::ExistingFile);
-    app.add_option("--out", opt.out, "output root of the shot (stages write OUT/<stage>/)")->required();
-    app.add_option("--frames", opt.frames, "frame range A-B or a single frame N (default: the shot's)");
+    app.add_option("--out", opt.out, "output root of the shot (stages write OUT/<stage>/)")
+        ->required();
+    app.add_option("--frames", opt.frames,
+                   "frame range A-B or a single frame N (default: the shot's)");
     app.add_option("--threads", threads_text,
                    "worker threads, at most " + std::to_string(kMaxThreadsPerHardwareThread) +
                        " x the hardware threads (default: all cores)");
@@ -253,7 +263,8 @@ int run_stage(const std::string& program, const std::string& description, int ar
     app.add_option("--log-level", opt.log_level, "error|warning|info|debug")
         ->check(CLI::IsMember({"error", "warning", "info", "debug"}));
     app.add_flag("--quiet", opt.quiet, "print errors and warnings only");
-    app.add_flag("--keep-partial", opt.keep_partial, "keep the .partial/ output folder of a failed run");
+    app.add_flag("--keep-partial", opt.keep_partial,
+                 "keep the .partial/ output folder of a failed run");
     if (add_flags) add_flags(app);
     // usage errors: the parser's and the flag values', one line each, exit 2
     try {
@@ -268,7 +279,7 @@ int run_stage(const std::string& program, const std::string& description, int ar
         log::error(e.what());
         return kExitUsage;
     }
-    const log::Level level = opt.quiet ? log::Level::Warning
+    const log::Level level = opt.quiet                    ? log::Level::Warning
                              : opt.log_level == "error"   ? log::Level::Error
                              : opt.log_level == "warning" ? log::Level::Warning
                              : opt.log_level == "debug"   ? log::Level::Debug

@@ -63,6 +63,7 @@ void report_error_lines(const std::string& message);
 /// @param argv main's argv (null-terminated), passed on unchanged to the re-executed binary
 int run_stage(const std::string& program, const std::string& description, int argc, char** argv,
               const std::function<void(CLI::App&)>& add_flags,
-              const std::function<int(const StageOptions&)>& body, const LockModeOf& lock_mode = {});
+              const std::function<int(const StageOptions&)>& body,
+              const LockModeOf& lock_mode = {});
 
 }  // namespace mudcrack

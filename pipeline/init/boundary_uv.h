@@ -16,14 +16,16 @@ using CornerUVs = std::array<Vec2, 3>;
 /// |n_x|: u = z, v = y; |n_z|: u = x, v = y), measured from the boundary's bounding box
 /// minimum and divided by its largest extent, so texture density is uniform across faces and
 /// UVs lie in [0, 1]. All corners of a triangle share its projection (seams fall on edges).
-std::vector<CornerUVs> project_boundary_uvs(const std::vector<Vec3>& X, const std::vector<Tri>& boundary);
+std::vector<CornerUVs> project_boundary_uvs(const std::vector<Vec3>& X,
+                                            const std::vector<Tri>& boundary);
 
 /// UV transfer from `surface` (which must have face_uv): each boundary corner takes the UV of
 /// its closest point on the input surface (CGAL AABB tree), interpolated barycentrically from
 /// the containing input face's corner UVs. The query point is the corner pulled 1 % of the
 /// way towards its triangle's centroid, so the corners of a triangle next to a UV seam sample
 /// the chart the triangle lies in. Implemented in cgal_surface.cpp.
-std::vector<CornerUVs> transfer_boundary_uvs(const InputSurface& surface, const std::vector<Vec3>& X,
+std::vector<CornerUVs> transfer_boundary_uvs(const InputSurface& surface,
+                                             const std::vector<Vec3>& X,
                                              const std::vector<Tri>& boundary);
 
 }  // namespace mudcrack

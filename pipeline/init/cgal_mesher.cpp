@@ -41,7 +41,8 @@ SurfaceMesh to_surface_mesh(const InputSurface& surface) {
                static_cast<SurfaceMesh::size_type>(surface.faces.size()));
     std::vector<SurfaceMesh::Vertex_index> v;
     v.reserve(surface.positions.size());
-    for (const Vec3& p : surface.positions) v.push_back(sm.add_vertex(Kernel::Point_3(p.x(), p.y(), p.z())));
+    for (const Vec3& p : surface.positions)
+        v.push_back(sm.add_vertex(Kernel::Point_3(p.x(), p.y(), p.z())));
     for (size_t f = 0; f < surface.faces.size(); ++f) {
         const Tri& t = surface.faces[f];
         if (sm.add_face(v[t[0]], v[t[1]], v[t[2]]) == SurfaceMesh::null_face()) {
@@ -59,14 +60,13 @@ template <class ConcurrencyTag>
 TetMesh run_mesh_3(Domain& domain, const MesherOptions& o) {
     using Tr = typename CGAL::Mesh_triangulation_3<Domain, CGAL::Default, ConcurrencyTag>::type;
     using C3t3 = CGAL::Mesh_complex_3_in_triangulation_3<Tr, typename Domain::Corner_index,
-                                                        typename Domain::Curve_index>;
+                                                         typename Domain::Curve_index>;
     using Criteria = CGAL::Mesh_criteria_3<Tr>;
     namespace p = CGAL::parameters;
 
     const Real L = o.edge_length;
     const Criteria criteria(p::edge_size = L,  // protecting balls along sharp features
-                            p::facet_angle = o.facet_angle,
-                            p::facet_size = o.facet_size_ratio * L,
+                            p::facet_angle = o.facet_angle, p::facet_size = o.facet_size_ratio * L,
                             p::facet_distance = o.facet_distance_ratio * L,
                             p::cell_radius_edge_ratio = o.cell_radius_edge_ratio,
                             p::cell_size = o.cell_size_ratio * L);
@@ -126,9 +126,9 @@ TetMesh tetrahedralize_surface(const InputSurface& surface, const MesherOptions&
         throw RuntimeError(std::string("CGAL Mesh_3 failed: ") + e.what());
     }
     if (mesh.tets.empty()) {
-        throw RuntimeError("CGAL Mesh_3 produced no tets at edge_length = " +
-                           std::to_string(options.edge_length) +
-                           " m: the edge length is probably too large for the object");
+        throw RuntimeError(
+            "CGAL Mesh_3 produced no tets at edge_length = " + std::to_string(options.edge_length) +
+            " m: the edge length is probably too large for the object");
     }
     return mesh;
 }

@@ -11,7 +11,7 @@ namespace mudcrack {
 /// because CGAL's criteria bound radii, not edges: the ratios below were calibrated (see
 /// tools/bench_init.sh) so that the mean tet edge comes out close to `edge_length`.
 struct MesherOptions {
-    Real edge_length = 0.025;          // target tet edge length [m]
+    Real edge_length = 0.025;  // target tet edge length [m]
     /// CGAL facet_size (radius of the surface Delaunay balls) / edge_length. An equilateral
     /// triangle of edge L has circumradius L/sqrt(3) = 0.577 L; refinement stops below the
     /// bound, so the bound sits higher: 0.7 and 0.75 below give a mean edge of 0.99 L on the
@@ -24,22 +24,22 @@ struct MesherOptions {
     /// surface) / edge_length: the knob that decides how much volume the chords cut off. The
     /// bunny at the default sizing loses 0.2 % of its volume at 0.05 (0.3 % at 0.1).
     Real facet_distance_ratio = 0.05;
-    Real facet_angle = 25;             // minimum boundary facet angle [deg]
-    Real cell_radius_edge_ratio = 3;   // tet circumradius / shortest edge bound
+    Real facet_angle = 25;            // minimum boundary facet angle [deg]
+    Real cell_radius_edge_ratio = 3;  // tet circumradius / shortest edge bound
     /// Sharp edges (dihedral angle of adjacent faces below 180 - feature_angle degrees) are
     /// detected and protected so boxes keep their corners; 0 turns feature detection off.
-    Real feature_angle = 60;           // [deg]
+    Real feature_angle = 60;  // [deg]
     /// Parallel_tag (TBB): faster on several cores, but CGAL's concurrent refinement depends
     /// on thread scheduling, so two runs may give different meshes. Sequential_tag with the
     /// seed below is reproducible bit for bit.
     bool parallel = false;
-    unsigned seed = 1;                 // CGAL::get_default_random() is reset to this
+    unsigned seed = 1;  // CGAL::get_default_random() is reset to this
     /// Sliver perturbation and exudation (Mesh_3's optimisers). Off by default: slivers only
     /// give a few particles a tiny share of volume, which MPM does not mind, and removing them
     /// costs more than the meshing itself (see tools/bench_init.sh).
     bool perturb = false;
     bool exude = false;
-    Real optimizer_time_limit = 0;     // [s] per optimiser; 0 = until done
+    Real optimizer_time_limit = 0;  // [s] per optimiser; 0 = until done
 };
 
 /// Tetrahedralizes the interior of a closed, outward-oriented, self-intersection-free surface

@@ -50,7 +50,8 @@ Real check_input_surface(const InputSurface& surface, const std::string& name) {
     for (const Vec3& p : surface.positions) points.emplace_back(p.x(), p.y(), p.z());
     std::vector<std::array<size_t, 3>> polygons;
     polygons.reserve(surface.faces.size());
-    for (const Tri& t : surface.faces) polygons.push_back({size_t(t[0]), size_t(t[1]), size_t(t[2])});
+    for (const Tri& t : surface.faces)
+        polygons.push_back({size_t(t[0]), size_t(t[1]), size_t(t[2])});
     if (!PMP::is_polygon_soup_a_polygon_mesh(polygons)) {
         problems.push_back(name + ": the faces do not form a manifold polygon mesh");
         refuse();
@@ -60,15 +61,17 @@ Real check_input_surface(const InputSurface& surface, const std::string& name) {
 
     // self-intersections: pairs of faces that meet other than at a shared edge or vertex
     std::vector<std::pair<SurfaceMesh::Face_index, SurfaceMesh::Face_index>> pairs;
-    PMP::self_intersections<CGAL::Parallel_if_available_tag>(faces(mesh), mesh, std::back_inserter(pairs));
+    PMP::self_intersections<CGAL::Parallel_if_available_tag>(faces(mesh), mesh,
+                                                             std::back_inserter(pairs));
     if (!pairs.empty()) {
         const auto f = pairs.front().first, g = pairs.front().second;
         Vec3 centroid = Vec3::Zero();
-        for (auto v : vertices_around_face(mesh.halfedge(f), mesh)) centroid += to_vec(mesh.point(v)) / 3;
+        for (auto v : vertices_around_face(mesh.halfedge(f), mesh))
+            centroid += to_vec(mesh.point(v)) / 3;
         problems.push_back(name + ": " + std::to_string(pairs.size()) +
                            " pairs of self-intersecting faces, first between faces " +
-                           std::to_string(std::size_t(f)) + " and " + std::to_string(std::size_t(g)) +
-                           " near " + point_text(centroid));
+                           std::to_string(std::size_t(f)) + " and " +
+                           std::to_string(std::size_t(g)) + " near " + point_text(centroid));
     }
 
     // enclosed volume: positive only when the normals point outward
@@ -77,14 +80,16 @@ Real check_input_surface(const InputSurface& surface, const std::string& name) {
         std::ostringstream msg;
         msg << name << ": enclosed volume = " << volume
             << " m^3: expected > 0 (faces wound counter-clockwise seen from outside; "
-            << (volume < 0 ? "this mesh is inside out: flip its normals)" : "the mesh encloses nothing)");
+            << (volume < 0 ? "this mesh is inside out: flip its normals)"
+                           : "the mesh encloses nothing)");
         problems.push_back(msg.str());
     }
     if (!problems.empty()) refuse();
     return volume;
 }
 
-std::vector<CornerUVs> transfer_boundary_uvs(const InputSurface& surface, const std::vector<Vec3>& X,
+std::vector<CornerUVs> transfer_boundary_uvs(const InputSurface& surface,
+                                             const std::vector<Vec3>& X,
                                              const std::vector<Tri>& boundary) {
     if (surface.face_uv.size() != surface.faces.size())
         throw RuntimeError("transfer_boundary_uvs: the input surface has no UVs");
@@ -98,7 +103,8 @@ std::vector<CornerUVs> transfer_boundary_uvs(const InputSurface& surface, const 
         const Vec3& p = surface.positions[v];
         return Point(p.x(), p.y(), p.z());
     };
-    for (const Tri& t : surface.faces) triangles.emplace_back(point(t[0]), point(t[1]), point(t[2]));
+    for (const Tri& t : surface.faces)
+        triangles.emplace_back(point(t[0]), point(t[1]), point(t[2]));
     Tree tree(triangles.cbegin(), triangles.cend());
     tree.build();
     tree.accelerate_distance_queries();  // built now: lazily it would race between threads
@@ -113,7 +119,8 @@ std::vector<CornerUVs> transfer_boundary_uvs(const InputSurface& surface, const 
             const size_t face = static_cast<size_t>(hit.second - triangles.cbegin());
             // barycentric coordinates of the closest point in the input face
             const Tri& s = surface.faces[face];
-            const Vec3 a = surface.positions[s[0]], b = surface.positions[s[1]], d = surface.positions[s[2]];
+            const Vec3 a = surface.positions[s[0]], b = surface.positions[s[1]],
+                       d = surface.positions[s[2]];
             const Vec3 p = to_vec(hit.first);
             const Vec3 e1 = b - a, e2 = d - a, r = p - a;
             const Real d11 = e1.dot(e1), d12 = e1.dot(e2), d22 = e2.dot(e2);

@@ -48,8 +48,8 @@ InputSurface load_placed_surface(const MeshSource& source) {
 InitResult finish_tet_mesh(TetMesh mesh, const InputSurface* uv_source) {
     drop_unused_vertices(mesh);
     if (const int64_t bad = count_non_positive_tets(mesh); bad > 0)
-        throw RuntimeError("init mesh: " + std::to_string(bad) + " of " + std::to_string(mesh.tets.size()) +
-                           " tets have non-positive volume");
+        throw RuntimeError("init mesh: " + std::to_string(bad) + " of " +
+                           std::to_string(mesh.tets.size()) + " tets have non-positive volume");
     mesh.boundary = extract_boundary_faces(mesh.tets);
     InitResult r;
     if (uv_source && !uv_source->face_uv.empty()) {
@@ -77,30 +77,36 @@ InitResult build_init(const InitParams& params, const MesherOptions& mesher) {
             break;
         case SourceType::Mesh: {
             if (params.mesh.path.empty())
-                throw ShotValueError("/source/mesh/path: missing: a mesh source needs a surface file");
+                throw ShotValueError(
+                    "/source/mesh/path: missing: a mesh source needs a surface file");
             const InputSurface surface = load_placed_surface(params.mesh);
             const Real surface_volume = check_input_surface(surface, params.mesh.path);
             Vec3 lo = surface.positions[0], hi = lo;
             for (const Vec3& x : surface.positions) lo = lo.cwiseMin(x), hi = hi.cwiseMax(x);
             if (mesher.edge_length > (hi - lo).maxCoeff())
-                throw ShotValueError("/init/edge_length = " + num(mesher.edge_length) + " m: larger than " +
-                                     params.mesh.path + " itself (largest extent " + num((hi - lo).maxCoeff()) +
+                throw ShotValueError("/init/edge_length = " + num(mesher.edge_length) +
+                                     " m: larger than " + params.mesh.path +
+                                     " itself (largest extent " + num((hi - lo).maxCoeff()) +
                                      " m after scaling); expected a fraction of it");
             // a quality Mesh_3 mesh has about one vertex per 0.55 L^3 (see default_edge_length)
             const double expected = surface_volume / (0.55 * std::pow(mesher.edge_length, 3));
             if (expected > kMaxInitParticles)
-                throw ShotValueError("/init/edge_length = " + num(mesher.edge_length) + " m: would make ~" +
-                                     count_text(expected) + " particles from " + params.mesh.path + " (volume " +
+                throw ShotValueError("/init/edge_length = " + num(mesher.edge_length) +
+                                     " m: would make ~" + count_text(expected) +
+                                     " particles from " + params.mesh.path + " (volume " +
                                      num(surface_volume) + " m^3); expected at most " +
-                                     count_text(kMaxInitParticles) + ": raise the edge length (or /sim/h when it is derived)");
-            log::info("input surface " + params.mesh.path + ": " + std::to_string(surface.positions.size()) +
-                      " vertices, " + std::to_string(surface.faces.size()) + " triangles, volume " +
+                                     count_text(kMaxInitParticles) +
+                                     ": raise the edge length (or /sim/h when it is derived)");
+            log::info("input surface " + params.mesh.path + ": " +
+                      std::to_string(surface.positions.size()) + " vertices, " +
+                      std::to_string(surface.faces.size()) + " triangles, volume " +
                       num(surface_volume) + " m^3");
             WallTimer mesh_timer;
             TetMesh tets = tetrahedralize_surface(surface, mesher);
             log::info("CGAL Mesh_3 (" + std::string(mesher.parallel ? "parallel" : "sequential") +
-                      ", edge length " + num(mesher.edge_length) + " m): " + std::to_string(tets.tets.size()) +
-                      " tets in " + num(mesh_timer.seconds()) + " s");
+                      ", edge length " + num(mesher.edge_length) +
+                      " m): " + std::to_string(tets.tets.size()) + " tets in " +
+                      num(mesh_timer.seconds()) + " s");
             r = finish_tet_mesh(std::move(tets), &surface);
             r.surface_volume = surface_volume;
             r.edge_length = mesher.edge_length;
@@ -109,13 +115,14 @@ InitResult build_init(const InitParams& params, const MesherOptions& mesher) {
     }
     // the heterogeneous strength, a function of the rest positions and the seed
     if (params.strength_field)
-        r.strength = strength_multipliers(make_strength_field(*params.strength_field, params.seed), r.mesh.X);
+        r.strength = strength_multipliers(make_strength_field(*params.strength_field, params.seed),
+                                          r.mesh.X);
     const MeshQuality& q = r.quality;
     std::ostringstream msg;
-    msg << source_type_name(params.type) << ": " << q.particles << " particles, " << q.tets << " tets, "
-        << q.boundary_faces << " boundary faces (UVs: " << r.uv_method << "), dihedral angles "
-        << q.min_dihedral_deg << " to " << q.max_dihedral_deg << " deg, mean edge " << q.mean_edge_length
-        << " m, volume " << q.tet_volume << " m^3";
+    msg << source_type_name(params.type) << ": " << q.particles << " particles, " << q.tets
+        << " tets, " << q.boundary_faces << " boundary faces (UVs: " << r.uv_method
+        << "), dihedral angles " << q.min_dihedral_deg << " to " << q.max_dihedral_deg
+        << " deg, mean edge " << q.mean_edge_length << " m, volume " << q.tet_volume << " m^3";
     if (r.surface_volume > 0)
         msg << " (" << 100 * (q.tet_volume / r.surface_volume - 1) << " % vs the input surface)";
     msg << ", built in " << timer.seconds() << " s";

@@ -32,13 +32,15 @@ InputSurface load_placed_surface(const MeshSource& source);
 
 /// Everything mc-init produces, in memory.
 struct InitResult {
-    TetMesh mesh;                 // rest positions, tets, outward boundary, boundary UVs
-    std::vector<Real> volume0;    // particle rest volumes [m^3], (n_particles)
+    TetMesh mesh;               // rest positions, tets, outward boundary, boundary UVs
+    std::vector<Real> volume0;  // particle rest volumes [m^3], (n_particles)
     MeshQuality quality;
-    Real surface_volume = 0;      // volume enclosed by the input surface (mesh source) [m^3]; 0 otherwise
-    Real edge_length = 0;         // target edge length given to Mesh_3 (mesh source) [m]; 0 otherwise
-    std::string uv_method;        // "transferred" (from the input's UVs) or "box projection"
-    std::vector<Real> strength;   // p0 multipliers (params.strength_field), else empty
+    // volume enclosed by the input surface (mesh source) [m^3]; 0 otherwise
+    Real surface_volume = 0;
+    // target edge length given to Mesh_3 (mesh source) [m]; 0 otherwise
+    Real edge_length = 0;
+    std::string uv_method;       // "transferred" (from the input's UVs) or "box projection"
+    std::vector<Real> strength;  // p0 multipliers (params.strength_field), else empty
 };
 
 /// Builds the source of `params`: a box lattice, a heightfield lattice, or a checked and

@@ -14,34 +14,34 @@ enum class SourceType { Mesh, Box, Heightfield };
 enum class Lattice { Regular, Jittered };
 
 struct MeshSource {
-    std::string path;              // closed triangle mesh (OBJ, PLY, STL, OFF, glTF)
-    Real scale = 1;                // uniform scale applied after loading
-    Vec3 translate = Vec3::Zero(); // applied after scaling [m]
-    bool fit_to_ground = true;     // translate so the lowest point sits on y = 0 (after translate)
+    std::string path;               // closed triangle mesh (OBJ, PLY, STL, OFF, glTF)
+    Real scale = 1;                 // uniform scale applied after loading
+    Vec3 translate = Vec3::Zero();  // applied after scaling [m]
+    bool fit_to_ground = true;      // translate so the lowest point sits on y = 0 (after translate)
 };
 
 /// A box slab filled with a lattice split into 6 tets per cell (Kuhn/Freudenthal split), so the
 /// particle count is exactly prod(n_i + 1).
 struct BoxSource {
-    Vec3 min = Vec3(-0.5, 0, -0.5); // [m]
-    Vec3 max = Vec3(0.5, 0.1, 0.5); // [m]
-    Real spacing = 0.025;           // lattice spacing [m]
+    Vec3 min = Vec3(-0.5, 0, -0.5);  // [m]
+    Vec3 max = Vec3(0.5, 0.1, 0.5);  // [m]
+    Real spacing = 0.025;            // lattice spacing [m]
     Lattice lattice = Lattice::Regular;
-    Real jitter = 0.25;             // jitter amplitude in units of spacing (interior only)
+    Real jitter = 0.25;  // jitter amplitude in units of spacing (interior only)
 };
 
 /// A terrain slab: flat bottom at y = 0, top at base + a carved channel and gentle noise, or
 /// a grayscale PNG heightmap.
 struct HeightfieldSource {
-    Vec3 size = Vec3(4, 0, 4);        // x and z extent [m] (y ignored)
-    Real base = 0.3;                  // thickness at the banks [m]
-    Real amplitude = 0.05;            // bank undulation amplitude [m]
-    Real channel_depth = 0.15;        // depth of the carved channel [m]
-    Real channel_width = 0.8;         // channel width [m]
-    Real channel_meander = 0.5;       // lateral meander amplitude [m]
-    std::string image;                // optional grayscale PNG; overrides the formula
-    Real image_height = 0.3;          // height of a white pixel [m]
-    Real spacing = 0.05;              // lattice spacing [m]
+    Vec3 size = Vec3(4, 0, 4);   // x and z extent [m] (y ignored)
+    Real base = 0.3;             // thickness at the banks [m]
+    Real amplitude = 0.05;       // bank undulation amplitude [m]
+    Real channel_depth = 0.15;   // depth of the carved channel [m]
+    Real channel_width = 0.8;    // channel width [m]
+    Real channel_meander = 0.5;  // lateral meander amplitude [m]
+    std::string image;           // optional grayscale PNG; overrides the formula
+    Real image_height = 0.3;     // height of a white pixel [m]
+    Real spacing = 0.05;         // lattice spacing [m]
 };
 
 /// A shot value the builders refuse, as "<pointer> = <value>: <expectation>": they see the values,
@@ -57,8 +57,8 @@ struct InitParams {
     MeshSource mesh;
     BoxSource box;
     HeightfieldSource heightfield;
-    Real edge_length = 0;   // target tet edge length for CGAL Mesh_3 [m]; 0 = derived from h
-    unsigned seed = 1;      // jitter, mesher and strength-field seed
+    Real edge_length = 0;  // target tet edge length for CGAL Mesh_3 [m]; 0 = derived from h
+    unsigned seed = 1;     // jitter, mesher and strength-field seed
     std::optional<StrengthFieldParams> strength_field;  // p0 multipliers cached per particle
 };
 

@@ -62,7 +62,9 @@ std::string count_text(double count) {
     return text;
 }
 
-double lattice_cells(Real extent, Real spacing) { return std::max(1.0, std::round(extent / spacing)); }
+double lattice_cells(Real extent, Real spacing) {
+    return std::max(1.0, std::round(extent / spacing));
+}
 
 std::vector<Tet> kuhn_tets(int nx, int ny, int nz) {
     // the 6 monotone paths from corner (0,0,0) to (1,1,1), one per axis permutation; a tet's
@@ -91,16 +93,18 @@ std::vector<Tet> kuhn_tets(int nx, int ny, int nz) {
 TetMesh make_box_tets(const BoxSource& box, unsigned seed) {
     const Vec3 extent = box.max - box.min;
     if (!(extent.minCoeff() > 0))
-        throw ShotValueError("/source/box: min = " + vec_text(box.min) + ", max = " + vec_text(box.max) +
-                             ": max must exceed min on every axis");
+        throw ShotValueError("/source/box: min = " + vec_text(box.min) + ", max = " +
+                             vec_text(box.max) + ": max must exceed min on every axis");
     if (!(box.spacing > 0))
         throw ShotValueError("/source/box/spacing = " + num(box.spacing) + ": must be > 0 [m]");
-    const double cells[3] = {lattice_cells(extent.x(), box.spacing), lattice_cells(extent.y(), box.spacing),
+    const double cells[3] = {lattice_cells(extent.x(), box.spacing),
+                             lattice_cells(extent.y(), box.spacing),
                              lattice_cells(extent.z(), box.spacing)};
     const double points = (cells[0] + 1) * (cells[1] + 1) * (cells[2] + 1);
     if (points > kMaxInitParticles)
-        throw ShotValueError("/source/box/spacing = " + num(box.spacing) + ": gives " + count_text(points) +
-                             " particles; expected at most " + count_text(kMaxInitParticles) +
+        throw ShotValueError("/source/box/spacing = " + num(box.spacing) + ": gives " +
+                             count_text(points) + " particles; expected at most " +
+                             count_text(kMaxInitParticles) +
                              ": raise the spacing or shrink the box");
     const int n[3] = {int(cells[0]), int(cells[1]), int(cells[2])};
     const Vec3 step(extent.x() / n[0], extent.y() / n[1], extent.z() / n[2]);

@@ -15,7 +15,8 @@ namespace mudcrack {
 /// more than two faces, edges whose two faces disagree on orientation, and vertices whose faces
 /// form several fans (non-manifold vertices, checked only when the edges are fine).
 /// Empty when the surface is a closed, oriented 2-manifold. CGAL-free (surface_topology.cpp).
-std::vector<std::string> surface_topology_problems(const InputSurface& surface, const std::string& name);
+std::vector<std::string> surface_topology_problems(const InputSurface& surface,
+                                                   const std::string& name);
 
 /// The full check: surface_topology_problems, then with CGAL Polygon_mesh_processing the
 /// self-intersections and the enclosed volume, which must be positive (outward normals).

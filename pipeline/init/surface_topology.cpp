@@ -22,14 +22,10 @@ struct EdgeUse {
     bool is_forward;  // the face traverses it lo -> hi
 };
 
-
-}  // namespace
-
-std::vector<std::string> surface_topology_problems(const InputSurface& surface, const std::string& name) {
-    std::vector<std::string> problems;
+/// Faces with a repeated vertex (zero area by construction).
+void add_repeated_vertex_problems(const InputSurface& surface, const std::string& name,
+                                  std::vector<std::string>& problems) {
     const auto& X = surface.positions;
-
-    // faces with a repeated vertex (zero area by construction)
     int64_t repeated = 0;
     int64_t first_repeated = -1;
     for (size_t f = 0; f < surface.faces.size(); ++f) {
@@ -43,7 +39,12 @@ std::vector<std::string> surface_topology_problems(const InputSurface& surface, 
                            " faces use the same vertex twice (degenerate), first is face " +
                            std::to_string(first_repeated) + " at " +
                            point_text(X[surface.faces[first_repeated][0]]));
+}
 
+/// Border, non-manifold and inconsistently wound edges.
+void add_edge_problems(const InputSurface& surface, const std::string& name,
+                       std::vector<std::string>& problems) {
+    const auto& X = surface.positions;
     // edge uses, sorted so each undirected edge's uses are adjacent
     std::vector<EdgeUse> uses;
     uses.reserve(3 * surface.faces.size());
@@ -72,7 +73,8 @@ std::vector<std::string> surface_topology_problems(const InputSurface& surface, 
     }
     if (border > 0)
         problems.push_back(name + ": " + std::to_string(border) +
-                           " border edges (the mesh is not closed), first at " + point_text(first_border));
+                           " border edges (the mesh is not closed), first at " +
+                           point_text(first_border));
     if (non_manifold > 0)
         problems.push_back(name + ": " + std::to_string(non_manifold) +
                            " non-manifold edges (shared by more than two faces), first at " +
@@ -80,11 +82,15 @@ std::vector<std::string> surface_topology_problems(const InputSurface& surface, 
     if (misoriented > 0)
         problems.push_back(name + ": " + std::to_string(misoriented) +
                            " edges whose two faces have opposite orientations (the faces are not "
-                           "consistently wound), first at " + point_text(first_misoriented));
-    if (!problems.empty()) return problems;
+                           "consistently wound), first at " +
+                           point_text(first_misoriented));
+}
 
-    // non-manifold vertices: the faces around a vertex must form a single fan, i.e. the
-    // opposite edges of its faces (its link) must be connected
+/// Non-manifold vertices: the faces around a vertex must form a single fan, i.e. the opposite
+/// edges of its faces (its link) must be connected.
+void add_vertex_fan_problems(const InputSurface& surface, const std::string& name,
+                             std::vector<std::string>& problems) {
+    const auto& X = surface.positions;
     std::vector<int32_t> offset(X.size() + 1, 0), incident;
     for (const Tri& t : surface.faces)
         for (int32_t v : t) ++offset[v + 1];
@@ -112,15 +118,28 @@ std::vector<std::string> surface_topology_problems(const InputSurface& surface, 
         auto index_of = [&](int32_t w) {
             return static_cast<int>(std::lower_bound(ids.begin(), ids.end(), w) - ids.begin());
         };
-        for (size_t k = 0; k + 1 < link.size(); k += 2) uf.unite(index_of(link[k]), index_of(link[k + 1]));
+        for (size_t k = 0; k + 1 < link.size(); k += 2)
+            uf.unite(index_of(link[k]), index_of(link[k + 1]));
         int components = 0;
-        for (size_t k = 0; k < ids.size(); ++k) components += uf.find(static_cast<int>(k)) == static_cast<int>(k);
+        for (size_t k = 0; k < ids.size(); ++k)
+            components += uf.find(static_cast<int>(k)) == static_cast<int>(k);
         if (components > 1 && bad_vertices++ == 0) first_bad = static_cast<int32_t>(v);
     }
     if (bad_vertices > 0)
         problems.push_back(name + ": " + std::to_string(bad_vertices) +
                            " non-manifold vertices (where separate sheets touch), first at " +
                            point_text(X[first_bad]));
+}
+
+}  // namespace
+
+std::vector<std::string> surface_topology_problems(const InputSurface& surface,
+                                                   const std::string& name) {
+    std::vector<std::string> problems;
+    add_repeated_vertex_problems(surface, name, problems);
+    add_edge_problems(surface, name, problems);
+    // a vertex fan is only well defined on closed, manifold, consistently wound edges
+    if (problems.empty()) add_vertex_fan_problems(surface, name, problems);
     return problems;
 }
 
@@ -131,7 +150,8 @@ Real enclosed_volume(const InputSurface& surface) {
     const Vec3 o = surface.positions[0];
     Real v = 0;
     for (const Tri& t : surface.faces)
-        v += signed_tet_volume(o, surface.positions[t[0]], surface.positions[t[1]], surface.positions[t[2]]);
+        v += signed_tet_volume(o, surface.positions[t[0]], surface.positions[t[1]],
+                               surface.positions[t[2]]);
     return v;
 }
 

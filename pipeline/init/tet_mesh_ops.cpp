@@ -43,7 +43,8 @@ std::vector<Tri> extract_boundary_faces(const std::vector<Tet>& tets) {
         }
     }
     // a face shared by two tets appears twice after sorting; a boundary face once
-    std::sort(faces.begin(), faces.end(), [](const Face& a, const Face& b) { return a.key < b.key; });
+    std::sort(faces.begin(), faces.end(),
+              [](const Face& a, const Face& b) { return a.key < b.key; });
     std::vector<Tri> boundary;
     for (size_t i = 0; i < faces.size();) {
         size_t j = i + 1;
@@ -59,7 +60,8 @@ int64_t count_non_positive_tets(const TetMesh& mesh, Real min_volume) {
         static_cast<int64_t>(mesh.tets.size()), int64_t(0),
         [&](int64_t i) -> int64_t {
             const Tet& t = mesh.tets[i];
-            return signed_tet_volume(mesh.X[t[0]], mesh.X[t[1]], mesh.X[t[2]], mesh.X[t[3]]) <= min_volume;
+            return signed_tet_volume(mesh.X[t[0]], mesh.X[t[1]], mesh.X[t[2]], mesh.X[t[3]]) <=
+                   min_volume;
         },
         [](int64_t a, int64_t b) { return a + b; });
 }
@@ -74,7 +76,8 @@ Real total_tet_volume(const TetMesh& mesh) {
         [](Real a, Real b) { return a + b; });
 }
 
-std::array<Real, 6> dihedral_angles_deg(const Vec3& a, const Vec3& b, const Vec3& c, const Vec3& d) {
+std::array<Real, 6> dihedral_angles_deg(const Vec3& a, const Vec3& b, const Vec3& c,
+                                        const Vec3& d) {
     // the angle at edge (i,j) is between the two faces containing it, i.e. pi minus the angle
     // between the outward normals of the faces opposite the other two vertices k and l
     const Vec3 p[4] = {a, b, c, d};
@@ -87,7 +90,8 @@ std::array<Real, 6> dihedral_angles_deg(const Vec3& a, const Vec3& b, const Vec3
     static constexpr int kEdgeFaces[6][2] = {{2, 3}, {1, 3}, {1, 2}, {0, 3}, {0, 2}, {0, 1}};
     std::array<Real, 6> angle;
     for (int e = 0; e < 6; ++e) {
-        const Real cosine = std::clamp(n[kEdgeFaces[e][0]].dot(n[kEdgeFaces[e][1]]), Real(-1), Real(1));
+        const Real cosine =
+            std::clamp(n[kEdgeFaces[e][0]].dot(n[kEdgeFaces[e][1]]), Real(-1), Real(1));
         angle[e] = Real(180) - std::acos(cosine) * Real(180) / kPi;
     }
     return angle;

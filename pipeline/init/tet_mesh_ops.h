@@ -32,10 +32,10 @@ struct MeshQuality {
     int64_t particles = 0;
     int64_t tets = 0;
     int64_t boundary_faces = 0;
-    Real min_dihedral_deg = 0;   // smallest dihedral angle over all tets [deg]
-    Real max_dihedral_deg = 0;   // largest dihedral angle over all tets [deg]
-    Real mean_edge_length = 0;   // mean over the tets' edges (interior edges counted per tet) [m]
-    Real tet_volume = 0;         // sum of tet volumes = sum of particle volumes [m^3]
+    Real min_dihedral_deg = 0;  // smallest dihedral angle over all tets [deg]
+    Real max_dihedral_deg = 0;  // largest dihedral angle over all tets [deg]
+    Real mean_edge_length = 0;  // mean over the tets' edges (interior edges counted per tet) [m]
+    Real tet_volume = 0;        // sum of tet volumes = sum of particle volumes [m^3]
     Vec3 bbox_min = Vec3::Zero();
     Vec3 bbox_max = Vec3::Zero();
 };

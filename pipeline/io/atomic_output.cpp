@@ -70,7 +70,8 @@ void write_atomically(const fs::path& path, const std::function<void(const fs::p
     if (ec) {
         const std::string reason = ec.message();
         fs::remove(tmp, ec);
-        throw RuntimeError(path.string() + ": cannot rename the finished file into place: " + reason);
+        throw RuntimeError(path.string() +
+                           ": cannot rename the finished file into place: " + reason);
     }
 }
 
@@ -82,7 +83,8 @@ void write_text_atomically(const fs::path& path, const std::string& text) {
     write_atomically(path, [&](const fs::path& tmp) {
         errno = 0;
         std::ofstream os(tmp, std::ios::binary);
-        if (!os) throw RuntimeError(tmp.string() + ": cannot open for writing: " + write_error_reason());
+        if (!os)
+            throw RuntimeError(tmp.string() + ": cannot open for writing: " + write_error_reason());
         os << text;
         os.close();  // the last buffer reaches the disk here: a full disk shows up at close
         if (!os) throw RuntimeError(tmp.string() + ": cannot write: " + write_error_reason());
@@ -90,14 +92,17 @@ void write_text_atomically(const fs::path& path, const std::string& text) {
 }
 
 StagingDir::StagingDir(fs::path final_dir, bool keep_partial)
-    : m_final(std::move(final_dir)), m_keep_partial(keep_partial) {
+    : m_final(std::move(final_dir)),
+      m_keep_partial(keep_partial) {
     const fs::path parent = m_final.parent_path().empty() ? fs::path(".") : m_final.parent_path();
     m_partial = parent / ("." + m_final.filename().string() + ".partial");
     if (!m_keep_partial) add_interrupt_cleanup(m_partial);
     std::error_code ec;
     fs::remove_all(m_partial, ec);
     fs::create_directories(m_partial, ec);
-    if (ec) throw RuntimeError(m_partial.string() + ": cannot create the output folder: " + ec.message());
+    if (ec)
+        throw RuntimeError(m_partial.string() +
+                           ": cannot create the output folder: " + ec.message());
 }
 
 StagingDir::~StagingDir() {
@@ -112,7 +117,9 @@ void StagingDir::commit() {
     fs::remove_all(m_final, ec);
     fs::rename(m_partial, m_final, ec);
     if (!ec) remove_interrupt_cleanup(m_partial);
-    if (ec) throw RuntimeError(m_final.string() + ": cannot move the finished output into place: " + ec.message());
+    if (ec)
+        throw RuntimeError(m_final.string() +
+                           ": cannot move the finished output into place: " + ec.message());
     m_committed = true;
 }
 

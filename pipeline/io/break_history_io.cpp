@@ -17,9 +17,11 @@ void write_break_history(const std::filesystem::path& path, const BreakHistory& 
     write_atomically(path, [&](const std::filesystem::path& tmp) {
         errno = 0;
         std::ofstream out(tmp, std::ios::binary);
-        if (!out) throw RuntimeError(tmp.string() + ": cannot open for writing: " + write_error_reason());
+        if (!out)
+            throw RuntimeError(tmp.string() + ": cannot open for writing: " + write_error_reason());
         const int64_t n = static_cast<int64_t>(h.first_break.size());
-        const uint64_t checksum = fnv1a64(h.first_break.data(), h.first_break.size() * sizeof(int32_t));
+        const uint64_t checksum =
+            fnv1a64(h.first_break.data(), h.first_break.size() * sizeof(int32_t));
         out.write(kBreaksMagic, sizeof kBreaksMagic);
         out.write(reinterpret_cast<const char*>(&h.source_hash), sizeof h.source_hash);
         out.write(reinterpret_cast<const char*>(&h.first_frame), sizeof h.first_frame);
@@ -28,12 +30,15 @@ void write_break_history(const std::filesystem::path& path, const BreakHistory& 
         out.write(reinterpret_cast<const char*>(h.first_break.data()), n * sizeof(int32_t));
         out.write(reinterpret_cast<const char*>(&checksum), sizeof checksum);
         out.close();  // a small file fails only here, when its one buffer is flushed
-        if (!out) throw RuntimeError(tmp.string() + ": cannot write the edge break history: " + write_error_reason());
+        if (!out)
+            throw RuntimeError(tmp.string() +
+                               ": cannot write the edge break history: " + write_error_reason());
     });
 }
 
 std::optional<BreakHistory> read_break_history(const std::filesystem::path& path,
-                                               std::optional<uint64_t> source_hash, int64_t n_edges) {
+                                               std::optional<uint64_t> source_hash,
+                                               int64_t n_edges) {
     std::ifstream in(path, std::ios::binary);
     if (!in) return std::nullopt;
     char magic[8];
@@ -51,7 +56,8 @@ std::optional<BreakHistory> read_break_history(const std::filesystem::path& path
     uint64_t checksum = 0;
     in.read(reinterpret_cast<char*>(h.first_break.data()), n * sizeof(int32_t));
     in.read(reinterpret_cast<char*>(&checksum), sizeof checksum);
-    if (!in || checksum != fnv1a64(h.first_break.data(), h.first_break.size() * sizeof(int32_t))) return std::nullopt;
+    if (!in || checksum != fnv1a64(h.first_break.data(), h.first_break.size() * sizeof(int32_t)))
+        return std::nullopt;
     return h;
 }
 

@@ -12,7 +12,8 @@ namespace mudcrack {
 constexpr const char* kBreakHistoryFile = "edge_breaks.bin";
 
 struct BreakHistory {
-    uint64_t source_hash = 0;  // hash of what it was computed from (sim manifest, Eq. 14 parameters, mesh)
+    // hash of what it was computed from (sim manifest, Eq. 14 parameters, mesh)
+    uint64_t source_hash = 0;
     int32_t first_frame = 0, last_frame = 0;
     std::vector<int32_t> first_break;  // per edge; kNeverBroken (surfacing/edge_breaks.h) if never
 };
@@ -23,6 +24,7 @@ void write_break_history(const std::filesystem::path& path, const BreakHistory& 
 /// The stored history if the file is intact, holds n_edges edges and, when `source_hash` is
 /// given, was computed from the same inputs; nullopt otherwise.
 std::optional<BreakHistory> read_break_history(const std::filesystem::path& path,
-                                               std::optional<uint64_t> source_hash, int64_t n_edges);
+                                               std::optional<uint64_t> source_hash,
+                                               int64_t n_edges);
 
 }  // namespace mudcrack

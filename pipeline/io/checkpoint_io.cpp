@@ -20,7 +20,14 @@ namespace {
 
 constexpr char kMagic[8] = {'M', 'C', 'C', 'K', 'P', 'T', '1', '\0'};
 
-enum class EntryKind : uint8_t { F64Array = 1, I32Array = 2, I64Array = 3, String = 4, F64 = 5, I64 = 6 };
+enum class EntryKind : uint8_t {
+    F64Array = 1,
+    I32Array = 2,
+    I64Array = 3,
+    String = 4,
+    F64 = 5,
+    I64 = 6
+};
 
 constexpr bool kHostIsLittleEndian = __BYTE_ORDER__ == __ORDER_LITTLE_ENDIAN__;
 
@@ -33,7 +40,9 @@ void swap_elements(char* data, size_t count, size_t width) {
 class ChecksummedWriter {
 public:
     explicit ChecksummedWriter(const fs::path& path) : m_os(path, std::ios::binary), m_path(path) {
-        if (!m_os) throw RuntimeError(path.string() + ": cannot open for writing: " + write_error_reason());
+        if (!m_os)
+            throw RuntimeError(path.string() +
+                               ": cannot open for writing: " + write_error_reason());
     }
     void raw(const void* data, size_t size) {
         m_hash = fnv1a64(data, size, m_hash);
@@ -83,7 +92,8 @@ public:
     explicit ChecksummedReader(const fs::path& path) : m_is(path, std::ios::binary), m_path(path) {
         std::error_code ec;
         m_size = fs::file_size(path, ec);
-        if (!m_is || ec) throw InputError(path.string() + ": checkpoint file not found or not readable");
+        if (!m_is || ec)
+            throw InputError(path.string() + ": checkpoint file not found or not readable");
     }
     [[noreturn]] void fail(const std::string& what) const {
         throw InputError(m_path.string() + ": " + what);
@@ -110,7 +120,8 @@ public:
             swap_elements(reinterpret_cast<char*>(values), count, sizeof(T));
         }
     }
-    /// An element count for `width`-byte elements, refused before allocating when the file is too short.
+    /// An element count for `width`-byte elements, refused before allocating when the file is too
+    /// short.
     size_t count(const std::string& entry, size_t width) {
         const uint64_t n = value<uint64_t>();
         // leave room for the trailing checksum
@@ -122,7 +133,9 @@ public:
     }
     std::string name() {
         const uint32_t n = value<uint32_t>();
-        if (n > remaining()) fail("entry name length " + std::to_string(n) + " exceeds the file (damaged checkpoint)");
+        if (n > remaining())
+            fail("entry name length " + std::to_string(n) +
+                 " exceeds the file (damaged checkpoint)");
         std::string s(n, '\0');
         raw(s.data(), n);
         return s;
@@ -137,7 +150,8 @@ private:
 };
 
 template <class T>
-void write_arrays(ChecksummedWriter& w, EntryKind kind, const std::map<std::string, std::vector<T>>& arrays) {
+void write_arrays(ChecksummedWriter& w, EntryKind kind,
+                  const std::map<std::string, std::vector<T>>& arrays) {
     for (const auto& [name, values] : arrays) {
         w.value(uint8_t(kind));
         w.name(name);
@@ -147,40 +161,47 @@ void write_arrays(ChecksummedWriter& w, EntryKind kind, const std::map<std::stri
 }
 
 template <class T>
-void read_array(ChecksummedReader& r, const std::string& name, std::map<std::string, std::vector<T>>& into) {
+void read_array(ChecksummedReader& r, const std::string& name,
+                std::map<std::string, std::vector<T>>& into) {
     std::vector<T> values(r.count(name, sizeof(T)));
     r.array(values.data(), values.size());
     if (!into.emplace(name, std::move(values)).second) r.fail("duplicate array '" + name + "'");
 }
 
 template <class Map>
-const typename Map::mapped_type& require(const Map& map, const std::string& name, const std::string& source,
-                                         const char* kind) {
+const typename Map::mapped_type& require(const Map& map, const std::string& name,
+                                         const std::string& source, const char* kind) {
     const auto it = map.find(name);
-    if (it == map.end()) throw InputError(source + ": checkpoint has no " + kind + " '" + name + "'");
+    if (it == map.end())
+        throw InputError(source + ": checkpoint has no " + kind + " '" + name + "'");
     return it->second;
 }
 
 template <class T>
-const std::vector<T>& require_sized(const std::map<std::string, std::vector<T>>& map, const std::string& name,
-                                    size_t expected_size, const std::string& source, const char* kind) {
+const std::vector<T>& require_sized(const std::map<std::string, std::vector<T>>& map,
+                                    const std::string& name, size_t expected_size,
+                                    const std::string& source, const char* kind) {
     const auto& values = require(map, name, source, kind);
     if (expected_size != SIZE_MAX && values.size() != expected_size) {
         throw InputError(source + ": checkpoint " + kind + " '" + name + "' has " +
-                         std::to_string(values.size()) + " elements, expected " + std::to_string(expected_size));
+                         std::to_string(values.size()) + " elements, expected " +
+                         std::to_string(expected_size));
     }
     return values;
 }
 
 }  // namespace
 
-const std::vector<double>& Checkpoint::require_f64(const std::string& name, size_t expected_size) const {
+const std::vector<double>& Checkpoint::require_f64(const std::string& name,
+                                                   size_t expected_size) const {
     return require_sized(f64, name, expected_size, source, "float64 array");
 }
-const std::vector<int32_t>& Checkpoint::require_i32(const std::string& name, size_t expected_size) const {
+const std::vector<int32_t>& Checkpoint::require_i32(const std::string& name,
+                                                    size_t expected_size) const {
     return require_sized(i32, name, expected_size, source, "int32 array");
 }
-const std::vector<int64_t>& Checkpoint::require_i64(const std::string& name, size_t expected_size) const {
+const std::vector<int64_t>& Checkpoint::require_i64(const std::string& name,
+                                                    size_t expected_size) const {
     return require_sized(i64, name, expected_size, source, "int64 array");
 }
 double Checkpoint::require_double(const std::string& name) const {
@@ -230,13 +251,15 @@ void write_checkpoint(const fs::path& path, const Checkpoint& c) {
 Checkpoint read_checkpoint(const fs::path& path) {
     ChecksummedReader r(path);
     char magic[sizeof kMagic];
-    if (r.remaining() < sizeof kMagic) r.fail("not a mudcrack checkpoint (too short for the MCCKPT1 header)");
+    if (r.remaining() < sizeof kMagic)
+        r.fail("not a mudcrack checkpoint (too short for the MCCKPT1 header)");
     r.raw(magic, sizeof magic);
-    if (std::memcmp(magic, kMagic, sizeof kMagic) != 0) r.fail("not a mudcrack checkpoint (no MCCKPT1 magic)");
+    if (std::memcmp(magic, kMagic, sizeof kMagic) != 0)
+        r.fail("not a mudcrack checkpoint (no MCCKPT1 magic)");
     const auto version = r.value<uint32_t>();
     if (version != kCheckpointFormatVersion) {
-        r.fail("checkpoint format version " + std::to_string(version) + ": this build reads version " +
-               std::to_string(kCheckpointFormatVersion) + " only");
+        r.fail("checkpoint format version " + std::to_string(version) +
+               ": this build reads version " + std::to_string(kCheckpointFormatVersion) + " only");
     }
     Checkpoint c;
     c.source = path.string();
@@ -251,12 +274,14 @@ Checkpoint read_checkpoint(const fs::path& path) {
             case EntryKind::String: {
                 std::string text(r.count(name, 1), '\0');
                 r.raw(text.data(), text.size());
-                if (!c.meta_string.emplace(name, std::move(text)).second) r.fail("duplicate string '" + name + "'");
+                if (!c.meta_string.emplace(name, std::move(text)).second)
+                    r.fail("duplicate string '" + name + "'");
                 break;
             }
             case EntryKind::F64:
             case EntryKind::I64: {
-                if (r.count(name, 8) != 1) r.fail("scalar '" + name + "' must have exactly one element");
+                if (r.count(name, 8) != 1)
+                    r.fail("scalar '" + name + "' must have exactly one element");
                 const bool inserted = EntryKind(kind) == EntryKind::F64
                                           ? c.meta_double.emplace(name, r.value<double>()).second
                                           : c.meta_int.emplace(name, r.value<int64_t>()).second;
@@ -272,7 +297,8 @@ Checkpoint read_checkpoint(const fs::path& path) {
     const auto stored = r.value<uint64_t>();
     if (stored != computed) r.fail("checksum mismatch: the checkpoint is damaged");
     if (r.remaining() != 0) {
-        r.fail(std::to_string(r.remaining()) + " unexpected bytes after the checksum (damaged checkpoint)");
+        r.fail(std::to_string(r.remaining()) +
+               " unexpected bytes after the checksum (damaged checkpoint)");
     }
     return c;
 }

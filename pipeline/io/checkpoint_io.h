@@ -25,19 +25,22 @@ constexpr uint32_t kCheckpointFormatVersion = 1;
 
 /// Named arrays and scalars. Names are unique within a kind.
 struct Checkpoint {
-    std::map<std::string, std::vector<double>> f64;    // e.g. "x" (3 n_particles), "Fe" (9 n)
-    std::map<std::string, std::vector<int32_t>> i32;   // e.g. "id"
+    std::map<std::string, std::vector<double>> f64;   // e.g. "x" (3 n_particles), "Fe" (9 n)
+    std::map<std::string, std::vector<int32_t>> i32;  // e.g. "id"
     std::map<std::string, std::vector<int64_t>> i64;
-    std::map<std::string, std::string> meta_string;    // e.g. "stage", "shot_hash"
-    std::map<std::string, double> meta_double;         // e.g. "time" [s]
-    std::map<std::string, int64_t> meta_int;           // e.g. "frame", "step"
-    std::string source;                                // the file it was read from (for messages)
+    std::map<std::string, std::string> meta_string;  // e.g. "stage", "shot_hash"
+    std::map<std::string, double> meta_double;       // e.g. "time" [s]
+    std::map<std::string, int64_t> meta_int;         // e.g. "frame", "step"
+    std::string source;                              // the file it was read from (for messages)
 
     /// The named array; throws InputError naming `source` and the name when it is missing or
     /// its length is not `expected_size` (pass SIZE_MAX to accept any length).
-    const std::vector<double>& require_f64(const std::string& name, size_t expected_size = SIZE_MAX) const;
-    const std::vector<int32_t>& require_i32(const std::string& name, size_t expected_size = SIZE_MAX) const;
-    const std::vector<int64_t>& require_i64(const std::string& name, size_t expected_size = SIZE_MAX) const;
+    const std::vector<double>& require_f64(const std::string& name,
+                                           size_t expected_size = SIZE_MAX) const;
+    const std::vector<int32_t>& require_i32(const std::string& name,
+                                            size_t expected_size = SIZE_MAX) const;
+    const std::vector<int64_t>& require_i64(const std::string& name,
+                                            size_t expected_size = SIZE_MAX) const;
     /// The named scalar; throws InputError naming `source` and the name when it is missing.
     double require_double(const std::string& name) const;
     int64_t require_int(const std::string& name) const;

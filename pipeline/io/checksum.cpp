@@ -24,7 +24,8 @@ MC_CARRYLESS inline __m128i load16(const unsigned char* p) {
 
 // x.hi * k.hi ^ x.lo * k.lo ^ next: 128 bits folded forward onto the next 128
 MC_CARRYLESS inline __m128i fold16(__m128i x, __m128i k, __m128i next) {
-    return _mm_xor_si128(_mm_xor_si128(_mm_clmulepi64_si128(x, k, 0x11), _mm_clmulepi64_si128(x, k, 0x00)), next);
+    return _mm_xor_si128(
+        _mm_xor_si128(_mm_clmulepi64_si128(x, k, 0x11), _mm_clmulepi64_si128(x, k, 0x00)), next);
 }
 
 /// CRC-32 folding with carry-less multiplication (Gopal et al., "Fast CRC Computation for Generic
@@ -58,7 +59,8 @@ MC_CARRYLESS uint32_t crc32_fold(const unsigned char* buf, size_t len, uint32_t 
     const __m128i low32 = _mm_setr_epi32(~0, 0, ~0, 0);
     x1 = _mm_xor_si128(_mm_srli_si128(x1, 8), _mm_clmulepi64_si128(x1, k, 0x10));
     k = _mm_loadl_epi64(reinterpret_cast<const __m128i*>(k5k0));
-    x1 = _mm_xor_si128(_mm_clmulepi64_si128(_mm_and_si128(x1, low32), k, 0x00), _mm_srli_si128(x1, 4));
+    x1 = _mm_xor_si128(_mm_clmulepi64_si128(_mm_and_si128(x1, low32), k, 0x00),
+                       _mm_srli_si128(x1, 4));
     k = _mm_load_si128(reinterpret_cast<const __m128i*>(poly));
     __m128i x5 = _mm_clmulepi64_si128(_mm_and_si128(x1, low32), k, 0x10);
     x5 = _mm_clmulepi64_si128(_mm_and_si128(x5, low32), k, 0x00);
@@ -87,13 +89,16 @@ uint32_t crc32_update(uint32_t crc, const void* data, size_t size) {
 
 std::string file_crc32(const std::filesystem::path& file) {
     constexpr size_t kBlock = size_t(1) << 20;  // large enough that the read calls cost nothing
-    const std::unique_ptr<std::FILE, int (*)(std::FILE*)> f(std::fopen(file.c_str(), "rb"), &std::fclose);
+    const std::unique_ptr<std::FILE, int (*)(std::FILE*)> f(std::fopen(file.c_str(), "rb"),
+                                                            &std::fclose);
     if (!f) throw InputError(file.string() + ": cannot read: " + std::strerror(errno));
     std::vector<unsigned char> block(kBlock);
     uint32_t crc = 0;
     size_t got = 0;
-    while ((got = std::fread(block.data(), 1, block.size(), f.get())) > 0) crc = crc32_update(crc, block.data(), got);
-    if (std::ferror(f.get())) throw InputError(file.string() + ": cannot read: " + std::strerror(errno));
+    while ((got = std::fread(block.data(), 1, block.size(), f.get())) > 0)
+        crc = crc32_update(crc, block.data(), got);
+    if (std::ferror(f.get()))
+        throw InputError(file.string() + ": cannot read: " + std::strerror(errno));
     char hex[16];
     std::snprintf(hex, sizeof hex, "%08x", crc);
     return hex;

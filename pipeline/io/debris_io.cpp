@@ -11,7 +11,8 @@
 namespace mudcrack {
 namespace {
 
-static_assert(__BYTE_ORDER__ == __ORDER_LITTLE_ENDIAN__, "debris PLY files are little-endian, written as in memory");
+static_assert(__BYTE_ORDER__ == __ORDER_LITTLE_ENDIAN__,
+              "debris PLY files are little-endian, written as in memory");
 
 constexpr const char* kProperties =
     "property float x\nproperty float y\nproperty float z\n"
@@ -63,17 +64,21 @@ DebrisPoints read_debris_ply(const std::filesystem::path& path) {
         }
     }
     if (line != "end_header" || text + "end_header\n" != header(count))
-        throw InputError(path.string() + ": not a mudcrack debris PLY (its header differs from docs/physics.md 5.7's)");
+        throw InputError(
+            path.string() +
+            ": not a mudcrack debris PLY (its header differs from docs/physics.md 5.7's)");
     const auto body_start = in.tellg();
     in.seekg(0, std::ios::end);
     const auto available = static_cast<size_t>(in.tellg() - body_start);
     in.seekg(body_start);
     if (available != count * kRecordBytes)
-        throw InputError(path.string() + ": truncated or too long: " + std::to_string(count) + " debris points take " +
-                         std::to_string(count * kRecordBytes) + " bytes; the file holds " + std::to_string(available));
+        throw InputError(path.string() + ": truncated or too long: " + std::to_string(count) +
+                         " debris points take " + std::to_string(count * kRecordBytes) +
+                         " bytes; the file holds " + std::to_string(available));
     std::string body(count * kRecordBytes, '\0');
     in.read(body.data(), static_cast<std::streamsize>(body.size()));
-    if (in.gcount() != static_cast<std::streamsize>(body.size())) throw InputError(path.string() + ": cannot read");
+    if (in.gcount() != static_cast<std::streamsize>(body.size()))
+        throw InputError(path.string() + ": cannot read");
     DebrisPoints d;
     for (size_t i = 0; i < count; ++i) {
         float f[7];

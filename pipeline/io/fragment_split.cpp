@@ -8,7 +8,8 @@ namespace mudcrack {
 FragmentSplit::FragmentSplit(const TriMesh& mesh) : m_n_original(int64_t(mesh.positions.size())) {
     if (mesh.face_fragment.empty()) return;
     m_vertex_fragment.assign(mesh.positions.size(), INT32_MIN);
-    std::map<std::pair<int32_t, int32_t>, int32_t> copy_of;  // (vertex, fragment) -> copy; only shared vertices
+    // (vertex, fragment) -> copy; only shared vertices
+    std::map<std::pair<int32_t, int32_t>, int32_t> copy_of;
     for (size_t f = 0; f < mesh.faces.size(); ++f) {
         const int32_t fragment = mesh.face_fragment[f];
         for (int c = 0; c < 3; ++c) {

@@ -17,7 +17,8 @@ namespace mudcrack {
 
 class FragmentSplit {
 public:
-    /// The plan for `mesh`; with no face_fragment, every vertex keeps fragment 0 and nothing splits.
+    /// The plan for `mesh`; with no face_fragment, every vertex keeps fragment 0 and nothing
+    /// splits.
     explicit FragmentSplit(const TriMesh& mesh);
 
     /// Vertices of the written mesh: the mesh's own, then the copies.
@@ -27,7 +28,9 @@ public:
         return v < m_n_original ? int32_t(v) : m_copy_source[size_t(v - m_n_original)];
     }
     /// The fragment of vertex v of the written mesh (0 when the mesh has no fragment ids).
-    int32_t fragment(int64_t v) const { return m_vertex_fragment.empty() ? 0 : m_vertex_fragment[size_t(v)]; }
+    int32_t fragment(int64_t v) const {
+        return m_vertex_fragment.empty() ? 0 : m_vertex_fragment[size_t(v)];
+    }
     bool has_fragments() const { return !m_vertex_fragment.empty(); }
 
     /// Face f with the written mesh's vertex ids.
@@ -35,16 +38,19 @@ public:
         Tri t = mesh.faces[f];
         if (m_moved_corner.empty()) return t;
         const int64_t first = 3 * int64_t(f);
-        auto it = std::lower_bound(m_moved_corner.begin(), m_moved_corner.end(), std::make_pair(first, INT32_MIN));
-        for (; it != m_moved_corner.end() && it->first < first + 3; ++it) t[it->first - first] = it->second;
+        auto it = std::lower_bound(m_moved_corner.begin(), m_moved_corner.end(),
+                                   std::make_pair(first, INT32_MIN));
+        for (; it != m_moved_corner.end() && it->first < first + 3; ++it)
+            t[it->first - first] = it->second;
         return t;
     }
 
 private:
     int64_t m_n_original = 0;
-    std::vector<int32_t> m_copy_source;                          // mesh vertex of each copy
-    std::vector<int32_t> m_vertex_fragment;                      // per written vertex, or empty
-    std::vector<std::pair<int64_t, int32_t>> m_moved_corner;     // (3 face + corner, copy), ascending
+    std::vector<int32_t> m_copy_source;      // mesh vertex of each copy
+    std::vector<int32_t> m_vertex_fragment;  // per written vertex, or empty
+    // (3 face + corner, copy), ascending
+    std::vector<std::pair<int64_t, int32_t>> m_moved_corner;
 };
 
 }  // namespace mudcrack

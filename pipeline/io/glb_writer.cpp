@@ -61,13 +61,15 @@ void write_stream(std::ostream& os, const Stream& s) {
         const int64_t end = std::min(s.count, begin + per_chunk);
         unsigned char* out = buffer.data();
         for (int64_t i = begin; i < end; ++i, out += element_bytes) s.fill(i, out);
-        os.write(reinterpret_cast<const char*>(buffer.data()), std::streamsize((end - begin) * element_bytes));
+        os.write(reinterpret_cast<const char*>(buffer.data()),
+                 std::streamsize((end - begin) * element_bytes));
     }
 }
 
 // the glTF document's arrays and the binary chunk's streams, filled mesh by mesh
 struct GlbBuilder {
-    json accessors = json::array(), views = json::array(), gltf_meshes = json::array(), materials = json::array();
+    json accessors = json::array(), views = json::array(), gltf_meshes = json::array(),
+         materials = json::array();
     json nodes = json::array({{{"name", "root"}, {"children", json::array()}}});
     std::vector<Stream> streams;
     int64_t offset = 0;  // the binary chunk's size so far
@@ -75,8 +77,12 @@ struct GlbBuilder {
     // one accessor over one tightly packed buffer view per array
     size_t add_array(Stream s, int component, int target, json extra = json::object()) {
         static const char* const kType[] = {"", "SCALAR", "VEC2", "VEC3", "VEC4"};
-        json view = {{"buffer", 0}, {"byteOffset", offset}, {"byteLength", s.bytes()}, {"target", target}};
-        json accessor = {{"bufferView", views.size()}, {"componentType", component}, {"count", s.count}, {"type", kType[s.width]}};
+        json view = {
+            {"buffer", 0}, {"byteOffset", offset}, {"byteLength", s.bytes()}, {"target", target}};
+        json accessor = {{"bufferView", views.size()},
+                         {"componentType", component},
+                         {"count", s.count},
+                         {"type", kType[s.width]}};
         accessor.update(extra);
         offset += s.bytes();
         views.push_back(view);
@@ -98,49 +104,65 @@ struct GlbBuilder {
         json attributes;
         Vec3f lo = Vec3f::Constant(std::numeric_limits<float>::max()), hi = -lo;
         for (const Vec3f& p : m.positions) lo = lo.cwiseMin(p), hi = hi.cwiseMax(p);
-        attributes["POSITION"] = add_array(
-            {n, 3, [&m, &split](int64_t v, unsigned char* o) { std::memcpy(o, m.positions[split.source(v)].data(), 12); }},
-            kFloat, kArrayBuffer, {{"min", {lo.x(), lo.y(), lo.z()}}, {"max", {hi.x(), hi.y(), hi.z()}}});
+        attributes["POSITION"] =
+            add_array({n, 3,
+                       [&m, &split](int64_t v, unsigned char* o) {
+                           std::memcpy(o, m.positions[split.source(v)].data(), 12);
+                       }},
+                      kFloat, kArrayBuffer,
+                      {{"min", {lo.x(), lo.y(), lo.z()}}, {"max", {hi.x(), hi.y(), hi.z()}}});
         if (!m.normals.empty())
-            attributes["NORMAL"] = add_array(
-                {n, 3, [&m, &split](int64_t v, unsigned char* o) { std::memcpy(o, m.normals[split.source(v)].data(), 12); }},
-                kFloat, kArrayBuffer);
+            attributes["NORMAL"] =
+                add_array({n, 3,
+                           [&m, &split](int64_t v, unsigned char* o) {
+                               std::memcpy(o, m.normals[split.source(v)].data(), 12);
+                           }},
+                          kFloat, kArrayBuffer);
         // glTF's v points down the image; readers flip it back. A fragment channel needs a
         // channel 0 before it (importers number channels by position), zeros when there are no UVs.
         if (!m.uvs.empty() || split.has_fragments())
-            attributes["TEXCOORD_0"] = add_array({n, 2,
-                                                  [&m, &split](int64_t v, unsigned char* o) {
-                                                      const Vec2f uv = m.uvs.empty() ? Vec2f::Zero() : m.uvs[split.source(v)];
-                                                      store(o, std::array<float, 2>{uv.x(), 1.f - uv.y()});
-                                                  }},
-                                                 kFloat, kArrayBuffer);
-        if (split.has_fragments())  // (fragment id, 0): exact in float for ids below 2^24
-            attributes["TEXCOORD_1"] = add_array(
+            attributes["TEXCOORD_0"] = add_array(
                 {n, 2,
-                 [&split](int64_t v, unsigned char* o) { store(o, std::array<float, 2>{float(split.fragment(v)), 1.f}); }},
+                 [&m, &split](int64_t v, unsigned char* o) {
+                     const Vec2f uv = m.uvs.empty() ? Vec2f::Zero() : m.uvs[split.source(v)];
+                     store(o, std::array<float, 2>{uv.x(), 1.f - uv.y()});
+                 }},
                 kFloat, kArrayBuffer);
+        if (split.has_fragments())  // (fragment id, 0): exact in float for ids below 2^24
+            attributes["TEXCOORD_1"] =
+                add_array({n, 2,
+                           [&split](int64_t v, unsigned char* o) {
+                               store(o, std::array<float, 2>{float(split.fragment(v)), 1.f});
+                           }},
+                          kFloat, kArrayBuffer);
         if (!m.saturation.empty() || !m.alpha.empty())
-            attributes["COLOR_0"] = add_array({n, 4,
-                                               [&m, &split](int64_t v, unsigned char* o) {
-                                                   const int32_t s = split.source(v);
-                                                   const float saturation = m.saturation.empty() ? 0.f : m.saturation[s];
-                                                   const float g = alpha_to_color(m.alpha.empty() ? 0.f : m.alpha[s]);
-                                                   store(o, std::array<float, 4>{saturation, g, 0.f, 1.f});
-                                               }},
-                                              kFloat, kArrayBuffer);
+            attributes["COLOR_0"] = add_array(
+                {n, 4,
+                 [&m, &split](int64_t v, unsigned char* o) {
+                     const int32_t s = split.source(v);
+                     const float saturation = m.saturation.empty() ? 0.f : m.saturation[s];
+                     const float g = alpha_to_color(m.alpha.empty() ? 0.f : m.alpha[s]);
+                     store(o, std::array<float, 4>{saturation, g, 0.f, 1.f});
+                 }},
+                kFloat, kArrayBuffer);
         // one face per stream element would make the accessor's count differ from the stream's:
         // indices stream corner by corner
-        const size_t indices = add_array({3 * int64_t(m.faces.size()), 1,
-                                          [&m, &split](int64_t corner, unsigned char* o) {
-                                              const Tri t = split.face(m, size_t(corner / 3));
-                                              store(o, std::array<uint32_t, 1>{uint32_t(t[corner % 3])});
-                                          }},
-                                         kUnsignedInt, kElementArrayBuffer);
-        gltf_meshes.push_back(
-            {{"name", m.name},
-             {"primitives", json::array({{{"attributes", attributes}, {"indices", indices}, {"material", materials.size()}, {"mode", 4}}})}});
-        materials.push_back({{"name", m.name + "_material"},
-                             {"pbrMetallicRoughness", {{"baseColorFactor", {0.55, 0.42, 0.30, 1.0}}, {"metallicFactor", 0.0}}}});
+        const size_t indices =
+            add_array({3 * int64_t(m.faces.size()), 1,
+                       [&m, &split](int64_t corner, unsigned char* o) {
+                           const Tri t = split.face(m, size_t(corner / 3));
+                           store(o, std::array<uint32_t, 1>{uint32_t(t[corner % 3])});
+                       }},
+                      kUnsignedInt, kElementArrayBuffer);
+        gltf_meshes.push_back({{"name", m.name},
+                               {"primitives", json::array({{{"attributes", attributes},
+                                                            {"indices", indices},
+                                                            {"material", materials.size()},
+                                                            {"mode", 4}}})}});
+        materials.push_back(
+            {{"name", m.name + "_material"},
+             {"pbrMetallicRoughness",
+              {{"baseColorFactor", {0.55, 0.42, 0.30, 1.0}}, {"metallicFactor", 0.0}}}});
         node["mesh"] = gltf_meshes.size() - 1;
         nodes.push_back(node);
     }
@@ -159,7 +181,8 @@ struct GlbBuilder {
             gltf["buffers"] = json::array({{{"byteLength", offset}}});
         }
         std::string text = gltf.dump();
-        text.append((4 - text.size() % 4) % 4, ' ');  // chunks are 4-byte aligned: JSON pads with spaces
+        // chunks are 4-byte aligned: JSON pads with spaces
+        text.append((4 - text.size() % 4) % 4, ' ');
         return text;
     }
 };
@@ -167,8 +190,10 @@ struct GlbBuilder {
 }  // namespace
 
 void write_glb(const fs::path& path, const std::vector<TriMesh>& meshes) {
-    static_assert(sizeof(float) == 4 && std::numeric_limits<float>::is_iec559, "glb floats are IEEE 754 binary32");
-    static_assert(__BYTE_ORDER__ == __ORDER_LITTLE_ENDIAN__, "glb arrays are little-endian, written as in memory");
+    static_assert(sizeof(float) == 4 && std::numeric_limits<float>::is_iec559,
+                  "glb floats are IEEE 754 binary32");
+    static_assert(__BYTE_ORDER__ == __ORDER_LITTLE_ENDIAN__,
+                  "glb arrays are little-endian, written as in memory");
     for (const TriMesh& m : meshes) check_tri_mesh(path, m);
 
     std::vector<FragmentSplit> splits;
@@ -181,13 +206,15 @@ void write_glb(const fs::path& path, const std::vector<TriMesh>& meshes) {
     const int64_t offset = glb.offset;
     const uint64_t total = 12 + 8 + text.size() + (offset > 0 ? 8 + uint64_t(offset) : 0);
     if (total > std::numeric_limits<uint32_t>::max())
-        throw RuntimeError(path.string() + ": " + std::to_string(total) +
-                           " bytes: a glb holds at most 4 GiB (write obj, or surface fewer frames' cracks)");
+        throw RuntimeError(
+            path.string() + ": " + std::to_string(total) +
+            " bytes: a glb holds at most 4 GiB (write obj, or surface fewer frames' cracks)");
 
     write_atomically(path, [&](const fs::path& tmp) {
         errno = 0;
         std::ofstream os(tmp, std::ios::binary);
-        if (!os) throw RuntimeError(tmp.string() + ": cannot open for writing: " + write_error_reason());
+        if (!os)
+            throw RuntimeError(tmp.string() + ": cannot open for writing: " + write_error_reason());
         put_u32(os, kGlbMagic);
         put_u32(os, 2);
         put_u32(os, uint32_t(total));

@@ -39,29 +39,34 @@ int png_color_type(int channels) {
 void write_png_file(const fs::path& tmp, const Image& image) {
     errno = 0;
     FilePtr file(std::fopen(tmp.c_str(), "wb"), &std::fclose);
-    if (!file) throw RuntimeError(tmp.string() + ": cannot open for writing: " + write_error_reason());
-    png_structp png = png_create_write_struct(PNG_LIBPNG_VER_STRING, nullptr, throw_png_error, ignore_png_warning);
+    if (!file)
+        throw RuntimeError(tmp.string() + ": cannot open for writing: " + write_error_reason());
+    png_structp png = png_create_write_struct(PNG_LIBPNG_VER_STRING, nullptr, throw_png_error,
+                                              ignore_png_warning);
     png_infop info = png ? png_create_info_struct(png) : nullptr;
     if (!info) throw RuntimeError(tmp.string() + ": libpng could not allocate a writer");
     try {
         png_init_io(png, file.get());
         png_set_IHDR(png, info, png_uint_32(image.width), png_uint_32(image.height), 8,
-                     png_color_type(image.channels), PNG_INTERLACE_NONE, PNG_COMPRESSION_TYPE_DEFAULT,
-                     PNG_FILTER_TYPE_DEFAULT);
+                     png_color_type(image.channels), PNG_INTERLACE_NONE,
+                     PNG_COMPRESSION_TYPE_DEFAULT, PNG_FILTER_TYPE_DEFAULT);
         png_write_info(png, info);
         const size_t stride = size_t(image.width) * size_t(image.channels);
-        for (int y = 0; y < image.height; ++y) png_write_row(png, image.pixels.data() + size_t(y) * stride);
+        for (int y = 0; y < image.height; ++y)
+            png_write_row(png, image.pixels.data() + size_t(y) * stride);
         png_write_end(png, nullptr);
     } catch (const std::exception& e) {
         png_destroy_write_struct(&png, &info);
         // libpng's stdio writer reports a short fwrite as "Write Error"; errno says why
-        throw RuntimeError(tmp.string() + ": PNG write failed: " + e.what() + ": " + write_error_reason());
+        throw RuntimeError(tmp.string() + ": PNG write failed: " + e.what() + ": " +
+                           write_error_reason());
     }
     png_destroy_write_struct(&png, &info);
     // fclose flushes the last buffer, so its result is the write's
     const bool flushed = std::fflush(file.get()) == 0 && !std::ferror(file.get());
     const bool closed = std::fclose(file.release()) == 0;
-    if (!flushed || !closed) throw RuntimeError(tmp.string() + ": cannot write: " + write_error_reason());
+    if (!flushed || !closed)
+        throw RuntimeError(tmp.string() + ": cannot write: " + write_error_reason());
 }
 
 }  // namespace
@@ -69,10 +74,12 @@ void write_png_file(const fs::path& tmp, const Image& image) {
 void write_png(const fs::path& path, const Image& image) {
     const bool valid_channels = image.channels >= 1 && image.channels <= 4;
     if (image.width <= 0 || image.height <= 0 || !valid_channels ||
-        image.pixels.size() != size_t(image.width) * size_t(image.height) * size_t(image.channels)) {
+        image.pixels.size() !=
+            size_t(image.width) * size_t(image.height) * size_t(image.channels)) {
         throw RuntimeError(path.string() + ": cannot write a " + std::to_string(image.width) + "x" +
-                           std::to_string(image.height) + "x" + std::to_string(image.channels) + " image with " +
-                           std::to_string(image.pixels.size()) + " bytes of pixels");
+                           std::to_string(image.height) + "x" + std::to_string(image.channels) +
+                           " image with " + std::to_string(image.pixels.size()) +
+                           " bytes of pixels");
     }
     write_atomically(path, [&](const fs::path& tmp) { write_png_file(tmp, image); });
 }
@@ -87,7 +94,8 @@ Image read_png(const fs::path& path) {
         png_sig_cmp(signature, 0, sizeof signature) != 0) {
         throw InputError(path.string() + ": not a PNG file (bad signature)");
     }
-    png_structp png = png_create_read_struct(PNG_LIBPNG_VER_STRING, nullptr, throw_png_error, ignore_png_warning);
+    png_structp png =
+        png_create_read_struct(PNG_LIBPNG_VER_STRING, nullptr, throw_png_error, ignore_png_warning);
     png_infop info = png ? png_create_info_struct(png) : nullptr;
     if (!info) throw RuntimeError(path.string() + ": libpng could not allocate a reader");
     Image image;
@@ -99,7 +107,8 @@ Image read_png(const fs::path& path) {
         // tRNS -> alpha
         const int color_type = png_get_color_type(png, info);
         if (color_type == PNG_COLOR_TYPE_PALETTE) png_set_palette_to_rgb(png);
-        if (color_type == PNG_COLOR_TYPE_GRAY && png_get_bit_depth(png, info) < 8) png_set_expand_gray_1_2_4_to_8(png);
+        if (color_type == PNG_COLOR_TYPE_GRAY && png_get_bit_depth(png, info) < 8)
+            png_set_expand_gray_1_2_4_to_8(png);
         if (png_get_valid(png, info, PNG_INFO_tRNS)) png_set_tRNS_to_alpha(png);
         if (png_get_bit_depth(png, info) == 16) png_set_strip_16(png);
         png_set_interlace_handling(png);
@@ -110,12 +119,14 @@ Image read_png(const fs::path& path) {
         const size_t stride = png_get_rowbytes(png, info);
         image.pixels.resize(stride * size_t(image.height));
         std::vector<png_bytep> rows(size_t(image.height));
-        for (int y = 0; y < image.height; ++y) rows[size_t(y)] = image.pixels.data() + size_t(y) * stride;
+        for (int y = 0; y < image.height; ++y)
+            rows[size_t(y)] = image.pixels.data() + size_t(y) * stride;
         png_read_image(png, rows.data());
         png_read_end(png, nullptr);
     } catch (const std::exception& e) {
         png_destroy_read_struct(&png, &info, nullptr);
-        throw InputError(path.string() + ": cannot read the PNG (truncated or damaged?): " + e.what());
+        throw InputError(path.string() +
+                         ": cannot read the PNG (truncated or damaged?): " + e.what());
     }
     png_destroy_read_struct(&png, &info, nullptr);
     return image;

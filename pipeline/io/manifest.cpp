@@ -54,7 +54,7 @@ nlohmann::json make_manifest(const std::string& stage, const std::string& shot_p
     m["shot_slice_hash"] = slice_hash;
     m["created_utc"] = utc_now_iso8601();
     m["host"] = host_name();
-    m["threads"] = thread_count();                             // workers this run uses
+    m["threads"] = thread_count();                                 // workers this run uses
     m["host_threads"] = int(std::thread::hardware_concurrency());  // what the machine offers
     return m;
 }
@@ -78,8 +78,9 @@ nlohmann::json read_manifest(const fs::path& dir) {
     nlohmann::json manifest = nlohmann::json::parse(is, nullptr, /*allow_exceptions=*/false,
                                                     /*ignore_comments=*/true);
     if (manifest.is_discarded() || !manifest.is_object()) {
-        throw InputError(path.string() + ": malformed manifest: expected a JSON object (re-run the "
-                                         "stage that wrote it)");
+        throw InputError(path.string() +
+                         ": malformed manifest: expected a JSON object (re-run the "
+                         "stage that wrote it)");
     }
     return manifest;
 }
@@ -89,27 +90,34 @@ nlohmann::json read_current_manifest(const fs::path& dir, const std::string& exp
     const std::string file = (dir / kManifestName).string();
     const auto hash = manifest.find("shot_slice_hash");
     if (hash == manifest.end())
-        throw InputError(file + ": /shot_slice_hash: missing, so it cannot be checked against this shot: re-run " +
-                         producer_of(dir));
+        throw InputError(
+            file +
+            ": /shot_slice_hash: missing, so it cannot be checked against this shot: re-run " +
+            producer_of(dir));
     if (!hash->is_string() || hash->get<std::string>().empty())
-        throw InputError(file + ": /shot_slice_hash = " + hash->dump() + ": not a slice hash: re-run " +
-                         producer_of(dir));
+        throw InputError(file + ": /shot_slice_hash = " + hash->dump() +
+                         ": not a slice hash: re-run " + producer_of(dir));
     const std::string found = hash->get<std::string>();
     if (found != expected_slice_hash)
-        throw InputError(file + ": /shot_slice_hash = \"" + found + "\": stale for this shot (expected \"" +
-                         expected_slice_hash + "\"): re-run " + producer_of(dir));
+        throw InputError(file + ": /shot_slice_hash = \"" + found +
+                         "\": stale for this shot (expected \"" + expected_slice_hash +
+                         "\"): re-run " + producer_of(dir));
     return manifest;
 }
 
 ManifestFrames manifest_frames(const json& manifest, const fs::path& manifest_file) {
     try {
-        return {manifest.at("frames").at("first").get<int>(), manifest.at("frames").at("last").get<int>()};
+        return {manifest.at("frames").at("first").get<int>(),
+                manifest.at("frames").at("last").get<int>()};
     } catch (const json::exception&) {
-        throw InputError(manifest_file.string() + ": /frames/first and /frames/last: missing or not integers");
+        throw InputError(manifest_file.string() +
+                         ": /frames/first and /frames/last: missing or not integers");
     }
 }
 
-json file_record(const fs::path& file) { return {{"file", file.filename().string()}, {"crc32", file_crc32(file)}}; }
+json file_record(const fs::path& file) {
+    return {{"file", file.filename().string()}, {"crc32", file_crc32(file)}};
+}
 
 RecordedChecksums::RecordedChecksums(const json& manifest, const fs::path& manifest_file) {
     add(manifest, manifest_file);
@@ -144,11 +152,13 @@ void RecordedChecksums::verify(const fs::path& file) const {
     std::error_code ec;
     if (!fs::is_regular_file(file, ec)) throw InputError(file.string() + ": missing" + rerun);
     if (it == m_records.end())
-        throw InputError(file.string() + ": no checksum recorded for it, so it cannot be verified" + rerun);
+        throw InputError(file.string() + ": no checksum recorded for it, so it cannot be verified" +
+                         rerun);
     const std::string found = file_crc32(file);
     if (found != it->second.crc32)
         throw InputError(file.string() + ": damaged: its CRC-32 is " + found + ", but " +
-                         it->second.manifest_file.string() + " records " + it->second.crc32 + rerun);
+                         it->second.manifest_file.string() + " records " + it->second.crc32 +
+                         rerun);
     {
         const std::lock_guard<std::mutex> lock(m_verified->mutex);
         m_verified->files.insert(file);

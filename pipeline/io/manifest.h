@@ -36,7 +36,8 @@ nlohmann::json read_manifest(const std::filesystem::path& dir);
 /// read, naming the file, the key and the value (e.g. "out/demo/sim/manifest.json:
 /// /shot_slice_hash = "9f..": stale for this shot (expected "3c.."): re-run mc-sim").
 /// @param expected_slice_hash Shot::slice_hash of the stage that wrote dir
-nlohmann::json read_current_manifest(const std::filesystem::path& dir, const std::string& expected_slice_hash);
+nlohmann::json read_current_manifest(const std::filesystem::path& dir,
+                                     const std::string& expected_slice_hash);
 
 /// The frames a stage's manifest covers, /frames/first to /frames/last (inclusive).
 struct ManifestFrames {
@@ -47,7 +48,8 @@ struct ManifestFrames {
 /// Reads /frames/first and /frames/last. Throws InputError naming the file when either is missing
 /// or not an integer.
 /// @param manifest_file the manifest's path, for the message
-ManifestFrames manifest_frames(const nlohmann::json& manifest, const std::filesystem::path& manifest_file);
+ManifestFrames manifest_frames(const nlohmann::json& manifest,
+                               const std::filesystem::path& manifest_file);
 
 /// A manifest's record of a file it names, the one form every stage writes:
 /// {"file": "<name in the manifest's folder>", "crc32": "<file_crc32 of its bytes>"}. Readers find

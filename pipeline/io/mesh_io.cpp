@@ -1,17 +1,17 @@
 #include "pipeline/io/mesh_io.h"
 
-#include <assimp/Exporter.hpp>
-#include <assimp/Importer.hpp>
 #include <assimp/material.h>
 #include <assimp/postprocess.h>
 #include <assimp/scene.h>
+#include <assimp/Exporter.hpp>
+#include <assimp/Importer.hpp>
 
 #include <algorithm>
 #include <cctype>
 #include <climits>
+#include <cmath>
 #include <cstdlib>
 #include <cstring>
-#include <cmath>
 #include <fstream>
 #include <functional>
 #include <map>
@@ -84,7 +84,8 @@ void append_mesh(const aiMesh& mesh, const aiMatrix4x4& world_from_mesh, Surface
         if (face.mNumIndices != 3) continue;  // points and lines left by the triangulation
         const unsigned* c = face.mIndices;
         // a triangle whose corners weld together has no area and no orientation
-        if (world[c[0]] == world[c[1]] || world[c[1]] == world[c[2]] || world[c[0]] == world[c[2]]) {
+        if (world[c[0]] == world[c[1]] || world[c[1]] == world[c[2]] ||
+            world[c[0]] == world[c[2]]) {
             ++out.dropped_degenerate;
             continue;
         }
@@ -117,7 +118,8 @@ void append_node(const aiScene& scene, const aiNode& node, const aiMatrix4x4& pa
 
 std::string lowercase_extension(const fs::path& path) {
     std::string ext = path.extension().string();
-    std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return char(std::tolower(c)); });
+    std::transform(ext.begin(), ext.end(), ext.begin(),
+                   [](unsigned char c) { return char(std::tolower(c)); });
     return ext;
 }
 
@@ -133,8 +135,9 @@ void check_text_mesh(const fs::path& path) {
         const std::streamsize n = is.gcount();
         const char* nul = static_cast<const char*>(std::memchr(buffer, '\0', size_t(n)));
         if (nul)
-            throw InputError(path.string() + ": byte " + std::to_string(offset + uint64_t(nul - buffer)) +
-                             " is NUL: an " + ext.substr(1) + " file is text (damaged or not a mesh?)");
+            throw InputError(path.string() + ": byte " +
+                             std::to_string(offset + uint64_t(nul - buffer)) + " is NUL: an " +
+                             ext.substr(1) + " file is text (damaged or not a mesh?)");
         offset += uint64_t(n);
     }
 }
@@ -157,8 +160,8 @@ void check_obj_vertices_finite(const fs::path& path) {
         for (int k = 0; k < 3 && fields >> word; ++k)
             if (!std::isfinite(std::strtod(word.c_str(), nullptr)))
                 throw InputError(path.string() + ": vertex " + std::to_string(vertex) + " (line " +
-                                 std::to_string(line_number) + ") has coordinate " + word.substr(0, 40) +
-                                 ": not finite; expected finite numbers");
+                                 std::to_string(line_number) + ") has coordinate " +
+                                 word.substr(0, 40) + ": not finite; expected finite numbers");
     }
 }
 
@@ -169,9 +172,11 @@ void check_mesh_vertices_finite(const fs::path& path, const aiScene& scene) {
             const aiVector3D& v = mesh.mVertices[i];
             if (std::isfinite(v.x) && std::isfinite(v.y) && std::isfinite(v.z)) continue;
             std::ostringstream where;
-            where << "vertex " << i << (scene.mNumMeshes > 1 ? " of mesh " + std::to_string(m) : std::string())
+            where << "vertex " << i
+                  << (scene.mNumMeshes > 1 ? " of mesh " + std::to_string(m) : std::string())
                   << " (0-based, as read) is (" << v.x << ", " << v.y << ", " << v.z << ")";
-            throw InputError(path.string() + ": " + where.str() + ": not finite; expected finite numbers");
+            throw InputError(path.string() + ": " + where.str() +
+                             ": not finite; expected finite numbers");
         }
     }
 }
@@ -192,7 +197,8 @@ void check_off_header(const fs::path& path) {
             std::getline(is, rest);
             continue;
         }
-        const bool magic = first && word.size() >= 3 && word.compare(word.size() - 3, 3, "OFF") == 0;
+        const bool magic =
+            first && word.size() >= 3 && word.compare(word.size() - 3, 3, "OFF") == 0;
         first = false;
         if (!magic) counts.push_back(word);  // the first word may be OFF, COFF, NOFF, ...
     }
@@ -207,7 +213,8 @@ void check_off_header(const fs::path& path) {
     }
     if (!ec && total > size)
         throw InputError(path.string() + ": OFF header declares " + std::to_string(total) +
-                         " vertices and faces, more than the file's " + std::to_string(size) + " bytes can hold");
+                         " vertices and faces, more than the file's " + std::to_string(size) +
+                         " bytes can hold");
 }
 
 // assimp 5.2.5's PLY reader runs past its buffer on a header without end_header or a binary body
@@ -245,7 +252,8 @@ void check_ply_header(const fs::path& path) {
         } else if (key == "element") {
             std::string name, number;
             words >> name >> number;
-            if (number.empty() || number.size() > 10 || number.find_first_not_of("0123456789") != std::string::npos)
+            if (number.empty() || number.size() > 10 ||
+                number.find_first_not_of("0123456789") != std::string::npos)
                 fail("element '" + name + "' count '" + number + "': expected a count below 10^10");
             count = std::stoull(number);
             element_count += count;
@@ -260,17 +268,20 @@ void check_ply_header(const fs::path& path) {
                 size = ply_type(count_type).bytes;
                 if (size == 0 || ply_type(item_type).bytes == 0)
                     fail("property list " + count_type + " " + item_type + ": unknown type");
-                if (!elements.empty()) elements.back().properties.push_back(PlyProperty{true, count_type, item_type});
+                if (!elements.empty())
+                    elements.back().properties.push_back(PlyProperty{true, count_type, item_type});
             } else {
                 size = ply_type(type).bytes;
                 if (size == 0) fail("property type '" + type + "': unknown type");
-                if (!elements.empty()) elements.back().properties.push_back(PlyProperty{false, "", type});
+                if (!elements.empty())
+                    elements.back().properties.push_back(PlyProperty{false, "", type});
             }
             min_body += count * size;
         } else if (key != "comment" && key != "obj_info" && !key.empty()) {
             // assimp skips a line it does not know and misreads the body after it (an abort in
             // its triangulation, found by tests/fuzz)
-            fail("line '" + line.substr(0, 60) + "': expected format, element, property, comment, obj_info or end_header");
+            fail("line '" + line.substr(0, 60) +
+                 "': expected format, element, property, comment, obj_info or end_header");
         }
     }
     if (!ended) fail("no end_header line");
@@ -283,8 +294,10 @@ void check_ply_header(const fs::path& path) {
     // ascii: every element takes at least one byte of text
     const uint64_t needed = format == "ascii" ? element_count : min_body;
     if (body < needed)
-        fail("the header declares " + std::to_string(element_count) + " elements needing at least " +
-             std::to_string(needed) + " bytes, the file holds " + std::to_string(body) + " after the header "
+        fail("the header declares " + std::to_string(element_count) +
+             " elements needing at least " + std::to_string(needed) + " bytes, the file holds " +
+             std::to_string(body) +
+             " after the header "
              "(truncated?)");
     check_ply_list_counts(path, uint64_t(body_start), format, elements);
 }
@@ -304,8 +317,8 @@ void check_polygon_flags(const fs::path& path, const aiScene& scene) {
         }
         if (polygons == 0)
             throw InputError(path.string() + ": cannot read the mesh: mesh " + std::to_string(m) +
-                             " is declared to hold polygons but its " + std::to_string(mesh.mNumFaces) +
-                             " faces (" + std::to_string(empty) +
+                             " is declared to hold polygons but its " +
+                             std::to_string(mesh.mNumFaces) + " faces (" + std::to_string(empty) +
                              " with no corner) have at most 3 corners each (damaged file?)");
     }
 }
@@ -315,8 +328,9 @@ void check_polygon_flags(const fs::path& path, const aiScene& scene) {
 InputSurface load_input_surface(const fs::path& path) {
     std::error_code ec;
     if (!fs::is_regular_file(path, ec)) {
-        throw InputError(path.string() + ": mesh file not found (expected a readable OBJ, PLY, STL, "
-                                         "OFF or glTF file)");
+        throw InputError(path.string() +
+                         ": mesh file not found (expected a readable OBJ, PLY, STL, "
+                         "OFF or glTF file)");
     }
     check_ply_header(path);
     check_text_mesh(path);
@@ -415,7 +429,8 @@ aiMesh* make_ai_mesh(const fs::path& path, const TriMesh& mesh, unsigned materia
         // UV channel 1 = (fragment id, 0): exact in float for ids below 2^24
         m->mNumUVComponents[1] = 2;
         m->mTextureCoords[1] = new aiVector3D[n];
-        for (size_t i = 0; i < n; ++i) m->mTextureCoords[1][i] = aiVector3D(float(split.fragment(i)), 0, 0);
+        for (size_t i = 0; i < n; ++i)
+            m->mTextureCoords[1][i] = aiVector3D(float(split.fragment(i)), 0, 0);
     }
     m->mNumFaces = unsigned(mesh.faces.size());
     m->mFaces = new aiFace[mesh.faces.size()];
@@ -464,7 +479,8 @@ std::string blob_text(const aiExportDataBlob& blob) {
 std::string post_process(const std::string& format, std::string bytes) {
     if (format == "dae") {
         // the COLLADA exporter stamps <created>/<modified> with the wall clock
-        static const std::regex created("<created>[^<]*</created>"), modified("<modified>[^<]*</modified>");
+        static const std::regex created("<created>[^<]*</created>"),
+            modified("<modified>[^<]*</modified>");
         bytes = std::regex_replace(bytes, created, "<created>1970-01-01T00:00:00</created>");
         bytes = std::regex_replace(bytes, modified, "<modified>1970-01-01T00:00:00</modified>");
     } else if (format == "obj") {
@@ -474,7 +490,8 @@ std::string post_process(const std::string& format, std::string bytes) {
         while (begin < bytes.size()) {
             size_t end = bytes.find('\n', begin);
             end = end == std::string::npos ? bytes.size() : end + 1;
-            if (bytes.compare(begin, 2, "g ") == 0) out += "o " + bytes.substr(begin + 2, end - begin - 2);
+            if (bytes.compare(begin, 2, "g ") == 0)
+                out += "o " + bytes.substr(begin + 2, end - begin - 2);
             out.append(bytes, begin, end - begin);
             begin = end;
         }
@@ -499,7 +516,8 @@ std::string mesh_format_refusal(const std::string& format) {
     return "unknown mesh format '" + format + "': expected glb, obj, ply or dae";
 }
 
-void export_meshes(const fs::path& path, const std::vector<TriMesh>& meshes, const std::string& format) {
+void export_meshes(const fs::path& path, const std::vector<TriMesh>& meshes,
+                   const std::string& format) {
     const MeshFormat* f = find_format(format);
     if (f == nullptr) throw InputError(path.string() + ": " + mesh_format_refusal(format));
     if (f->assimp_id == nullptr) return write_glb(path, meshes);
@@ -517,10 +535,13 @@ void export_meshes(const fs::path& path, const std::vector<TriMesh>& meshes, con
     const auto scene = make_scene(path, format == "ply" ? stripped : meshes);
     Assimp::Exporter exporter;
     Assimp::ExportProperties properties;
-    properties.SetPropertyString(AI_CONFIG_EXPORT_BLOB_NAME, path.stem().string());  // obj: "mtllib <stem>.mtl"
-    const aiExportDataBlob* blob = exporter.ExportToBlob(scene.get(), f->assimp_id, 0u, &properties);
+    // obj: "mtllib <stem>.mtl"
+    properties.SetPropertyString(AI_CONFIG_EXPORT_BLOB_NAME, path.stem().string());
+    const aiExportDataBlob* blob =
+        exporter.ExportToBlob(scene.get(), f->assimp_id, 0u, &properties);
     if (blob == nullptr) {
-        throw RuntimeError(path.string() + ": assimp could not export " + format + ": " + exporter.GetErrorString());
+        throw RuntimeError(path.string() + ": assimp could not export " + format + ": " +
+                           exporter.GetErrorString());
     }
     // side files first (obj's .mtl), then the main file, so the main file never points at nothing.
     // assimp names side blobs "<blob name up to its first dot>.<ext>" ("boundary.mtl" for
@@ -530,7 +551,8 @@ void export_meshes(const fs::path& path, const std::vector<TriMesh>& meshes, con
     for (const aiExportDataBlob* side = blob->next; side != nullptr; side = side->next) {
         const std::string side_name = side->name.C_Str();
         const std::string ext = side_name.find('.') != std::string::npos
-                                    ? side_name.substr(side_name.rfind('.') + 1) : side_name;
+                                    ? side_name.substr(side_name.rfind('.') + 1)
+                                    : side_name;
         fs::path side_path = path;
         side_path.replace_extension(ext);
         const std::string own_name = side_path.filename().string();
@@ -560,7 +582,8 @@ std::vector<TriMesh> import_meshes(const fs::path& path) {
     }
     std::vector<TriMesh> meshes;
     // depth-first over the nodes, so meshes come back in the order they were written
-    std::function<void(const aiNode&, const aiMatrix4x4&)> visit = [&](const aiNode& node, const aiMatrix4x4& parent) {
+    std::function<void(const aiNode&, const aiMatrix4x4&)> visit = [&](const aiNode& node,
+                                                                       const aiMatrix4x4& parent) {
         const aiMatrix4x4 world_from_node = parent * node.mTransformation;
         const aiMatrix3x3 normal_matrix = aiMatrix3x3(world_from_node).Inverse().Transpose();
         for (unsigned k = 0; k < node.mNumMeshes; ++k) {
@@ -609,7 +632,8 @@ std::vector<TriMesh> import_meshes(const fs::path& path) {
                     out.positions.push_back(corners.positions[v]);
                     if (!corners.normals.empty()) out.normals.push_back(corners.normals[v]);
                     if (!corners.uvs.empty()) out.uvs.push_back(corners.uvs[v]);
-                    if (!corners.saturation.empty()) out.saturation.push_back(corners.saturation[v]);
+                    if (!corners.saturation.empty())
+                        out.saturation.push_back(corners.saturation[v]);
                     if (!corners.alpha.empty()) out.alpha.push_back(corners.alpha[v]);
                 }
             }
@@ -618,7 +642,8 @@ std::vector<TriMesh> import_meshes(const fs::path& path) {
                 if (face.mNumIndices != 3) continue;
                 const unsigned* c = face.mIndices;
                 out.faces.push_back({index_of[c[0]], index_of[c[1]], index_of[c[2]]});
-                if (m.HasTextureCoords(1)) out.face_fragment.push_back(int32_t(std::lround(m.mTextureCoords[1][c[0]].x)));
+                if (m.HasTextureCoords(1))
+                    out.face_fragment.push_back(int32_t(std::lround(m.mTextureCoords[1][c[0]].x)));
             }
             meshes.push_back(std::move(out));
         }

@@ -12,9 +12,9 @@ namespace mudcrack {
 
 /// An input surface, all of its meshes merged, vertices welded by exact position.
 struct InputSurface {
-    std::vector<Vec3> positions;              // [m]
-    std::vector<Tri> faces;                   // triangles (polygons are triangulated)
-    std::vector<std::array<Vec2, 3>> face_uv; // per-corner UVs, (n_faces) or empty if none
+    std::vector<Vec3> positions;               // [m]
+    std::vector<Tri> faces;                    // triangles (polygons are triangulated)
+    std::vector<std::array<Vec2, 3>> face_uv;  // per-corner UVs, (n_faces) or empty if none
 };
 
 /// Loads a triangle mesh with assimp. Throws InputError naming the file if it is missing,

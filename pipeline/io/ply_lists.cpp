@@ -15,14 +15,22 @@ namespace mudcrack {
 
 PlyType ply_type(const std::string& name) {
     static const std::pair<const char*, PlyType> kTypes[] = {
-        {"char", {1, true, false, 127}},           {"int8", {1, true, false, 127}},
-        {"uchar", {1, false, false, 255}},         {"uint8", {1, false, false, 255}},
-        {"short", {2, true, false, 32767}},        {"int16", {2, true, false, 32767}},
-        {"ushort", {2, false, false, 65535}},      {"uint16", {2, false, false, 65535}},
-        {"int", {4, true, false, 2147483647}},     {"int32", {4, true, false, 2147483647}},
-        {"uint", {4, false, false, 4294967295u}},  {"uint32", {4, false, false, 4294967295u}},
-        {"float", {4, true, true, 0}},             {"float32", {4, true, true, 0}},
-        {"double", {8, true, true, 0}},            {"float64", {8, true, true, 0}}};
+        {"char", {1, true, false, 127}},
+        {"int8", {1, true, false, 127}},
+        {"uchar", {1, false, false, 255}},
+        {"uint8", {1, false, false, 255}},
+        {"short", {2, true, false, 32767}},
+        {"int16", {2, true, false, 32767}},
+        {"ushort", {2, false, false, 65535}},
+        {"uint16", {2, false, false, 65535}},
+        {"int", {4, true, false, 2147483647}},
+        {"int32", {4, true, false, 2147483647}},
+        {"uint", {4, false, false, 4294967295u}},
+        {"uint32", {4, false, false, 4294967295u}},
+        {"float", {4, true, true, 0}},
+        {"float32", {4, true, true, 0}},
+        {"double", {8, true, true, 0}},
+        {"float64", {8, true, true, 0}}};
     for (const auto& [n, t] : kTypes)
         if (name == n) return t;
     return {};
@@ -30,19 +38,23 @@ PlyType ply_type(const std::string& name) {
 
 namespace {
 
-[[noreturn]] void refuse(const fs::path& path, const PlyElement& element, uint64_t instance, const std::string& why) {
+[[noreturn]] void refuse(const fs::path& path, const PlyElement& element, uint64_t instance,
+                         const std::string& why) {
     throw InputError(path.string() + ": malformed PLY body: element '" + element.name + "' " +
                      std::to_string(instance) + ": " + why);
 }
 
-void check_count(const fs::path& path, const PlyElement& element, uint64_t instance, const PlyType& type,
-                 int64_t count, uint64_t left) {
-    if (count < 0) refuse(path, element, instance, "list count " + std::to_string(count) + " is negative");
+void check_count(const fs::path& path, const PlyElement& element, uint64_t instance,
+                 const PlyType& type, int64_t count, uint64_t left) {
+    if (count < 0)
+        refuse(path, element, instance, "list count " + std::to_string(count) + " is negative");
     if (uint64_t(count) > type.max)
-        refuse(path, element, instance, "list count " + std::to_string(count) + " does not fit its type");
+        refuse(path, element, instance,
+               "list count " + std::to_string(count) + " does not fit its type");
     if (uint64_t(count) > left)
-        refuse(path, element, instance, "list count " + std::to_string(count) + ", more than the " +
-                                            std::to_string(left) + " bytes left in the file");
+        refuse(path, element, instance,
+               "list count " + std::to_string(count) + ", more than the " + std::to_string(left) +
+                   " bytes left in the file");
 }
 
 // ---- binary: exact ----
@@ -52,11 +64,13 @@ int64_t read_integer(const char* p, const PlyType& type, bool big_endian) {
     const auto* b = reinterpret_cast<const unsigned char*>(p);
     uint64_t u = 0;
     for (size_t k = 0; k < type.bytes; ++k) u = (u << 8) | b[big_endian ? k : type.bytes - 1 - k];
-    if (type.is_signed && (u >> (8 * type.bytes - 1)) != 0) return int64_t(u) - (int64_t(1) << (8 * type.bytes));
+    if (type.is_signed && (u >> (8 * type.bytes - 1)) != 0)
+        return int64_t(u) - (int64_t(1) << (8 * type.bytes));
     return int64_t(u);
 }
 
-void walk_binary(const fs::path& path, const std::string& body, bool big_endian, const std::vector<PlyElement>& elements) {
+void walk_binary(const fs::path& path, const std::string& body, bool big_endian,
+                 const std::vector<PlyElement>& elements) {
     size_t at = 0;
     for (const PlyElement& element : elements) {
         if (element.properties.empty()) continue;  // takes no byte
@@ -64,12 +78,14 @@ void walk_binary(const fs::path& path, const std::string& body, bool big_endian,
             for (const PlyProperty& property : element.properties) {
                 const PlyType item = ply_type(property.type);
                 if (!property.is_list) {
-                    if (item.bytes > body.size() - at) refuse(path, element, i, "the file ends inside it");
+                    if (item.bytes > body.size() - at)
+                        refuse(path, element, i, "the file ends inside it");
                     at += item.bytes;
                     continue;
                 }
                 const PlyType count_type = ply_type(property.count_type);
-                if (count_type.bytes > body.size() - at) refuse(path, element, i, "the file ends inside it");
+                if (count_type.bytes > body.size() - at)
+                    refuse(path, element, i, "the file ends inside it");
                 const int64_t count = read_integer(&body[at], count_type, big_endian);
                 at += count_type.bytes;
                 check_count(path, element, i, count_type, count, (body.size() - at) / item.bytes);
@@ -116,7 +132,8 @@ bool skip_spaces(const std::string& line, size_t& at) {
 // assimp's strtoul10 / strtol10 as its PLY parser reads an integer (32-bit, wrapping)
 int64_t parse_integer(const std::string& line, size_t& at, bool is_signed) {
     bool negative = false;
-    if (is_signed && at < line.size() && (line[at] == '-' || line[at] == '+')) negative = line[at++] == '-';
+    if (is_signed && at < line.size() && (line[at] == '-' || line[at] == '+'))
+        negative = line[at++] == '-';
     uint32_t value = 0;
     while (at < line.size() && is_digit(line[at])) value = value * 10u + uint32_t(line[at++] - '0');
     if (!is_signed) return int64_t(value);
@@ -171,7 +188,8 @@ bool skip_value(const std::string& line, size_t& at, const PlyType& type) {
     return true;
 }
 
-void walk_ascii(const fs::path& path, const std::string& text, size_t start, const std::vector<PlyElement>& elements) {
+void walk_ascii(const fs::path& path, const std::string& text, size_t start,
+                const std::vector<PlyElement>& elements) {
     AsciiLines lines(text, start);
     std::string line;
     for (const PlyElement& element : elements) {
@@ -215,7 +233,8 @@ void check_ply_list_counts(const fs::path& path, uint64_t body_offset, const std
         // assimp starts at the header's last line end
         walk_ascii(path, text, size_t(body_offset) - (body_offset > 0 ? 1 : 0), elements);
     } else {
-        walk_binary(path, text.substr(size_t(body_offset)), format == "binary_big_endian", elements);
+        walk_binary(path, text.substr(size_t(body_offset)), format == "binary_big_endian",
+                    elements);
     }
 }
 

@@ -39,7 +39,7 @@ struct PlyElement {
 /// exact), and throws InputError naming the file, the element and the instance when a list count
 /// is negative, larger than its type holds, or larger than the bytes left in the file.
 /// `format` is "ascii", "binary_little_endian" or "binary_big_endian".
-void check_ply_list_counts(const std::filesystem::path& path, uint64_t body_offset, const std::string& format,
-                           const std::vector<PlyElement>& elements);
+void check_ply_list_counts(const std::filesystem::path& path, uint64_t body_offset,
+                           const std::string& format, const std::vector<PlyElement>& elements);
 
 }  // namespace mudcrack

@@ -31,10 +31,9 @@ namespace mudcrack {
 namespace {
 
 // the on-disk layout (documented for Houdini users and the lead):
-//   one PointDataGrid named "particles", linear transform with voxel size = write_points' voxel_size;
-//   P     vec3s, NullCodec (full float precision), world position
-//   id    int32
-//   float attributes -> "float", Vec3f -> "vec3s", Mat3f -> "mat3s" (openvdb::math::Mat3s, element
+//   one PointDataGrid named "particles", linear transform with voxel size = write_points'
+//   voxel_size; P     vec3s, NullCodec (full float precision), world position id    int32 float
+//   attributes -> "float", Vec3f -> "vec3s", Mat3f -> "mat3s" (openvdb::math::Mat3s, element
 //         (i,j) = M(i,j); Houdini's VDB-to-points conversion turns it into a matrix3 attribute,
 //         transposed to Houdini's row-vector convention), all NullCodec
 //   grid metadata: the cloud's string/double/int64 entries + mudcrack:format_version (int64) and
@@ -50,10 +49,12 @@ void initialize_openvdb() {
 
 // metadata that OpenVDB itself maintains on every grid: not the cloud's business
 bool is_openvdb_managed_meta(const std::string& name) {
-    return name == openvdb::GridBase::META_GRID_CLASS || name == openvdb::GridBase::META_GRID_CREATOR ||
-           name == openvdb::GridBase::META_GRID_NAME || name == openvdb::GridBase::META_SAVE_HALF_FLOAT ||
-           name == openvdb::GridBase::META_IS_LOCAL_SPACE || name == openvdb::GridBase::META_VECTOR_TYPE ||
-           name.rfind("file_", 0) == 0;
+    return name == openvdb::GridBase::META_GRID_CLASS ||
+           name == openvdb::GridBase::META_GRID_CREATOR ||
+           name == openvdb::GridBase::META_GRID_NAME ||
+           name == openvdb::GridBase::META_SAVE_HALF_FLOAT ||
+           name == openvdb::GridBase::META_IS_LOCAL_SPACE ||
+           name == openvdb::GridBase::META_VECTOR_TYPE || name.rfind("file_", 0) == 0;
 }
 
 openvdb::Vec3f to_vdb(const Vec3f& v) { return openvdb::Vec3f(v.x(), v.y(), v.z()); }
@@ -70,8 +71,8 @@ Mat3f from_vdb(const openvdb::math::Mat3s& m) {
 }
 
 template <class T>
-void check_attribute_size(const fs::path& path, const std::string& name, const std::vector<T>& values,
-                          size_t n) {
+void check_attribute_size(const fs::path& path, const std::string& name,
+                          const std::vector<T>& values, size_t n) {
     if (values.size() != n) {
         throw RuntimeError(path.string() + ": attribute '" + name + "' has " +
                            std::to_string(values.size()) + " values for " + std::to_string(n) +
@@ -114,8 +115,8 @@ openvdb::points::PointDataGrid::Ptr make_grid(const fs::path& path, const PointC
     // bucket the points into voxels, then store P relative to each voxel at full float precision
     const auto transform = openvdb::math::Transform::createLinearTransform(voxel_size);
     const vdbp::PointAttributeVector<openvdb::Vec3f> position_wrapper(positions);
-    const auto index_grid =
-        openvdb::tools::createPointIndexGrid<openvdb::tools::PointIndexGrid>(position_wrapper, *transform);
+    const auto index_grid = openvdb::tools::createPointIndexGrid<openvdb::tools::PointIndexGrid>(
+        position_wrapper, *transform);
     auto grid = vdbp::createPointDataGrid<vdbp::NullCodec, vdbp::PointDataGrid>(
         *index_grid, position_wrapper, *transform);
     grid->setName(kGridName);
@@ -148,9 +149,12 @@ openvdb::points::PointDataGrid::Ptr make_grid(const fs::path& path, const PointC
     }
 
     // metadata: the cloud's, then ours (which win)
-    for (const auto& [key, value] : cloud.meta_string) grid->insertMeta(key, openvdb::StringMetadata(value));
-    for (const auto& [key, value] : cloud.meta_double) grid->insertMeta(key, openvdb::DoubleMetadata(value));
-    for (const auto& [key, value] : cloud.meta_int) grid->insertMeta(key, openvdb::Int64Metadata(value));
+    for (const auto& [key, value] : cloud.meta_string)
+        grid->insertMeta(key, openvdb::StringMetadata(value));
+    for (const auto& [key, value] : cloud.meta_double)
+        grid->insertMeta(key, openvdb::DoubleMetadata(value));
+    for (const auto& [key, value] : cloud.meta_int)
+        grid->insertMeta(key, openvdb::Int64Metadata(value));
     grid->insertMeta(kFormatVersionKey, openvdb::Int64Metadata(kPointsFormatVersion));
     grid->insertMeta(kPointCountKey, openvdb::Int64Metadata(int64_t(n)));
     return grid;
@@ -167,7 +171,8 @@ bool looks_like_uuid(const std::string& s) {
     if (s.size() != kUuidLength) return false;
     for (size_t i = 0; i < s.size(); ++i) {
         const bool is_dash_slot = i == 8 || i == 13 || i == 18 || i == 23;
-        if (is_dash_slot ? s[i] != '-' : !std::isxdigit(static_cast<unsigned char>(s[i]))) return false;
+        if (is_dash_slot ? s[i] != '-' : !std::isxdigit(static_cast<unsigned char>(s[i])))
+            return false;
     }
     return true;
 }
@@ -211,18 +216,22 @@ public:
     }
 };
 
-// opens the file and returns the "particles" grid, data or metadata only; every failure names the file
+// opens the file and returns the "particles" grid, data or metadata only; every failure names the
+// file
 openvdb::GridBase::Ptr open_particles_grid(const fs::path& path, bool metadata_only) {
     initialize_openvdb();
     std::error_code ec;
     if (!fs::is_regular_file(path, ec)) {
-        throw InputError(path.string() + ": points file not found (expected a mudcrack OpenVDB "
-                                         "points cache)");
+        throw InputError(path.string() +
+                         ": points file not found (expected a mudcrack OpenVDB "
+                         "points cache)");
     }
     // ScaleMap and UniformScaleMap store five Vec3d: scale, voxel size, inverse scale, its square
     // and half the inverse scale
-    check_vdb_layout(path, {vdbp::PointDataGrid::gridType(), openvdb::math::UniformScaleMap::mapType(),
-                            uint32_t(5 * sizeof(openvdb::Vec3d)), uint32_t(sizeof(vdbp::PointDataTree::ValueType))});
+    check_vdb_layout(
+        path,
+        {vdbp::PointDataGrid::gridType(), openvdb::math::UniformScaleMap::mapType(),
+         uint32_t(5 * sizeof(openvdb::Vec3d)), uint32_t(sizeof(vdbp::PointDataTree::ValueType))});
     openvdb::GridBase::Ptr grid;
     try {
         openvdb::io::File file(path.string());
@@ -236,8 +245,10 @@ openvdb::GridBase::Ptr open_particles_grid(const fs::path& path, bool metadata_o
     } catch (const InputError&) {
         throw;
     } catch (const std::exception& e) {
-        throw InputError(path.string() + ": cannot read the points file (truncated or not an "
-                                         "OpenVDB file?): " + e.what());
+        throw InputError(path.string() +
+                         ": cannot read the points file (truncated or not an "
+                         "OpenVDB file?): " +
+                         e.what());
     }
     // the format version decides whether we understand the rest
     const auto version = grid->getMetadata<openvdb::Int64Metadata>(kFormatVersionKey);
@@ -263,11 +274,16 @@ PointCloud metadata_of(const openvdb::GridBase& grid) {
         const std::string& key = it->first;
         if (is_openvdb_managed_meta(key)) continue;
         const openvdb::Metadata& meta = *it->second;
-        if (auto s = dynamic_cast<const openvdb::StringMetadata*>(&meta)) cloud.meta_string[key] = s->value();
-        else if (auto d = dynamic_cast<const openvdb::DoubleMetadata*>(&meta)) cloud.meta_double[key] = d->value();
-        else if (auto f = dynamic_cast<const openvdb::FloatMetadata*>(&meta)) cloud.meta_double[key] = f->value();
-        else if (auto l = dynamic_cast<const openvdb::Int64Metadata*>(&meta)) cloud.meta_int[key] = l->value();
-        else if (auto i = dynamic_cast<const openvdb::Int32Metadata*>(&meta)) cloud.meta_int[key] = i->value();
+        if (auto s = dynamic_cast<const openvdb::StringMetadata*>(&meta))
+            cloud.meta_string[key] = s->value();
+        else if (auto d = dynamic_cast<const openvdb::DoubleMetadata*>(&meta))
+            cloud.meta_double[key] = d->value();
+        else if (auto f = dynamic_cast<const openvdb::FloatMetadata*>(&meta))
+            cloud.meta_double[key] = f->value();
+        else if (auto l = dynamic_cast<const openvdb::Int64Metadata*>(&meta))
+            cloud.meta_int[key] = l->value();
+        else if (auto i = dynamic_cast<const openvdb::Int32Metadata*>(&meta))
+            cloud.meta_int[key] = i->value();
     }
     return cloud;
 }
@@ -291,16 +307,22 @@ std::vector<T> permuted(const std::vector<T>& values, const std::vector<size_t>&
 // the cloud's attribute list for elements of type T (float, Vec3f or Mat3f)
 template <class T>
 auto& attributes_of(PointCloud& cloud) {
-    if constexpr (std::is_same_v<T, float>) return cloud.floats;
-    else if constexpr (std::is_same_v<T, Vec3f>) return cloud.vec3s;
-    else return cloud.mat3s;
+    if constexpr (std::is_same_v<T, float>)
+        return cloud.floats;
+    else if constexpr (std::is_same_v<T, Vec3f>)
+        return cloud.vec3s;
+    else
+        return cloud.mat3s;
 }
 
 template <class T>
 const std::vector<T>* find_attribute(const PointCloud& cloud, const std::string& name) {
-    if constexpr (std::is_same_v<T, float>) return cloud.find_float(name);
-    else if constexpr (std::is_same_v<T, Vec3f>) return cloud.find_vec3(name);
-    else return cloud.find_mat3(name);
+    if constexpr (std::is_same_v<T, float>)
+        return cloud.find_float(name);
+    else if constexpr (std::is_same_v<T, Vec3f>)
+        return cloud.find_vec3(name);
+    else
+        return cloud.find_mat3(name);
 }
 
 }  // namespace
@@ -327,14 +349,17 @@ void write_points(const fs::path& path, const PointCloud& cloud, double voxel_si
     write_atomically(path, [&](const fs::path& tmp) {
         errno = 0;
         std::ofstream os(tmp, std::ios::out | std::ios::binary | std::ios::trunc);
-        if (!os) throw RuntimeError(tmp.string() + ": cannot open for writing: " + write_error_reason());
+        if (!os)
+            throw RuntimeError(tmp.string() + ": cannot open for writing: " + write_error_reason());
         try {
             CheckedVdbWriter().write_to(os, openvdb::GridCPtrVec{grid});
         } catch (const openvdb::Exception& e) {
             throw RuntimeError(tmp.string() + ": cannot write the points file: " + e.what());
         }
         os.close();
-        if (!os) throw RuntimeError(tmp.string() + ": cannot write the points file: " + write_error_reason());
+        if (!os)
+            throw RuntimeError(tmp.string() +
+                               ": cannot write the points file: " + write_error_reason());
         make_uuid_content_derived(tmp);
     });
 }
@@ -384,7 +409,8 @@ PointCloud read_points(const fs::path& path) {
     // the file stores points voxel by voxel: restore ascending id order
     std::vector<size_t> order(n);
     std::iota(order.begin(), order.end(), size_t(0));
-    std::stable_sort(order.begin(), order.end(), [&](size_t a, size_t b) { return ids[a] < ids[b]; });
+    std::stable_sort(order.begin(), order.end(),
+                     [&](size_t a, size_t b) { return ids[a] < ids[b]; });
     cloud.P = permuted(P, order);
     cloud.id = permuted(ids, order);
 
@@ -400,7 +426,8 @@ PointCloud read_points(const fs::path& path) {
         } else if (type == openvdb::typeNameAsString<openvdb::Vec3f>()) {
             std::vector<Vec3f> values;
             values.reserve(n);
-            gather<openvdb::Vec3f>(tree, pos, values, [](const openvdb::Vec3f& v) { return from_vdb(v); });
+            gather<openvdb::Vec3f>(tree, pos, values,
+                                   [](const openvdb::Vec3f& v) { return from_vdb(v); });
             cloud.vec3s.emplace_back(name, permuted(values, order));
         } else if (type == openvdb::typeNameAsString<openvdb::math::Mat3s>()) {
             std::vector<Mat3f> values;
@@ -441,17 +468,18 @@ ParticleFrame points_to_frame(const PointCloud& cloud, const std::string& source
     for (size_t i = 0; i < n; ++i) {
         const int32_t id = cloud.id[i];
         if (id < 0 || size_t(id) >= n || slot[size_t(id)] != n) {
-            throw InputError(source + ": point " + std::to_string(i) + " has id " + std::to_string(id) +
-                             ": expected each of the ids 0.." + std::to_string(int64_t(n) - 1) +
-                             " exactly once");
+            throw InputError(source + ": point " + std::to_string(i) + " has id " +
+                             std::to_string(id) + ": expected each of the ids 0.." +
+                             std::to_string(int64_t(n) - 1) + " exactly once");
         }
         slot[size_t(id)] = i;
     }
     auto by_id = [&](const auto& values, const std::string& name) {
         using Vector = std::decay_t<decltype(values)>;
         if (values.size() != n) {
-            throw InputError(source + ": attribute '" + name + "' has " + std::to_string(values.size()) +
-                             " values for " + std::to_string(n) + " points");
+            throw InputError(source + ": attribute '" + name + "' has " +
+                             std::to_string(values.size()) + " values for " + std::to_string(n) +
+                             " points");
         }
         Vector out(n);
         for (size_t id = 0; id < n; ++id) out[id] = values[slot[id]];
@@ -464,13 +492,17 @@ ParticleFrame points_to_frame(const PointCloud& cloud, const std::string& source
     if (const auto* values = find_attribute<T>(cloud, vdb)) frame.member = by_id(*values, vdb);
     MC_CACHED_ATTRIBUTES(MC_READ_CACHED)
 #undef MC_READ_CACHED
-    if (auto it = cloud.meta_int.find("mudcrack:frame"); it != cloud.meta_int.end()) frame.frame = int(it->second);
-    if (auto it = cloud.meta_int.find("mudcrack:substeps"); it != cloud.meta_int.end()) frame.substeps = int(it->second);
-    if (auto it = cloud.meta_double.find("mudcrack:time"); it != cloud.meta_double.end()) frame.time = it->second;
+    if (auto it = cloud.meta_int.find("mudcrack:frame"); it != cloud.meta_int.end())
+        frame.frame = int(it->second);
+    if (auto it = cloud.meta_int.find("mudcrack:substeps"); it != cloud.meta_int.end())
+        frame.substeps = int(it->second);
+    if (auto it = cloud.meta_double.find("mudcrack:time"); it != cloud.meta_double.end())
+        frame.time = it->second;
     return frame;
 }
 
-fs::path frame_path(const fs::path& dir, const std::string& stem, int frame, const std::string& ext) {
+fs::path frame_path(const fs::path& dir, const std::string& stem, int frame,
+                    const std::string& ext) {
     char number[16];
     std::snprintf(number, sizeof number, "%04d", frame);
     const std::string suffix = ext.empty() || ext[0] == '.' ? ext : "." + ext;

@@ -18,14 +18,15 @@ constexpr int kPointsFormatVersion = 1;
 
 /// A point cloud with named attributes, in particle-id order (id[i] is usually i).
 struct PointCloud {
-    std::vector<Vec3f> P;                                             // positions [m]
-    std::vector<int32_t> id;                                          // particle ids
+    std::vector<Vec3f> P;                                            // positions [m]
+    std::vector<int32_t> id;                                         // particle ids
     std::vector<std::pair<std::string, std::vector<float>>> floats;  // scalar attributes
     std::vector<std::pair<std::string, std::vector<Vec3f>>> vec3s;   // vector attributes
     std::vector<std::pair<std::string, std::vector<Mat3f>>> mat3s;   // matrix attributes
-    std::map<std::string, std::string> meta_string;   // e.g. mudcrack:stage
-    std::map<std::string, double> meta_double;        // e.g. mudcrack:time
-    std::map<std::string, int64_t> meta_int;          // e.g. mudcrack:frame, mudcrack:format_version
+    std::map<std::string, std::string> meta_string;                  // e.g. mudcrack:stage
+    std::map<std::string, double> meta_double;                       // e.g. mudcrack:time
+    // e.g. mudcrack:frame, mudcrack:format_version
+    std::map<std::string, int64_t> meta_int;
 
     const std::vector<float>* find_float(const std::string& name) const;
     const std::vector<Vec3f>* find_vec3(const std::string& name) const;
@@ -50,8 +51,8 @@ PointCloud read_points(const std::filesystem::path& path);
 PointCloud read_points_metadata(const std::filesystem::path& path);
 
 /// A simulation frame <-> its cache: P, id, and the attributes present in `frame` (those of
-/// MC_CACHED_ATTRIBUTES, under their VDB names); metadata mudcrack:frame, mudcrack:time, mudcrack:substeps,
-/// mudcrack:stage = "sim".
+/// MC_CACHED_ATTRIBUTES, under their VDB names); metadata mudcrack:frame, mudcrack:time,
+/// mudcrack:substeps, mudcrack:stage = "sim".
 PointCloud frame_to_points(const ParticleFrame& frame);
 /// Inverse of frame_to_points. Throws InputError (naming `source`) if ids are not 0..n-1.
 ParticleFrame points_to_frame(const PointCloud& cloud, const std::string& source);
@@ -62,7 +63,7 @@ ParticleFrame points_to_frame(const PointCloud& cloud, const std::string& source
 constexpr int kMaxFrame = 9999;
 
 /// "dir/particles.0042.vdb" style frame file names: 1-based, zero-padded to 4 digits.
-std::filesystem::path frame_path(const std::filesystem::path& dir, const std::string& stem, int frame,
-                                 const std::string& ext);
+std::filesystem::path frame_path(const std::filesystem::path& dir, const std::string& stem,
+                                 int frame, const std::string& ext);
 
 }  // namespace mudcrack

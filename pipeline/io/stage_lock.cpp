@@ -31,21 +31,24 @@ std::string utc_now() {
 
 // whether fd is still the file at path (a releasing holder may have removed it meanwhile)
 bool is_same_file(int fd, const fs::path& path) {
-    struct stat open_file {}, named {};
+    struct stat open_file {
+    }, named{};
     if (fstat(fd, &open_file) != 0 || stat(path.c_str(), &named) != 0) return false;
     return open_file.st_dev == named.st_dev && open_file.st_ino == named.st_ino;
 }
 
 // the refusal: who holds the folder, read from the lock file (an exclusive holder) or known from
 // the mode (chunks share it)
-std::string refusal(const fs::path& stage_dir, const fs::path& lock_path, const std::string& program, int fd) {
+std::string refusal(const fs::path& stage_dir, const fs::path& lock_path,
+                    const std::string& program, int fd) {
     std::string holder;
     if (flock(fd, LOCK_SH | LOCK_NB) == 0) {  // only sharing chunks hold it
         flock(fd, LOCK_UN);
         holder = "farm chunks (mc-render --frames) are writing into it";
     } else {
         const std::string recorded = lock_holder_text(lock_path);
-        holder = "another writer holds it (" + (recorded.empty() ? std::string("no holder recorded") : recorded) + ")";
+        holder = "another writer holds it (" +
+                 (recorded.empty() ? std::string("no holder recorded") : recorded) + ")";
     }
     return stage_dir.string() + ": " + holder + "; lock " + lock_path.string() + ": " + program +
            " refuses to write into a folder another run is writing (one writer per folder): wait for that run "
@@ -76,29 +79,34 @@ std::string lock_holder_text(const fs::path& lock_file) {
     return "host " + host + ", pid " + pid + ", " + program + ", since " + start;
 }
 
-StageLock::StageLock(const fs::path& stage_dir, const std::string& program, LockMode mode) : m_mode(mode) {
+StageLock::StageLock(const fs::path& stage_dir, const std::string& program, LockMode mode)
+    : m_mode(mode) {
     // a stage writes only into a folder of its own: through a link it would delete and replace
     // another folder's files (another shot's, under /reuse), so a linked stage folder is refused,
     // never followed or replaced (readers follow links: /reuse shares a stage that way)
     std::error_code ec;
     if (fs::is_symlink(stage_dir, ec))
-        throw InputError(stage_dir.string() + ": a symbolic link (to " + fs::read_symlink(stage_dir, ec).string() +
-                         "): " + program + " writes only into a real folder, never through a link into another one: "
+        throw InputError(stage_dir.string() + ": a symbolic link (to " +
+                         fs::read_symlink(stage_dir, ec).string() + "): " + program +
+                         " writes only into a real folder, never through a link into another one: "
                          "remove the link, or give --out a folder of its own");
     m_stage_dir = fs::weakly_canonical(fs::absolute(stage_dir), ec);
     if (ec) m_stage_dir = fs::absolute(stage_dir).lexically_normal();
     const fs::path parent = m_stage_dir.parent_path();
     m_path = parent / ("." + m_stage_dir.filename().string() + ".lock");
     // the folders made here go again on release when nothing else was written into them
-    for (fs::path p = parent; !p.empty() && !fs::exists(p, ec) && p != p.parent_path(); p = p.parent_path())
+    for (fs::path p = parent; !p.empty() && !fs::exists(p, ec) && p != p.parent_path();
+         p = p.parent_path())
         m_made_dirs.push_back(p);
     fs::create_directories(parent, ec);
-    if (ec) throw RuntimeError(parent.string() + ": cannot create the output folder: " + ec.message());
+    if (ec)
+        throw RuntimeError(parent.string() + ": cannot create the output folder: " + ec.message());
 
     for (int attempt = 0; attempt < kLockAttempts; ++attempt) {
         const int fd = open(m_path.c_str(), O_RDWR | O_CREAT | O_CLOEXEC, 0644);
         if (fd < 0)
-            throw RuntimeError(m_path.string() + ": cannot create the lock file: " + std::strerror(errno));
+            throw RuntimeError(m_path.string() +
+                               ": cannot create the lock file: " + std::strerror(errno));
         if (flock(fd, (mode == LockMode::Exclusive ? LOCK_EX : LOCK_SH) | LOCK_NB) != 0) {
             const std::string why = refusal(m_stage_dir, m_path, program, fd);
             close(fd);
@@ -111,7 +119,9 @@ StageLock::StageLock(const fs::path& stage_dir, const std::string& program, Lock
         m_fd = fd;
         break;
     }
-    if (m_fd < 0) throw RuntimeError(m_path.string() + ": cannot take the lock: the file keeps being replaced");
+    if (m_fd < 0)
+        throw RuntimeError(m_path.string() +
+                           ": cannot take the lock: the file keeps being replaced");
     if (mode == LockMode::Exclusive) {
         std::ostringstream record;
         record << "host=" << lock_host_name() << "\npid=" << getpid() << "\nprogram=" << program
@@ -119,7 +129,8 @@ StageLock::StageLock(const fs::path& stage_dir, const std::string& program, Lock
         const std::string text = record.str();
         // the record only helps a refused writer name the holder: a failed write is not fatal
         [[maybe_unused]] const bool is_recorded =
-            ftruncate(m_fd, 0) == 0 && write(m_fd, text.data(), text.size()) == ssize_t(text.size());
+            ftruncate(m_fd, 0) == 0 &&
+            write(m_fd, text.data(), text.size()) == ssize_t(text.size());
     }
 }
 

@@ -1,7 +1,7 @@
 #include "pipeline/io/tet_mesh_io.h"
 
-#include <cerrno>
 #include <algorithm>
+#include <cerrno>
 #include <cstring>
 #include <fstream>
 #include <iterator>
@@ -91,14 +91,16 @@ void write_vtu(const fs::path& tmp, const TetMesh& mesh) {
         << "<VTKFile type=\"UnstructuredGrid\" version=\"1.0\" byte_order=\"LittleEndian\" "
            "header_type=\"UInt64\">\n"
         << "  <UnstructuredGrid>\n"
-        << "    <Piece NumberOfPoints=\"" << n_points << "\" NumberOfCells=\"" << n_cells << "\">\n";
+        << "    <Piece NumberOfPoints=\"" << n_points << "\" NumberOfCells=\"" << n_cells
+        << "\">\n";
     uint64_t offset = 0;
     std::string section;
     for (const Array& a : arrays) {
         if (a.section != section) {
             if (!section.empty()) xml << "      </" << section << ">\n";
             section = a.section;
-            xml << "      <" << section << (section == "PointData" ? " Scalars=\"id\"" : "") << ">\n";
+            xml << "      <" << section << (section == "PointData" ? " Scalars=\"id\"" : "")
+                << ">\n";
         }
         xml << "        <DataArray type=\"" << a.type << "\" Name=\"" << a.name << "\"";
         if (a.components != 1) xml << " NumberOfComponents=\"" << a.components << "\"";
@@ -112,7 +114,8 @@ void write_vtu(const fs::path& tmp, const TetMesh& mesh) {
 
     errno = 0;
     std::ofstream os(tmp, std::ios::binary);
-    if (!os) throw RuntimeError(tmp.string() + ": cannot open for writing: " + write_error_reason());
+    if (!os)
+        throw RuntimeError(tmp.string() + ": cannot open for writing: " + write_error_reason());
     os << xml.str();
     for (const Array& a : arrays) {
         const uint64_t size = a.bytes.size();
@@ -153,19 +156,23 @@ public:
         m_data_begin = underscore + 1;
         m_header = m_bytes.substr(0, underscore);
         const std::string vtkfile = tag_text("<VTKFile");
-        if (xml_attribute(vtkfile, "type") != "UnstructuredGrid") fail("VTKFile type is not UnstructuredGrid");
+        if (xml_attribute(vtkfile, "type") != "UnstructuredGrid")
+            fail("VTKFile type is not UnstructuredGrid");
         if (xml_attribute(vtkfile, "byte_order") != "LittleEndian" ||
             xml_attribute(vtkfile, "header_type") != "UInt64" ||
             xml_attribute(tag_text("<AppendedData"), "encoding") != "raw") {
-            fail("expected byte_order=\"LittleEndian\", header_type=\"UInt64\" and raw appended data "
-                 "(as mc-init writes; files re-saved by other tools are not supported)");
+            fail(
+                "expected byte_order=\"LittleEndian\", header_type=\"UInt64\" and raw appended data "
+                "(as mc-init writes; files re-saved by other tools are not supported)");
         }
         const std::string piece = tag_text("<Piece");
         m_points = parse_count(xml_attribute(piece, "NumberOfPoints"), "NumberOfPoints");
         m_cells = parse_count(xml_attribute(piece, "NumberOfCells"), "NumberOfCells");
     }
 
-    [[noreturn]] void fail(const std::string& what) const { throw InputError(m_path.string() + ": " + what); }
+    [[noreturn]] void fail(const std::string& what) const {
+        throw InputError(m_path.string() + ": " + what);
+    }
     size_t n_points() const { return m_points; }
     size_t n_cells() const { return m_cells; }
     bool has_array(const std::string& name) const { return !find_tag(name).empty(); }
@@ -176,18 +183,23 @@ public:
         const std::string tag = find_tag(name);
         if (tag.empty()) fail("no DataArray named '" + name + "'");
         if (xml_attribute(tag, "type") != type) {
-            fail("DataArray '" + name + "' has type " + xml_attribute(tag, "type") + ", expected " + type);
+            fail("DataArray '" + name + "' has type " + xml_attribute(tag, "type") + ", expected " +
+                 type);
         }
-        if (xml_attribute(tag, "format") != "appended") fail("DataArray '" + name + "' is not in the appended data");
-        const size_t at = m_data_begin + parse_count(xml_attribute(tag, "offset"), name + " offset");
+        if (xml_attribute(tag, "format") != "appended")
+            fail("DataArray '" + name + "' is not in the appended data");
+        const size_t at =
+            m_data_begin + parse_count(xml_attribute(tag, "offset"), name + " offset");
         uint64_t size = 0;
-        if (at + sizeof size > m_bytes.size()) fail("truncated: DataArray '" + name + "' starts past the end");
+        if (at + sizeof size > m_bytes.size())
+            fail("truncated: DataArray '" + name + "' starts past the end");
         std::memcpy(&size, m_bytes.data() + at, sizeof size);
         if (size != count * sizeof(T)) {
             fail("DataArray '" + name + "' holds " + std::to_string(size) + " bytes, expected " +
                  std::to_string(count * sizeof(T)));
         }
-        if (at + sizeof size + size > m_bytes.size()) fail("truncated: DataArray '" + name + "' ends past the end");
+        if (at + sizeof size + size > m_bytes.size())
+            fail("truncated: DataArray '" + name + "' ends past the end");
         std::vector<T> values(count);
         std::memcpy(values.data(), m_bytes.data() + at + sizeof size, size);
         return values;
@@ -195,10 +207,12 @@ public:
 
     /// Must close the file: the writer's trailer after the last block.
     void expect_trailer(size_t last_block_end) const {
-        if (m_bytes.find("</VTKFile>", last_block_end) == std::string::npos) fail("truncated: no </VTKFile> at the end");
+        if (m_bytes.find("</VTKFile>", last_block_end) == std::string::npos)
+            fail("truncated: no </VTKFile> at the end");
     }
     size_t block_end(const std::string& name) const {
-        const size_t at = m_data_begin + parse_count(xml_attribute(find_tag(name), "offset"), name + " offset");
+        const size_t at =
+            m_data_begin + parse_count(xml_attribute(find_tag(name), "offset"), name + " offset");
         uint64_t size = 0;
         std::memcpy(&size, m_bytes.data() + at, sizeof size);
         return at + sizeof size + size;
@@ -251,7 +265,8 @@ TetMesh read_tet_mesh_vtu(const fs::path& path) {
     const auto kind = vtu.array<uint8_t>("kind", "UInt8", n_cells);
     const size_t n_connectivity = n_cells == 0 ? 0 : size_t(std::max<int64_t>(offsets.back(), 0));
     if (n_connectivity > 4 * n_cells) {
-        vtu.fail("the last cell offset is " + std::to_string(offsets.back()) + ": expected at most 4 corners per cell");
+        vtu.fail("the last cell offset is " + std::to_string(offsets.back()) +
+                 ": expected at most 4 corners per cell");
     }
     const auto connectivity = vtu.array<int64_t>("connectivity", "Int64", n_connectivity);
     const bool has_uv = vtu.has_array("uv");
@@ -272,20 +287,21 @@ TetMesh read_tet_mesh_vtu(const fs::path& path) {
         const int64_t end = offsets[c];
         const int64_t corners = types[c] == kVtkTetra ? 4 : types[c] == kVtkTriangle ? 3 : -1;
         if (corners < 0 || end - begin != corners) {
-            vtu.fail("cell " + std::to_string(c) + " has VTK type " + std::to_string(int(types[c])) + " and " +
-                     std::to_string(end - begin) + " corners: expected tetrahedra (10) and triangles (5)");
+            vtu.fail("cell " + std::to_string(c) + " has VTK type " +
+                     std::to_string(int(types[c])) + " and " + std::to_string(end - begin) +
+                     " corners: expected tetrahedra (10) and triangles (5)");
         }
         const uint8_t expected_kind = corners == 4 ? kKindTet : kKindBoundary;
         if (kind[c] != expected_kind) {
-            vtu.fail("cell " + std::to_string(c) + " has kind " + std::to_string(int(kind[c])) + ", expected " +
-                     std::to_string(int(expected_kind)) + " for its VTK type");
+            vtu.fail("cell " + std::to_string(c) + " has kind " + std::to_string(int(kind[c])) +
+                     ", expected " + std::to_string(int(expected_kind)) + " for its VTK type");
         }
         int32_t v[4] = {0, 0, 0, 0};
         for (int64_t k = 0; k < corners; ++k) {
             const int64_t p = connectivity[size_t(begin + k)];
             if (p < 0 || size_t(p) >= n_points) {
-                vtu.fail("cell " + std::to_string(c) + " references point " + std::to_string(p) + " of " +
-                         std::to_string(n_points));
+                vtu.fail("cell " + std::to_string(c) + " references point " + std::to_string(p) +
+                         " of " + std::to_string(n_points));
             }
             v[k] = int32_t(p);
         }

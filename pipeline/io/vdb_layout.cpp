@@ -23,8 +23,9 @@ constexpr int64_t kUuidLength = 36;
 constexpr int64_t kTileCoordBytes = 12;
 // io/Compression.h: a grid's compression flags and a node's value metadata
 constexpr uint32_t kCompressZip = 0x1, kCompressActiveMask = 0x2, kCompressBlosc = 0x4;
-constexpr uint8_t kNoMaskAndOneInactiveValue = 2, kMaskAndNoInactiveValues = 3, kMaskAndOneInactiveValue = 4,
-                  kMaskAndTwoInactiveValues = 5, kNoMaskAndAllValues = 6;
+constexpr uint8_t kNoMaskAndOneInactiveValue = 2, kMaskAndNoInactiveValues = 3,
+                  kMaskAndOneInactiveValue = 4, kMaskAndTwoInactiveValues = 5,
+                  kNoMaskAndAllValues = 6;
 // the 5-4-3 tree of a points grid: two internal levels, then 8^3 leaves
 constexpr uint32_t kInternalLog2Dims[2] = {5, 4};
 constexpr uint32_t kLeafValues = 512;
@@ -51,14 +52,15 @@ public:
     }
 
     [[noreturn]] void fail(const std::string& what) const {
-        throw InputError(m_path.string() + ": truncated or damaged points file: " + what + " (file has " +
-                         std::to_string(m_size) + " bytes)");
+        throw InputError(m_path.string() + ": truncated or damaged points file: " + what +
+                         " (file has " + std::to_string(m_size) + " bytes)");
     }
 
     template <class T>
     T read(const char* what) {
         T v{};
-        if (!m_is.read(reinterpret_cast<char*>(&v), sizeof v)) fail(std::string(what) + " ends early");
+        if (!m_is.read(reinterpret_cast<char*>(&v), sizeof v))
+            fail(std::string(what) + " ends early");
         m_pos += int64_t(sizeof v);
         return v;
     }
@@ -69,13 +71,15 @@ public:
     }
     void seek(int64_t pos, const std::string& what) {
         if (pos < m_pos || pos > m_size)
-            fail(what + " at byte " + std::to_string(pos) + " lies before what was read or past the end of the file");
+            fail(what + " at byte " + std::to_string(pos) +
+                 " lies before what was read or past the end of the file");
         m_pos = pos;
         m_is.seekg(m_pos);
     }
     std::string string(const std::string& what) {
         const uint32_t n = read<uint32_t>(what.c_str());
-        if (int64_t(n) > m_size - m_pos) fail(what + " of " + std::to_string(n) + " bytes runs past the end of the file");
+        if (int64_t(n) > m_size - m_pos)
+            fail(what + " of " + std::to_string(n) + " bytes runs past the end of the file");
         std::string s(n, '\0');
         if (!m_is.read(s.data(), std::streamsize(n))) fail(what + " ends early");
         m_pos += n;
@@ -91,7 +95,8 @@ public:
         for (uint32_t i = 0; i < count; ++i) {
             const std::string name = string(owner + " metadata name");
             const std::string type = string(owner + " metadata '" + name.substr(0, 40) + "' type");
-            const std::string what = owner + " metadata '" + name.substr(0, 40) + "' (" + type.substr(0, 20) + ")";
+            const std::string what =
+                owner + " metadata '" + name.substr(0, 40) + "' (" + type.substr(0, 20) + ")";
             const uint32_t bytes = read<uint32_t>((what + " size").c_str());
             if (type == "string") {
                 skip(bytes, what);
@@ -100,7 +105,8 @@ public:
             const int64_t expected = metadata_bytes(type);
             if (expected < 0) fail(what + ": a metadata type mudcrack does not write");
             if (bytes != expected)
-                fail(what + " states " + std::to_string(bytes) + " bytes, the type has " + std::to_string(expected));
+                fail(what + " states " + std::to_string(bytes) + " bytes, the type has " +
+                     std::to_string(expected));
             if (type == "bool") {
                 bool_byte(what);
             } else {
@@ -128,8 +134,8 @@ public:
         const auto stated = read<int64_t>((what + " size").c_str());
         if (stated <= 0) {
             if (stated != -raw_bytes)
-                fail(what + " holds " + std::to_string(-stated) + " uncompressed bytes, the node has " +
-                     std::to_string(raw_bytes));
+                fail(what + " holds " + std::to_string(-stated) +
+                     " uncompressed bytes, the node has " + std::to_string(raw_bytes));
             skip(raw_bytes, what);
         } else {
             skip(stated, what + " of " + std::to_string(stated) + " compressed bytes");
@@ -137,15 +143,18 @@ public:
     }
     // an internal node's topology (tree/InternalNode.h readTopology, io/Compression.h
     // readCompressedValues): child and value masks, the compressed values, then each child
-    void internal_node(uint32_t log2dim, uint32_t compression, uint32_t value_bytes, const std::string& what) {
+    void internal_node(uint32_t log2dim, uint32_t compression, uint32_t value_bytes,
+                       const std::string& what) {
         const uint32_t values = 1u << (3 * log2dim);
         const std::vector<uint64_t> children = mask(values, what + " child mask");
         const std::vector<uint64_t> active = mask(values, what + " value mask");
         const uint8_t metadata = read<uint8_t>((what + " value metadata").c_str());
-        if (metadata > kNoMaskAndAllValues) fail(what + " value metadata " + std::to_string(metadata) + ", expected 0 to 6");
+        if (metadata > kNoMaskAndAllValues)
+            fail(what + " value metadata " + std::to_string(metadata) + ", expected 0 to 6");
         if (metadata == kNoMaskAndOneInactiveValue || metadata == kMaskAndOneInactiveValue ||
             metadata == kMaskAndTwoInactiveValues)
-            skip(int64_t(value_bytes) * (metadata == kMaskAndTwoInactiveValues ? 2 : 1), what + " inactive values");
+            skip(int64_t(value_bytes) * (metadata == kMaskAndTwoInactiveValues ? 2 : 1),
+                 what + " inactive values");
         if (metadata == kMaskAndNoInactiveValues || metadata == kMaskAndOneInactiveValue ||
             metadata == kMaskAndTwoInactiveValues)
             mask(values, what + " selection mask");
@@ -180,7 +189,8 @@ private:
 
 void check_vdb_layout(const fs::path& path, const VdbLayoutExpectation& expected) {
     VdbWalker in(path);
-    if (in.read<int64_t>("header") != kVdbMagic) in.fail("no OpenVDB magic number (not an OpenVDB file?)");
+    if (in.read<int64_t>("header") != kVdbMagic)
+        in.fail("no OpenVDB magic number (not an OpenVDB file?)");
     const uint32_t version = in.read<uint32_t>("header");
     if (version < kOldestFileVersion || version > kNewestFileVersion)
         in.fail("OpenVDB file version " + std::to_string(version) + ", expected " +
@@ -188,7 +198,8 @@ void check_vdb_layout(const fs::path& path, const VdbLayoutExpectation& expected
     in.read<uint32_t>("header");  // library major version
     in.read<uint32_t>("header");  // library minor version
     if (in.read<uint8_t>("header") != 1)
-        in.fail("the header says the grids have no offsets (a streamed file; mudcrack writes seekable ones)");
+        in.fail(
+            "the header says the grids have no offsets (a streamed file; mudcrack writes seekable ones)");
     in.skip(kUuidLength, "header UUID");
     in.metadata("file");
     const uint32_t grid_count = in.read<uint32_t>("grid count");
@@ -197,26 +208,30 @@ void check_vdb_layout(const fs::path& path, const VdbLayoutExpectation& expected
         in.string(grid + " name");
         const std::string tree_type = in.string(grid + " type");
         if (tree_type != expected.tree_type)
-            in.fail(grid + " is a '" + tree_type.substr(0, 40) + "', expected a '" + expected.tree_type + "'");
+            in.fail(grid + " is a '" + tree_type.substr(0, 40) + "', expected a '" +
+                    expected.tree_type + "'");
         if (!in.string(grid + " instance parent").empty())
             in.fail(grid + " is an instance of another grid (mudcrack writes none)");
         const auto grid_pos = in.read<int64_t>("grid descriptor");
         in.read<int64_t>("grid descriptor");  // where the leaf buffers start
         const auto end_pos = in.read<int64_t>("grid descriptor");
-        if (end_pos < grid_pos) in.fail(grid + " ends at byte " + std::to_string(end_pos) + ", before it starts");
+        if (end_pos < grid_pos)
+            in.fail(grid + " ends at byte " + std::to_string(end_pos) + ", before it starts");
         in.seek(grid_pos, grid + " data");
         const auto compression = in.read<uint32_t>((grid + " compression").c_str());
         in.metadata(grid);
         const std::string map_type = in.string(grid + " transform type");
         if (map_type != expected.map_type)
-            in.fail(grid + " transform is a '" + map_type.substr(0, 40) + "', expected a '" + expected.map_type + "'");
+            in.fail(grid + " transform is a '" + map_type.substr(0, 40) + "', expected a '" +
+                    expected.map_type + "'");
         in.skip(expected.map_bytes, grid + " transform");
         in.read<uint32_t>((grid + " buffer count").c_str());
         in.skip(expected.root_value_bytes, grid + " background");
         const uint32_t tiles = in.read<uint32_t>((grid + " root tile count").c_str());
         const uint32_t children = in.read<uint32_t>((grid + " root child count").c_str());
         for (uint32_t t = 0; t < tiles; ++t) {
-            in.skip(kTileCoordBytes + expected.root_value_bytes, grid + " root tile " + std::to_string(t));
+            in.skip(kTileCoordBytes + expected.root_value_bytes,
+                    grid + " root tile " + std::to_string(t));
             in.bool_byte(grid + " root tile " + std::to_string(t) + " active flag");
         }
         for (uint32_t c = 0; c < children; ++c) {

@@ -9,9 +9,9 @@ namespace mudcrack {
 /// What a points cache's grids must be: the tree type its descriptor names and the transform
 /// its grid stores (the only kinds mudcrack writes).
 struct VdbLayoutExpectation {
-    std::string tree_type;      // e.g. "Tree_ptdataidx32_5_4_3"
-    std::string map_type;       // e.g. "UniformScaleMap"
-    uint32_t map_bytes = 0;     // that map's stored size
+    std::string tree_type;          // e.g. "Tree_ptdataidx32_5_4_3"
+    std::string map_type;           // e.g. "UniformScaleMap"
+    uint32_t map_bytes = 0;         // that map's stored size
     uint32_t root_value_bytes = 0;  // the tree's value size (a root tile's value)
 };
 

@@ -12,6 +12,7 @@
 
 #include <Eigen/LU>
 
+#include "pipeline/io/checksum.h"
 #include "surfacing/pieces.h"
 #include "surfacing/weld_classes.h"
 
@@ -22,14 +23,14 @@ namespace {
 struct Key3 {
     uint32_t a, b, c;
     int32_t piece;
-    bool operator==(const Key3& o) const { return a == o.a && b == o.b && c == o.c && piece == o.piece; }
-};
-struct Key3Hash {
-    size_t operator()(const Key3& k) const {
-        uint64_t h = 1469598103934665603ull;
-        for (uint32_t w : {k.a, k.b, k.c, uint32_t(k.piece)}) h = (h ^ w) * 1099511628211ull;
-        return size_t(h);
+    bool operator==(const Key3& o) const {
+        return a == o.a && b == o.b && c == o.c && piece == o.piece;
     }
+};
+static_assert(sizeof(Key3) == 16, "Key3Hash hashes the key's bytes: no padding");
+struct Key3Hash {
+    // four 32-bit words, no padding: the key's bytes are its identity
+    size_t operator()(const Key3& k) const { return size_t(fnv1a64(&k, sizeof(Key3))); }
 };
 Key3 position_key(const Vec3f& p, int32_t piece) {
     Key3 k{};
@@ -40,11 +41,14 @@ Key3 position_key(const Vec3f& p, int32_t piece) {
     return k;
 }
 
-int32_t face_piece(const TriMesh& m, size_t f) { return m.face_fragment.empty() ? 0 : m.face_fragment[f]; }
+int32_t face_piece(const TriMesh& m, size_t f) {
+    return m.face_fragment.empty() ? 0 : m.face_fragment[f];
+}
 
 Vec3 face_normal(const TriMesh& m, size_t f) {
     const Tri& t = m.faces[f];
-    const Vec3 a = m.positions[t[0]].cast<Real>(), b = m.positions[t[1]].cast<Real>(), c = m.positions[t[2]].cast<Real>();
+    const Vec3 a = m.positions[t[0]].cast<Real>(), b = m.positions[t[1]].cast<Real>(),
+               c = m.positions[t[2]].cast<Real>();
     return (b - a).cross(c - a) / 2;  // length: the area
 }
 
@@ -64,7 +68,8 @@ struct WeldedFaces {
             Face face{{}, face_piece(m, f), is_crack, face_normal(m, f)};
             for (int k = 0; k < 3; ++k) {
                 const Vec3f& p = m.positions[m.faces[f][k]];
-                const auto [it, added] = index.try_emplace(position_key(p, face.piece), int32_t(position.size()));
+                const auto [it, added] =
+                    index.try_emplace(position_key(p, face.piece), int32_t(position.size()));
                 if (added) position.push_back(p);
                 face.v[k] = it->second;
             }
@@ -109,12 +114,14 @@ MeshPieces measure_mesh_pieces(const TriMesh& boundary, const TriMesh& crack, Re
             chip_faces += piece_faces[piece];
         }
     }
-    out.chip_triangle_fraction = w.faces.empty() ? 0.0 : double(chip_faces) / double(w.faces.size());
+    out.chip_triangle_fraction =
+        w.faces.empty() ? 0.0 : double(chip_faces) / double(w.faces.size());
 
     // edges: closedness per piece, wall roughness, rims on the top
     std::unordered_map<uint64_t, std::vector<int32_t>> edge_faces;  // welded vertices are per piece
     for (size_t f = 0; f < w.faces.size(); ++f)
-        for (int k = 0; k < 3; ++k) edge_faces[edge_key(w.faces[f].v[k], w.faces[f].v[(k + 1) % 3])].push_back(int32_t(f));
+        for (int k = 0; k < 3; ++k)
+            edge_faces[edge_key(w.faces[f].v[k], w.faces[f].v[(k + 1) % 3])].push_back(int32_t(f));
     std::unordered_set<int32_t> open_pieces;
     double angle_sum = 0, weight_sum = 0;
     for (const auto& [key, fs] : edge_faces) {
@@ -127,7 +134,8 @@ MeshPieces measure_mesh_pieces(const TriMesh& boundary, const TriMesh& crack, Re
         const auto &f0 = w.faces[fs[0]], &f1 = w.faces[fs[1]];
         const Real a0 = f0.area_normal.norm(), a1 = f1.area_normal.norm();
         if (f0.is_crack && f1.is_crack && a0 > 0 && a1 > 0) {
-            const Real c = std::clamp(f0.area_normal.dot(f1.area_normal) / (a0 * a1), Real(-1), Real(1));
+            const Real c =
+                std::clamp(f0.area_normal.dot(f1.area_normal) / (a0 * a1), Real(-1), Real(1));
             angle_sum += (a0 + a1) / 2 * std::acos(c);
             weight_sum += (a0 + a1) / 2;
         }
@@ -143,7 +151,8 @@ MeshPieces measure_mesh_pieces(const TriMesh& boundary, const TriMesh& crack, Re
     out.crack_roughness_deg = weight_sum > 0 ? angle_sum / weight_sum * 180 / kPi : 0.0;
     for (const auto& f : w.faces)
         if (f.is_crack) out.crack_area += f.area_normal.norm() / 2;
-    out.crack_area_per_metre = out.top_crack_length > 0 ? out.crack_area / out.top_crack_length : 0.0;
+    out.crack_area_per_metre =
+        out.top_crack_length > 0 ? out.crack_area / out.top_crack_length : 0.0;
     return out;
 }
 
@@ -207,7 +216,8 @@ public:
 
 private:
     const CoreTopology& m_topo;
-    std::vector<std::pair<int32_t, int>> m_face_tet;  // a tet holding each face, and the corner opposite it
+    // a tet holding each face, and the corner opposite it
+    std::vector<std::pair<int32_t, int>> m_face_tet;
 };
 
 /// The distance from `target` to the convex hull of points[0..n) (n <= 4): the least over the
@@ -220,8 +230,8 @@ Real distance_to_hull(const std::array<Vec3, 4>& points, int n, const Vec3& targ
         int k = 0;
         for (int i = 0; i < n; ++i)
             if (subset & (1u << i)) idx[k++] = i;
-        // nearest point origin + E mu of the subset's affine hull: (E^T E) mu = E^T (target - origin),
-        // the unused rows of the 3 x 3 system set to mu_i = 0
+        // nearest point origin + E mu of the subset's affine hull: (E^T E) mu = E^T (target -
+        // origin), the unused rows of the 3 x 3 system set to mu_i = 0
         const Vec3& origin = points[idx[0]];
         Mat3 E = Mat3::Zero(), gram = Mat3::Identity();
         for (int i = 1; i < k; ++i) E.col(i - 1) = points[idx[i]] - origin;
@@ -241,7 +251,9 @@ struct KeyPiece {
     bool operator==(const KeyPiece& o) const { return key == o.key && piece == o.piece; }
 };
 struct KeyPieceHash {
-    size_t operator()(const KeyPiece& k) const { return size_t(k.key * 0x9E3779B97F4A7C15ull) ^ size_t(k.piece); }
+    size_t operator()(const KeyPiece& k) const {
+        return size_t(k.key * 0x9E3779B97F4A7C15ull) ^ size_t(k.piece);
+    }
 };
 
 /// Each vertex's (weld key, piece) and position, over both meshes.
@@ -249,7 +261,8 @@ std::unordered_map<KeyPiece, Vec3f, KeyPieceHash> keyed_positions(const Surfaced
     std::unordered_map<KeyPiece, Vec3f, KeyPieceHash> out;
     auto add = [&](const TriMesh& m, const std::vector<uint64_t>& keys) {
         for (size_t f = 0; f < m.faces.size(); ++f)
-            for (int32_t v : m.faces[f]) out.try_emplace({keys[v], face_piece(m, f)}, m.positions[v]);
+            for (int32_t v : m.faces[f])
+                out.try_emplace({keys[v], face_piece(m, f)}, m.positions[v]);
     };
     add(s.boundary, s.boundary_weld_key);
     add(s.crack, s.crack_weld_key);
@@ -258,8 +271,9 @@ std::unordered_map<KeyPiece, Vec3f, KeyPieceHash> keyed_positions(const Surfaced
 
 }  // namespace
 
-SurfaceMotion measure_surface_motion(const CoreTopology& topo, const SurfacedFrame& a, const ParticleFrame& frame_a,
-                                     const SurfacedFrame& b, const ParticleFrame& frame_b, Real cell) {
+SurfaceMotion measure_surface_motion(const CoreTopology& topo, const SurfacedFrame& a,
+                                     const ParticleFrame& frame_a, const SurfacedFrame& b,
+                                     const ParticleFrame& frame_b, Real cell) {
     SurfaceMotion out;
     const WeldClassOwners owners(topo);
     const auto in_a = keyed_positions(a);
@@ -270,7 +284,8 @@ SurfaceMotion measure_surface_motion(const CoreTopology& topo, const SurfacedFra
         const Vec3 moved = (yb - it->second).cast<Real>();
         // its particles: the owners of its class under a's settled cuts, which hold its class
         // under every later cut (cuts only grow)
-        const ClassMembers followed = owners.members(kp.key, a.edge_settled.empty() ? a.edge_cut : a.edge_settled);
+        const ClassMembers followed =
+            owners.members(kp.key, a.edge_settled.empty() ? a.edge_cut : a.edge_settled);
         std::array<Vec3, 4> particle_moved;
         for (int j = 0; j < followed.n; ++j) {
             const int32_t p = followed.particle[j];
@@ -289,7 +304,8 @@ SurfaceMotion measure_surface_motion(const CoreTopology& topo, const SurfacedFra
             ids_b(b.particle_piece.begin(), b.particle_piece.end());
         for (size_t p = 0; p < a.particle_piece.size(); ++p) {
             const int32_t pa = a.particle_piece[p], pb = b.particle_piece[p];
-            if (pa != pb && pa != kDebris && pb != kDebris && ids_a.count(pb) && ids_b.count(pa)) ++out.piece_changes;
+            if (pa != pb && pa != kDebris && pb != kDebris && ids_a.count(pb) && ids_b.count(pa))
+                ++out.piece_changes;
         }
     }
     return out;

@@ -15,20 +15,20 @@
 namespace mudcrack {
 
 struct MeshPieces {
-    int32_t pieces = 0;                // distinct face_fragment ids over both meshes
-    int32_t chips = 0;                 // pieces under 2 h across (piece_width of their vertices)
-    double chip_triangle_fraction = 0; // share of all triangles that belong to chips
-    int32_t open_pieces = 0;           // pieces with an edge not shared by exactly two triangles
-    int64_t open_edges = 0;            // such edges, over all pieces
-    int64_t hole_edges = 0;            // of those, edges of an odd number of triangles: a hole's
-                                       // rim (an even number is sheets that touch, such as the
-                                       // two sides of a crack not yet open)
-    double crack_roughness_deg = 0;    // area-weighted mean angle between neighbouring crack
-                                       // triangles' normals [degrees]
-    double crack_area = 0;             // crack-wall area, one side of each crack [m^2]
-    double top_crack_length = 0;       // crack line on the top (rims where walls meet up-facing
-                                       // skin), one side of each crack [m]
-    double crack_area_per_metre = 0;   // crack_area / top_crack_length [m^2/m]
+    int32_t pieces = 0;                 // distinct face_fragment ids over both meshes
+    int32_t chips = 0;                  // pieces under 2 h across (piece_width of their vertices)
+    double chip_triangle_fraction = 0;  // share of all triangles that belong to chips
+    int32_t open_pieces = 0;            // pieces with an edge not shared by exactly two triangles
+    int64_t open_edges = 0;             // such edges, over all pieces
+    int64_t hole_edges = 0;             // of those, edges of an odd number of triangles: a hole's
+                                        // rim (an even number is sheets that touch, such as the
+                                        // two sides of a crack not yet open)
+    double crack_roughness_deg = 0;     // area-weighted mean angle between neighbouring crack
+                                        // triangles' normals [degrees]
+    double crack_area = 0;              // crack-wall area, one side of each crack [m^2]
+    double top_crack_length = 0;        // crack line on the top (rims where walls meet up-facing
+                                        // skin), one side of each crack [m]
+    double crack_area_per_metre = 0;    // crack_area / top_crack_length [m^2/m]
 };
 
 /// Pieces are the faces' face_fragment ids (a mesh without them is one piece); a piece's
@@ -55,7 +55,8 @@ struct SurfaceMotion {
 /// where its class was welded before to where it is welded now, or that smoothing moves away from
 /// its particles, does.
 /// @param piece_a, piece_b the piece of each particle in a and b (SurfacedFrame::particle_piece)
-SurfaceMotion measure_surface_motion(const CoreTopology& topo, const SurfacedFrame& a, const ParticleFrame& frame_a,
-                                     const SurfacedFrame& b, const ParticleFrame& frame_b, Real cell);
+SurfaceMotion measure_surface_motion(const CoreTopology& topo, const SurfacedFrame& a,
+                                     const ParticleFrame& frame_a, const SurfacedFrame& b,
+                                     const ParticleFrame& frame_b, Real cell);
 
 }  // namespace mudcrack

@@ -3,8 +3,8 @@
 #include <algorithm>
 #include <cmath>
 #include <map>
-#include <set>
 #include <numeric>
+#include <set>
 #include <string>
 
 #include <Eigen/Eigenvalues>
@@ -40,7 +40,8 @@ SizeSummary summarize_sizes(const std::vector<Real>& sizes) {
 }  // namespace
 
 RestColumns build_rest_columns(const std::vector<Vec3>& rest, Real width) {
-    if (!(width > 0)) throw InputError("rest columns: width = " + std::to_string(width) + ": expected > 0");
+    if (!(width > 0))
+        throw InputError("rest columns: width = " + std::to_string(width) + ": expected > 0");
     RestColumns columns;
     columns.width = width;
     const int32_t n = static_cast<int32_t>(rest.size());
@@ -64,7 +65,8 @@ RestColumns build_rest_columns(const std::vector<Vec3>& rest, Real width) {
 
 Real particle_spacing(const std::vector<Real>& rest_volume) {
     if (rest_volume.empty()) return 0;
-    const Real mean = std::accumulate(rest_volume.begin(), rest_volume.end(), Real(0)) / rest_volume.size();
+    const Real mean =
+        std::accumulate(rest_volume.begin(), rest_volume.end(), Real(0)) / rest_volume.size();
     return std::cbrt(mean);
 }
 
@@ -130,7 +132,8 @@ LayerShape measure_layer_shape(const RestColumns& columns, const std::vector<Vec
     return shape;
 }
 
-FragmentSizes measure_fragment_sizes(const Fragments& fragments, const std::vector<Real>& rest_volume) {
+FragmentSizes measure_fragment_sizes(const Fragments& fragments,
+                                     const std::vector<Real>& rest_volume) {
     if (fragments.id.size() != rest_volume.size())
         throw InputError("fragment sizes: " + std::to_string(fragments.id.size()) + " labels for " +
                          std::to_string(rest_volume.size()) + " particle volumes");
@@ -169,11 +172,12 @@ struct TopLayer {
 void check_edges_and_columns(const CoreTopology& topo, const std::vector<uint8_t>& is_broken,
                              const RestColumns& columns, const char* what) {
     if (static_cast<int32_t>(is_broken.size()) != topo.n_edges())
-        throw InputError(std::string(what) + ": " + std::to_string(is_broken.size()) + " edge flags for " +
-                         std::to_string(topo.n_edges()) + " edges");
+        throw InputError(std::string(what) + ": " + std::to_string(is_broken.size()) +
+                         " edge flags for " + std::to_string(topo.n_edges()) + " edges");
     if (static_cast<int32_t>(columns.particle.size()) != topo.n_particles)
-        throw InputError(std::string(what) + ": columns hold " + std::to_string(columns.particle.size()) +
-                         " particles, the mesh " + std::to_string(topo.n_particles));
+        throw InputError(std::string(what) + ": columns hold " +
+                         std::to_string(columns.particle.size()) + " particles, the mesh " +
+                         std::to_string(topo.n_particles));
 }
 
 TopLayer top_layer_components(const CoreTopology& topo, const std::vector<uint8_t>& is_broken,
@@ -208,7 +212,8 @@ TopLayer top_layer_components(const CoreTopology& topo, const std::vector<uint8_
 
 }  // namespace
 
-std::vector<int32_t> top_polygon_labels(const CoreTopology& topo, const std::vector<uint8_t>& is_broken,
+std::vector<int32_t> top_polygon_labels(const CoreTopology& topo,
+                                        const std::vector<uint8_t>& is_broken,
                                         const RestColumns& columns, int min_particles) {
     const TopLayer layer = top_layer_components(topo, is_broken, columns, "top polygon labels");
     const int32_t smallest = std::max(min_particles, kMinPolygonParticles);
@@ -223,19 +228,22 @@ std::vector<int32_t> top_polygon_labels(const CoreTopology& topo, const std::vec
     return label;
 }
 
-SurfacePolygons measure_surface_polygons(const CoreTopology& topo, const std::vector<uint8_t>& is_broken,
+SurfacePolygons measure_surface_polygons(const CoreTopology& topo,
+                                         const std::vector<uint8_t>& is_broken,
                                          const RestColumns& columns, int min_particles) {
     const TopLayer layer = top_layer_components(topo, is_broken, columns, "surface polygons");
     SurfacePolygons polygons;
     polygons.top_particles = layer.top_particles;
     const std::vector<int32_t>& size = layer.size;
     // each top particle stands for an equal share of the footprint (columns x width^2)
-    const Real particle_area = polygons.top_particles > 0 ? columns.n_columns() * columns.width * columns.width /
-                                                                polygons.top_particles
-                                                          : 0;
+    const Real particle_area =
+        polygons.top_particles > 0
+            ? columns.n_columns() * columns.width * columns.width / polygons.top_particles
+            : 0;
     std::vector<Real> areas;
     for (int32_t p = 0; p < topo.n_particles; ++p)
-        if (size[p] >= std::max(min_particles, kMinPolygonParticles)) areas.push_back(size[p] * particle_area);
+        if (size[p] >= std::max(min_particles, kMinPolygonParticles))
+            areas.push_back(size[p] * particle_area);
     polygons.count = static_cast<int32_t>(areas.size());
     const SizeSummary summary = summarize_sizes(areas);
     polygons.weighted_mean_area = summary.weighted_mean;
@@ -286,7 +294,8 @@ constexpr int64_t kRimColumns = 6;
 class PointGrid {
 public:
     PointGrid(const std::vector<Vec2>& points, Real cell) : m_points(points), m_cell(cell) {
-        for (int32_t i = 0; i < static_cast<int32_t>(points.size()); ++i) m_cells[key(points[i])].push_back(i);
+        for (int32_t i = 0; i < static_cast<int32_t>(points.size()); ++i)
+            m_cells[key(points[i])].push_back(i);
     }
     // calls fn(j) for every point j within `radius` (<= cell) of `at`
     template <class Fn>
@@ -303,7 +312,8 @@ public:
 
 private:
     std::pair<int64_t, int64_t> key(const Vec2& p) const {
-        return {static_cast<int64_t>(std::floor(p.x() / m_cell)), static_cast<int64_t>(std::floor(p.y() / m_cell))};
+        return {static_cast<int64_t>(std::floor(p.x() / m_cell)),
+                static_cast<int64_t>(std::floor(p.y() / m_cell))};
     }
     const std::vector<Vec2>& m_points;
     Real m_cell;
@@ -324,14 +334,16 @@ ColumnCells footprint_cells(const CoreTopology& topo, const RestColumns& columns
     ColumnCells footprint;
     for (int32_t c = 0; c < columns.n_columns(); ++c) {
         const Vec3& r = topo.X[columns.particle[columns.begin[c]]];
-        footprint.insert({static_cast<int64_t>(std::floor(r.x() / w)), static_cast<int64_t>(std::floor(r.z() / w))});
+        footprint.insert({static_cast<int64_t>(std::floor(r.x() / w)),
+                          static_cast<int64_t>(std::floor(r.z() / w))});
     }
     return footprint;
 }
 
 // a point kRimColumns or more columns inside the footprint: not on the rim
 bool is_inland(const ColumnCells& footprint, const Vec2& at, Real w) {
-    const int64_t cx = static_cast<int64_t>(std::floor(at.x() / w)), cz = static_cast<int64_t>(std::floor(at.y() / w));
+    const int64_t cx = static_cast<int64_t>(std::floor(at.x() / w)),
+                  cz = static_cast<int64_t>(std::floor(at.y() / w));
     for (int64_t dx = -kRimColumns; dx <= kRimColumns; ++dx)
         for (int64_t dz = -kRimColumns; dz <= kRimColumns; ++dz)
             if (!footprint.count({cx + dx, cz + dz})) return false;
@@ -369,8 +381,9 @@ void measure_crack_directions(const std::vector<Vec2>& point, const PointGrid& g
 
 // junctions: clusters of crack points with three or more polygons among their neighbours'
 // pairs, each a T or a Y by its branches' widest gap; sets junctions, t_fraction and y_fraction
-void classify_junctions(const std::vector<Vec2>& point, const std::vector<std::pair<int32_t, int32_t>>& pair,
-                        const PointGrid& grid, Real junction_radius, Real branch_radius, Real w, CrackNetwork& net) {
+void classify_junctions(const std::vector<Vec2>& point,
+                        const std::vector<std::pair<int32_t, int32_t>>& pair, const PointGrid& grid,
+                        Real junction_radius, Real branch_radius, Real w, CrackNetwork& net) {
     // junction candidates, clustered greedily in index order (deterministic)
     std::vector<uint8_t> is_candidate(point.size(), 0);
     for (size_t i = 0; i < point.size(); ++i) {
@@ -403,7 +416,8 @@ void classify_junctions(const std::vector<Vec2>& point, const std::vector<std::p
         // a branch per polygon pair near the junction: towards the mean of its crack points
         std::map<std::pair<int32_t, int32_t>, std::pair<Vec2, int>> branches;
         grid.near(center, branch_radius, [&](int32_t j) {
-            if (pair[j].first == pair[j].second) return;  // inside a polygon: not a branch between two
+            // inside a polygon: not a branch between two
+            if (pair[j].first == pair[j].second) return;
             auto& [sum, count] = branches[pair[j]];
             if (count == 0) sum = Vec2::Zero();
             sum += point[j] - center, ++count;
@@ -411,14 +425,16 @@ void classify_junctions(const std::vector<Vec2>& point, const std::vector<std::p
         std::vector<Real> angles;
         for (const auto& [key, branch] : branches) {
             const Vec2 d = branch.first / branch.second;
-            if (d.norm() < w / 2) continue;  // a pair whose points sit on the junction: no direction
+            // a pair whose points sit on the junction: no direction
+            if (d.norm() < w / 2) continue;
             angles.push_back(std::atan2(d.y(), d.x()) * 180 / kPi);
         }
         if (angles.size() < 3) continue;
         ++branched;
         std::sort(angles.begin(), angles.end());
         Real widest = angles.front() + 360 - angles.back();
-        for (size_t k = 1; k < angles.size(); ++k) widest = std::max(widest, angles[k] - angles[k - 1]);
+        for (size_t k = 1; k < angles.size(); ++k)
+            widest = std::max(widest, angles[k] - angles[k - 1]);
         if (widest >= 150)
             ++t_count;
         else if (angles.size() == 3)
@@ -456,13 +472,14 @@ CrackNetwork measure_crack_network(const CoreTopology& topo, const std::vector<u
     const PointGrid grid(point, branch_radius);
     // the rim is left out of the directions: cracks along the slab's own edges follow its
     // outline, not the grid, and a box's outline runs along the grid axes
-    measure_crack_directions(point, grid, direction_radius, footprint_cells(topo, columns, w), w, net);
+    measure_crack_directions(point, grid, direction_radius, footprint_cells(topo, columns, w), w,
+                             net);
     classify_junctions(point, pair, grid, junction_radius, branch_radius, w, net);
     return net;
 }
 
-HardeningHalves measure_hardening_halves(const std::vector<int32_t>& surface, const std::vector<float>& alpha,
-                                         Real alpha0) {
+HardeningHalves measure_hardening_halves(const std::vector<int32_t>& surface,
+                                         const std::vector<float>& alpha, Real alpha0) {
     HardeningHalves halves;
     halves.surface_particles = static_cast<int32_t>(surface.size());
     if (surface.empty()) return halves;

@@ -22,9 +22,9 @@ namespace mudcrack {
 
 /// Particles grouped in vertical columns of their rest positions, each sorted by rest height.
 struct RestColumns {
-    Real width = 0;                           // column width [m] (x and z)
-    std::vector<int32_t> begin;               // CSR offsets into particle, (n_columns + 1)
-    std::vector<int32_t> particle;            // particle ids, bottom to top within a column
+    Real width = 0;                 // column width [m] (x and z)
+    std::vector<int32_t> begin;     // CSR offsets into particle, (n_columns + 1)
+    std::vector<int32_t> particle;  // particle ids, bottom to top within a column
     int32_t n_columns() const { return static_cast<int32_t>(begin.size()) - 1; }
 };
 
@@ -37,18 +37,18 @@ RestColumns build_rest_columns(const std::vector<Vec3>& rest, Real width);
 Real particle_spacing(const std::vector<Real>& rest_volume);
 
 struct LayerShape {
-    int32_t columns = 0;          // columns with at least one particle
-    Real top_rise_median = 0;     // median vertical displacement of the columns' top particles [m]
-    Real top_rise_p95 = 0;        // its 95th percentile [m]
-    Real curl = 0;                // top_rise_p95 - top_rise_median: how far the highest 5 % of the
-                                  // top surface (curled rims) rose above the typical surface [m]
-    Real split_fraction = 0;      // fraction of columns with a gap inside (a horizontal crack)
-                                  // above the ground band
-    Real lifted_fraction = 0;     // fraction of columns whose bottom rose off its rest height, or
-                                  // that opened a gap inside the ground band
-    Real split_height_median = 0; // median height above the ground of the split columns' widest
-                                  // gap (its lower particle), in cells of GroundBand::cell [-]
-    Real split_height_p10 = 0;    // its 10th percentile [-]
+    int32_t columns = 0;           // columns with at least one particle
+    Real top_rise_median = 0;      // median vertical displacement of the columns' top particles [m]
+    Real top_rise_p95 = 0;         // its 95th percentile [m]
+    Real curl = 0;                 // top_rise_p95 - top_rise_median: how far the highest 5 % of the
+                                   // top surface (curled rims) rose above the typical surface [m]
+    Real split_fraction = 0;       // fraction of columns with a gap inside (a horizontal crack)
+                                   // above the ground band
+    Real lifted_fraction = 0;      // fraction of columns whose bottom rose off its rest height, or
+                                   // that opened a gap inside the ground band
+    Real split_height_median = 0;  // median height above the ground of the split columns' widest
+                                   // gap (its lower particle), in cells of GroundBand::cell [-]
+    Real split_height_p10 = 0;     // its 10th percentile [-]
 };
 
 /// Where a gap is lift-off rather than a peeling crack. A sticky (or frictional) ground holds the
@@ -57,8 +57,8 @@ struct LayerShape {
 /// off wetter soil.
 struct GroundBand {
     Real ground_y = -std::numeric_limits<Real>::infinity();  // the ground's height [m]; -inf: none
-    Real band = 0;   // gaps whose lower particle lies within this of the ground are lift-off [m]
-    Real cell = 1;   // grid spacing h: split heights are reported in cells [m]
+    Real band = 0;  // gaps whose lower particle lies within this of the ground are lift-off [m]
+    Real cell = 1;  // grid spacing h: split heights are reported in cells [m]
 };
 
 /// Measures the current positions `x` against the rest positions `rest` (same ids). A column is
@@ -70,39 +70,43 @@ LayerShape measure_layer_shape(const RestColumns& columns, const std::vector<Vec
                                const std::vector<Vec3>& x, Real gap, const GroundBand& ground = {});
 
 struct FragmentSizes {
-    int32_t count = 0;             // fragments kept by the surfacing
-    Real total_volume = 0;         // rest volume of the kept fragments [m^3]
-    Real largest_fraction = 0;     // the largest fragment's share of total_volume
-    Real weighted_mean_volume = 0; // sum V_f^2 / sum V_f [m^3]: the size of the fragment a random
-                                   // bit of soil belongs to, insensitive to crumbs
+    int32_t count = 0;              // fragments kept by the surfacing
+    Real total_volume = 0;          // rest volume of the kept fragments [m^3]
+    Real largest_fraction = 0;      // the largest fragment's share of total_volume
+    Real weighted_mean_volume = 0;  // sum V_f^2 / sum V_f [m^3]: the size of the fragment a random
+                                    // bit of soil belongs to, insensitive to crumbs
 };
 
 /// Fragment sizes from the surfacing's labels and the particles' rest volumes.
-FragmentSizes measure_fragment_sizes(const Fragments& fragments, const std::vector<Real>& rest_volume);
+FragmentSizes measure_fragment_sizes(const Fragments& fragments,
+                                     const std::vector<Real>& rest_volume);
 
 /// The crack polygons of the top surface: what an artist sees from above. Desiccation cracks
 /// often stop short of the bottom, so a slab cut into polygons on top is still one fragment;
 /// these count the pieces of the top layer (the particles within two column widths of their
 /// column's top) joined by unbroken edges.
 struct SurfacePolygons {
-    int32_t count = 0;             // polygons of at least min_particles top particles
-    int32_t top_particles = 0;     // particles in the top layer
-    Real weighted_mean_area = 0;   // sum A^2 / sum A over polygons [m^2]; a polygon's area A is its
-                                   // share of the top particles times the footprint (columns x width^2)
-    Real largest_fraction = 0;     // the largest polygon's share of the counted top particles
-    Real effective_count = 0;      // (sum A)^2 / sum A^2: N for N equal polygons, while chips cut off
-                                   // along a torn band add almost nothing (a top that is one plate
-                                   // and 16 chips of 0.5 % each: 1.2); the plates a viewer sees
+    int32_t count = 0;          // polygons of at least min_particles top particles
+    int32_t top_particles = 0;  // particles in the top layer
+    Real weighted_mean_area =
+        0;  // sum A^2 / sum A over polygons [m^2]; a polygon's area A is its
+            // share of the top particles times the footprint (columns x width^2)
+    Real largest_fraction = 0;  // the largest polygon's share of the counted top particles
+    // (sum A)^2 / sum A^2: N for N equal polygons, while chips cut off along a torn band add almost
+    // nothing (a top that is one plate and 16 chips of 0.5 % each: 1.2); the plates a viewer sees
+    Real effective_count = 0;
 };
 
 /// `is_broken` per edge of `topo` (1 = broken at the frame measured). Polygons with fewer than
 /// min_particles particles are crumbs: left out of count and areas.
-SurfacePolygons measure_surface_polygons(const CoreTopology& topo, const std::vector<uint8_t>& is_broken,
+SurfacePolygons measure_surface_polygons(const CoreTopology& topo,
+                                         const std::vector<uint8_t>& is_broken,
                                          const RestColumns& columns, int min_particles);
 
 /// The top layer's polygon of each particle: -1 off the top layer or in a crumb, else a label in
 /// [0, count) (the polygons measure_surface_polygons counts, in order of their smallest particle).
-std::vector<int32_t> top_polygon_labels(const CoreTopology& topo, const std::vector<uint8_t>& is_broken,
+std::vector<int32_t> top_polygon_labels(const CoreTopology& topo,
+                                        const std::vector<uint8_t>& is_broken,
                                         const RestColumns& columns, int min_particles);
 
 /// The look of the crack network on the top surface, seen from above (in rest positions: the
@@ -125,8 +129,8 @@ struct CrackNetwork {
     /// within four column widths): T when the widest angle is >= 150 degrees (a crack that ended
     /// on another), Y when three branches all lie < 150 degrees apart (cracks that split).
     int32_t junctions = 0;
-    Real t_fraction = 0;   // of the junctions with three or more branches
-    Real y_fraction = 0;   // of the junctions with exactly three branches, and the widest < 150 deg
+    Real t_fraction = 0;  // of the junctions with three or more branches
+    Real y_fraction = 0;  // of the junctions with exactly three branches, and the widest < 150 deg
 };
 
 /// The crack network of the top layer at the frame `is_broken` describes.
@@ -140,13 +144,14 @@ CrackNetwork measure_crack_network(const CoreTopology& topo, const std::vector<u
 /// a crack down to the base is the column's thickness, and a peeling crust's horizontal crack
 /// counts as deep as the vertical crack that reaches it.
 struct CrackDepth {
-    int32_t cracked_columns = 0;   // columns cracked at the top
-    Real cracked_fraction = 0;     // their share of the columns
-    Real depth_median = 0;         // median crack depth of the cracked columns [m]
-    Real depth_p90 = 0;            // its 90th percentile [m]
-    Real depth_max = 0;            // [m]
-    Real thickness_median = 0;     // median rest thickness (top - bottom particle) of the cracked columns [m]
-    Real through_fraction = 0;     // cracked columns whose crack reaches their bottom particle
+    int32_t cracked_columns = 0;  // columns cracked at the top
+    Real cracked_fraction = 0;    // their share of the columns
+    Real depth_median = 0;        // median crack depth of the cracked columns [m]
+    Real depth_p90 = 0;           // its 90th percentile [m]
+    Real depth_max = 0;           // [m]
+    // median rest thickness (top - bottom particle) of the cracked columns [m]
+    Real thickness_median = 0;
+    Real through_fraction = 0;  // cracked columns whose crack reaches their bottom particle
 };
 
 /// The crack depth of the layer at the frame `is_broken` describes.
@@ -163,7 +168,7 @@ struct HardeningHalves {
 };
 
 /// `surface` lists the particles on the boundary (each once), `alpha` is per particle.
-HardeningHalves measure_hardening_halves(const std::vector<int32_t>& surface, const std::vector<float>& alpha,
-                                         Real alpha0);
+HardeningHalves measure_hardening_halves(const std::vector<int32_t>& surface,
+                                         const std::vector<float>& alpha, Real alpha0);
 
 }  // namespace mudcrack

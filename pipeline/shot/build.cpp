@@ -21,7 +21,9 @@ const json* find_value(const json& tree, const std::string& pointer) {
     const json::json_pointer p(pointer);
     return tree.contains(p) ? &tree.at(p) : nullptr;
 }
-bool has(const json& tree, const std::string& pointer) { return find_value(tree, pointer) != nullptr; }
+bool has(const json& tree, const std::string& pointer) {
+    return find_value(tree, pointer) != nullptr;
+}
 Real number(const json& tree, const std::string& pointer) {
     return tree.at(json::json_pointer(pointer)).get<double>();
 }
@@ -39,11 +41,21 @@ Vec3 vec3(const json& tree, const std::string& pointer) {
     return Vec3(v[0].get<double>(), v[1].get<double>(), v[2].get<double>());
 }
 
-void read_into(const json& tree, const std::string& pointer, Real& out) { out = number(tree, pointer); }
-void read_into(const json& tree, const std::string& pointer, int& out) { out = integer(tree, pointer); }
-void read_into(const json& tree, const std::string& pointer, bool& out) { out = boolean(tree, pointer); }
-void read_into(const json& tree, const std::string& pointer, std::string& out) { out = text(tree, pointer); }
-void read_into(const json& tree, const std::string& pointer, Vec3& out) { out = vec3(tree, pointer); }
+void read_into(const json& tree, const std::string& pointer, Real& out) {
+    out = number(tree, pointer);
+}
+void read_into(const json& tree, const std::string& pointer, int& out) {
+    out = integer(tree, pointer);
+}
+void read_into(const json& tree, const std::string& pointer, bool& out) {
+    out = boolean(tree, pointer);
+}
+void read_into(const json& tree, const std::string& pointer, std::string& out) {
+    out = text(tree, pointer);
+}
+void read_into(const json& tree, const std::string& pointer, Vec3& out) {
+    out = vec3(tree, pointer);
+}
 
 // one member of a typed params struct and its key inside the struct's shot section
 template <class S>
@@ -55,7 +67,8 @@ struct Field {
 // copies each key of `section` into its member of `out`; the keys must be in the filled tree
 // (keys with a default always are), so optional keys stay with their own has() test
 template <class S>
-void read_fields(const json& tree, const std::string& section, S& out, std::initializer_list<Field<S>> fields) {
+void read_fields(const json& tree, const std::string& section, S& out,
+                 std::initializer_list<Field<S>> fields) {
     for (const Field<S>& f : fields) {
         const std::string pointer = section + "/" + f.key;
         std::visit([&](auto member) { read_into(tree, pointer, out.*member); }, f.member);
@@ -83,8 +96,9 @@ std::string resolve_existing(json& tree, const std::string& pointer, const std::
     const fs::path resolved = resolve(shot_path, given);
     std::error_code ec;
     if (!fs::is_regular_file(resolved, ec))
-        issues.add(pointer, value_text(&tree.at(p)),
-                   "file not found (looked for " + resolved.string() + ", relative to the shot file)");
+        issues.add(
+            pointer, value_text(&tree.at(p)),
+            "file not found (looked for " + resolved.string() + ", relative to the shot file)");
     tree[p] = resolved.string();
     return resolved.string();
 }
@@ -121,8 +135,8 @@ void check_reuse(const json& tree, const std::string& shot_path, Issues& issues)
                                   /*ignore_comments=*/true);
     if (root.is_object() && root.contains("reuse"))
         issues.add("/reuse", value_text(reuse),
-                   "must name a shot that does not set /reuse itself (" + other.string() + " reuses " +
-                       value_text(&root["reuse"]) + "; name that shot instead)");
+                   "must name a shot that does not set /reuse itself (" + other.string() +
+                       " reuses " + value_text(&root["reuse"]) + "; name that shot instead)");
 }
 
 bool all_less(const Vec3& a, const Vec3& b) { return (a.array() < b.array()).all(); }
@@ -160,7 +174,8 @@ void build_box(const json& tree, BoxSource& box, Issues& issues) {
                             {"max", &BoxSource::max},
                             {"spacing", &BoxSource::spacing},
                             {"jitter", &BoxSource::jitter}});
-    box.lattice = text(tree, "/source/box/lattice") == "jittered" ? Lattice::Jittered : Lattice::Regular;
+    box.lattice =
+        text(tree, "/source/box/lattice") == "jittered" ? Lattice::Jittered : Lattice::Regular;
     if (issues.has("/source/box")) return;  // bounds already reported
     if (!all_less(box.min, box.max)) {
         issues.add("/source/box/max", issues.value_of(tree, "/source/box/max"),
@@ -171,18 +186,25 @@ void build_box(const json& tree, BoxSource& box, Issues& issues) {
     }
     const Real smallest = (box.max - box.min).minCoeff();
     if (box.spacing > smallest)
-        issues.add("/source/box/spacing", issues.value_of(tree, "/source/box/spacing"),
-                   "must be <= the smallest box extent " + g(smallest) + " (at least one lattice cell)", "m");
+        issues.add(
+            "/source/box/spacing", issues.value_of(tree, "/source/box/spacing"),
+            "must be <= the smallest box extent " + g(smallest) + " (at least one lattice cell)",
+            "m");
 }
 
-void build_heightfield(json& tree, const std::string& shot_path, HeightfieldSource& hf, Issues& issues) {
+void build_heightfield(json& tree, const std::string& shot_path, HeightfieldSource& hf,
+                       Issues& issues) {
     const json& size = tree.at(json::json_pointer("/source/heightfield/size"));
     hf.size = Vec3(size[0].get<double>(), 0, size[1].get<double>());
     using H = HeightfieldSource;
     read_fields<H>(tree, "/source/heightfield", hf,
-                   {{"base", &H::base}, {"amplitude", &H::amplitude}, {"channel_depth", &H::channel_depth},
-                    {"channel_width", &H::channel_width}, {"channel_meander", &H::channel_meander},
-                    {"image_height", &H::image_height}, {"spacing", &H::spacing}});
+                   {{"base", &H::base},
+                    {"amplitude", &H::amplitude},
+                    {"channel_depth", &H::channel_depth},
+                    {"channel_width", &H::channel_width},
+                    {"channel_meander", &H::channel_meander},
+                    {"image_height", &H::image_height},
+                    {"spacing", &H::spacing}});
     if (has(tree, "/source/heightfield/image"))
         hf.image = resolve_existing(tree, "/source/heightfield/image", shot_path, issues);
     // the channel must not cut through the slab's bottom
@@ -204,7 +226,8 @@ void build_plasticity(json& tree, SimModel& model) {
     const Real beta = has(tree, "/plasticity/beta") ? number(tree, "/plasticity/beta") : Real(1);
     nacc.beta0 = has(tree, "/plasticity/beta0") ? number(tree, "/plasticity/beta0") : beta;
     nacc.beta1 = has(tree, "/plasticity/beta1") ? number(tree, "/plasticity/beta1") : beta;
-    if (has(tree, "/plasticity/damage_strain")) nacc.damage_strain = number(tree, "/plasticity/damage_strain");
+    if (has(tree, "/plasticity/damage_strain"))
+        nacc.damage_strain = number(tree, "/plasticity/damage_strain");
     // the shorthand is replaced by what it means, so equal settings give equal slices
     json& section = tree["plasticity"];
     section.erase("beta");
@@ -218,25 +241,36 @@ void build_moisture(json& tree, SimModel& model, Issues& issues) {
     MoistureParams m;
     using M = MoistureParams;
     read_fields<M>(tree, "/moisture", m,
-                   {{"eta", &M::eta}, {"k_r", &M::k_r}, {"eps", &M::eps}, {"D", &M::D}, {"lambda", &M::lambda},
-                    {"theta0", &M::theta0}, {"cg_tolerance", &M::cg_tolerance},
-                    {"cg_max_iterations", &M::cg_max_iterations}, {"seal_colliders", &M::seal_colliders},
-                    {"implicit_robin", &M::implicit_robin}, {"interval", &M::interval},
+                   {{"eta", &M::eta},
+                    {"k_r", &M::k_r},
+                    {"eps", &M::eps},
+                    {"D", &M::D},
+                    {"lambda", &M::lambda},
+                    {"theta0", &M::theta0},
+                    {"cg_tolerance", &M::cg_tolerance},
+                    {"cg_max_iterations", &M::cg_max_iterations},
+                    {"seal_colliders", &M::seal_colliders},
+                    {"implicit_robin", &M::implicit_robin},
+                    {"interval", &M::interval},
                     {"max_log_jw_step", &M::max_log_jw_step}});
-    m.evaporation = text(tree, "/moisture/evaporation") == "surface" ? MoistureParams::Evaporation::Surface
-                                                                    : MoistureParams::Evaporation::Grid;
+    m.evaporation = text(tree, "/moisture/evaporation") == "surface"
+                        ? MoistureParams::Evaporation::Surface
+                        : MoistureParams::Evaporation::Grid;
     if (m.implicit_robin && m.evaporation == MoistureParams::Evaporation::Surface)
-        issues.add("/moisture/implicit_robin", issues.value_of(tree, "/moisture/implicit_robin"),
-                   "must be false with /moisture/evaporation = \"surface\" (the surface layer's decay is "
-                   "exact; the implicit Robin term belongs to the grid evaporation)");
+        issues.add(
+            "/moisture/implicit_robin", issues.value_of(tree, "/moisture/implicit_robin"),
+            "must be false with /moisture/evaporation = \"surface\" (the surface layer's decay is "
+            "exact; the implicit Robin term belongs to the grid evaporation)");
     // particles start fully saturated unless told otherwise (MoistureParams::initial_theta); the
     // slice records the value they start at, unclamped so the range check below still sees it
-    m.theta_init = has(tree, "/moisture/theta_init") ? number(tree, "/moisture/theta_init") : m.initial_theta();
+    m.theta_init = has(tree, "/moisture/theta_init") ? number(tree, "/moisture/theta_init")
+                                                     : m.initial_theta();
     tree["moisture"]["theta_init"] = m.theta_init;
     if (!issues.has("/moisture/eta")) {
         const std::string within = "must be in [0, /moisture/eta = " + g(m.eta) + "]";
         if (m.theta_init > m.eta && !issues.has("/moisture/theta_init"))
-            issues.add("/moisture/theta_init", issues.value_of(tree, "/moisture/theta_init"), within);
+            issues.add("/moisture/theta_init", issues.value_of(tree, "/moisture/theta_init"),
+                       within);
         if (m.theta0 > m.eta && !issues.has("/moisture/theta0"))
             issues.add("/moisture/theta0", issues.value_of(tree, "/moisture/theta0"), within);
     }
@@ -247,32 +281,37 @@ void build_time(const json& tree, SimModel& model, Issues& issues) {
     TimeParams& t = model.time;
     using T = TimeParams;
     read_fields<T>(tree, "/sim", t,
-                   {{"dt_max", &T::dt_max}, {"cfl_velocity", &T::cfl_velocity}, {"cfl_elastic", &T::cfl_elastic}});
-    read_fields<T>(tree, "/frames", t, {{"fps", &T::fps}, {"start", &T::frame_start}, {"end", &T::frame_end}});
+                   {{"dt_max", &T::dt_max},
+                    {"cfl_velocity", &T::cfl_velocity},
+                    {"cfl_elastic", &T::cfl_elastic}});
+    read_fields<T>(tree, "/frames", t,
+                   {{"fps", &T::fps}, {"start", &T::frame_start}, {"end", &T::frame_end}});
     if (t.frame_end < t.frame_start && !issues.has("/frames"))
         issues.add("/frames/end", issues.value_of(tree, "/frames/end"),
                    "must be >= /frames/start = " + std::to_string(t.frame_start));
     if (!has(tree, "/sim/dt")) return;
     t.dt_fixed = number(tree, "/sim/dt");
     // explicit MPM blows up above the elastic wave bound (docs/physics.md §1.7): refuse it at load
-    const bool are_inputs_ok = !issues.has("/material") && !issues.has("/sim/h") &&
-                               !issues.has("/sim/cfl_elastic");
+    const bool are_inputs_ok =
+        !issues.has("/material") && !issues.has("/sim/h") && !issues.has("/sim/cfl_elastic");
     const Real bound = elastic_dt_bound(model);
     if (are_inputs_ok && t.dt_fixed > bound) {
         const ElasticParams& e = model.elastic;
         issues.add("/sim/dt", issues.value_of(tree, "/sim/dt"),
-                   "exceeds the elastic bound C_E h / c_p = " + g(bound) + " s (C_E=" + g(t.cfl_elastic) +
-                       ", h=" + g(model.h) + " m, E=" + g(e.youngs_modulus) + " Pa, nu=" +
-                       g(e.poisson_ratio) + ", rho=" + g(e.density) + " kg/m^3, c_p=" +
-                       g(e.wave_speed()) + " m/s); lower /sim/dt or omit it for adaptive steps");
+                   "exceeds the elastic bound C_E h / c_p = " + g(bound) +
+                       " s (C_E=" + g(t.cfl_elastic) + ", h=" + g(model.h) +
+                       " m, E=" + g(e.youngs_modulus) + " Pa, nu=" + g(e.poisson_ratio) +
+                       ", rho=" + g(e.density) + " kg/m^3, c_p=" + g(e.wave_speed()) +
+                       " m/s); lower /sim/dt or omit it for adaptive steps");
     }
 }
 
 void build_colliders(const json& tree, SimModel& model, Issues& issues) {
     if (has(tree, "/colliders/ground")) {
         GroundParams ground;
-        read_fields<GroundParams>(tree, "/colliders/ground", ground,
-                                  {{"height", &GroundParams::height}, {"friction", &GroundParams::friction}});
+        read_fields<GroundParams>(
+            tree, "/colliders/ground", ground,
+            {{"height", &GroundParams::height}, {"friction", &GroundParams::friction}});
         ground.mode = collider_mode(text(tree, "/colliders/ground/mode"));
         model.ground = ground;
     }
@@ -285,8 +324,8 @@ void build_colliders(const json& tree, SimModel& model, Issues& issues) {
                                    {"padding", &DomainParams::padding}});
         if (!issues.has("/colliders/domain") && !all_less(d.min, d.max))
             issues.add("/colliders/domain/max", issues.value_of(tree, "/colliders/domain/max"),
-                       "must be > /colliders/domain/min = " + issues.value_of(tree, "/colliders/domain/min") +
-                           " on every axis",
+                       "must be > /colliders/domain/min = " +
+                           issues.value_of(tree, "/colliders/domain/min") + " on every axis",
                        "m");
     }
 }
@@ -304,22 +343,26 @@ InitParams build_init(json& tree, const std::string& shot_path, Issues& issues) 
     const bool has_type = has(tree, "/source/type");
     init.type = has_type ? source_type(text(tree, "/source/type")) : SourceType::Box;
     init.edge_length = number(tree, "/init/edge_length");
-    init.seed = static_cast<unsigned>(tree.at(json::json_pointer("/init/seed")).get<std::int64_t>());
+    init.seed =
+        static_cast<unsigned>(tree.at(json::json_pointer("/init/seed")).get<std::int64_t>());
     if (has(tree, "/init/strength_field")) {
         StrengthFieldParams field;
         field.correlation_length = number(tree, "/init/strength_field/correlation_length");
         field.weibull_modulus = number(tree, "/init/strength_field/weibull_modulus");
         init.strength_field = field;
         if (!has(tree, "/plasticity"))
-            issues.add("/init/strength_field", "(set)",
-                       "needs /plasticity: the field multiplies the NACC yield pressure p0, which pure "
-                       "elasticity does not have");
+            issues.add(
+                "/init/strength_field", "(set)",
+                "needs /plasticity: the field multiplies the NACC yield pressure p0, which pure "
+                "elasticity does not have");
     }
     if (!has_type) return init;  // already reported; which source settings apply is unknown
     switch (init.type) {
         case SourceType::Mesh: build_mesh(tree, shot_path, init.mesh, issues); break;
         case SourceType::Box: build_box(tree, init.box, issues); break;
-        case SourceType::Heightfield: build_heightfield(tree, shot_path, init.heightfield, issues); break;
+        case SourceType::Heightfield:
+            build_heightfield(tree, shot_path, init.heightfield, issues);
+            break;
     }
     // only the selected source's settings matter downstream
     json& source = tree["source"];
@@ -352,14 +395,21 @@ std::optional<SurfaceParams> build_surface(const json& tree, Issues& issues) {
     s.mode = *parse_surface_mode(text(tree, "/surfacing/mode"));  // the spec admits only mode names
     using S = SurfaceParams;
     read_fields<S>(tree, "/surfacing", s,
-                   {{"zeta", &S::zeta}, {"length_consistent", &S::length_consistent}, {"cracks", &S::cracks},
-                    {"format", &S::format}, {"min_fragment_particles", &S::min_fragment_particles},
-                    {"min_piece_size", &S::min_piece_size}, {"debris_gap", &S::debris_gap},
-                    {"close_gaps", &S::close_gaps}, {"wall_smoothing", &S::wall_smoothing}});
-    s.debris = text(tree, "/surfacing/debris") == "points" ? DebrisOutput::Points : DebrisOutput::None;
+                   {{"zeta", &S::zeta},
+                    {"length_consistent", &S::length_consistent},
+                    {"cracks", &S::cracks},
+                    {"format", &S::format},
+                    {"min_fragment_particles", &S::min_fragment_particles},
+                    {"min_piece_size", &S::min_piece_size},
+                    {"debris_gap", &S::debris_gap},
+                    {"close_gaps", &S::close_gaps},
+                    {"wall_smoothing", &S::wall_smoothing}});
+    s.debris =
+        text(tree, "/surfacing/debris") == "points" ? DebrisOutput::Points : DebrisOutput::None;
     if (debris_needs_plates(s))
-        issues.add("/surfacing/debris", issues.value_of(tree, "/surfacing/debris"),
-                   "needs /surfacing/mode = \"plates\" (only the plates mode tells debris from the pieces)");
+        issues.add(
+            "/surfacing/debris", issues.value_of(tree, "/surfacing/debris"),
+            "needs /surfacing/mode = \"plates\" (only the plates mode tells debris from the pieces)");
     return s;
 }
 
@@ -378,18 +428,22 @@ std::optional<RenderParams> build_render(const json& tree) {
     }
     using R = RenderParams;
     read_fields<R>(tree, "/render", r,
-                   {{"samples", &R::samples}, {"albedo", &R::albedo}, {"alpha_range", &R::alpha_range},
+                   {{"samples", &R::samples},
+                    {"albedo", &R::albedo},
+                    {"alpha_range", &R::alpha_range},
                     {"fps", &R::fps}});
     r.turntable = has(tree, "/render/turntable");
     if (r.turntable)
-        read_fields<R>(tree, "/render/turntable", r, {{"views", &R::turntable_views}, {"frame", &R::turntable_frame}});
+        read_fields<R>(tree, "/render/turntable", r,
+                       {{"views", &R::turntable_views}, {"frame", &R::turntable_frame}});
     return r;
 }
 
 namespace {
 
 // whether the shot has the physics a cached attribute needs
-bool has_cache_physics(CachePhysics physics, const SimModel& sim, const std::optional<SurfaceParams>& surface) {
+bool has_cache_physics(CachePhysics physics, const SimModel& sim,
+                       const std::optional<SurfaceParams>& surface) {
     switch (physics) {
         case CachePhysics::Always: return true;
         case CachePhysics::Moisture: return sim.moisture.has_value();
@@ -413,8 +467,8 @@ const char* cache_physics_text(CachePhysics physics) {
 
 }  // namespace
 
-CacheAttributes derive_cache(const json& tree, const SimModel& sim, const std::optional<SurfaceParams>& surface,
-                             Issues& issues) {
+CacheAttributes derive_cache(const json& tree, const SimModel& sim,
+                             const std::optional<SurfaceParams>& surface, Issues& issues) {
     CacheAttributes cache;
     for (size_t i = 0; i < kCachedAttributeCount; ++i) {
         const CachedAttributeInfo& a = kCachedAttributes[i];
@@ -426,8 +480,9 @@ CacheAttributes derive_cache(const json& tree, const SimModel& sim, const std::o
         const std::string pointer = std::string("/sim/cache/") + a.shot_key;
         const bool is_requested = has(tree, pointer) && boolean(tree, pointer);
         if (is_requested && !has_physics)
-            issues.add(pointer, "true", std::string("the shot has no ") + a.vdb_name + " to cache: needs " +
-                                            cache_physics_text(a.physics));
+            issues.add(pointer, "true",
+                       std::string("the shot has no ") + a.vdb_name + " to cache: needs " +
+                           cache_physics_text(a.physics));
         cache[i] = is_requested && has_physics;
     }
     return cache;
@@ -455,13 +510,16 @@ void check_across(const json& tree, const InitParams& init, const SimModel& sim,
     if (is_domain_ok && sim.ground && !issues.has("/colliders/ground") &&
         !(sim.ground->height >= d.min.y() && sim.ground->height < d.max.y()))
         issues.add("/colliders/ground/height", issues.value_of(tree, "/colliders/ground/height"),
-                   "must be in [" + g(d.min.y()) + ", " + g(d.max.y()) + ") (the domain's y range)", "m");
-    if (render && render->turntable && !issues.has("/render/turntable/frame") && !issues.has("/frames")) {
+                   "must be in [" + g(d.min.y()) + ", " + g(d.max.y()) + ") (the domain's y range)",
+                   "m");
+    if (render && render->turntable && !issues.has("/render/turntable/frame") &&
+        !issues.has("/frames")) {
         const int f = render->turntable_frame;
         if (f != -1 && (f < sim.time.frame_start || f > sim.time.frame_end))
             issues.add("/render/turntable/frame", issues.value_of(tree, "/render/turntable/frame"),
-                       "must be -1 (the last frame) or a frame in [" + std::to_string(sim.time.frame_start) +
-                           ", " + std::to_string(sim.time.frame_end) + "]");
+                       "must be -1 (the last frame) or a frame in [" +
+                           std::to_string(sim.time.frame_start) + ", " +
+                           std::to_string(sim.time.frame_end) + "]");
     }
 }
 
@@ -475,10 +533,11 @@ void warn_doubtful(const SimModel& sim, const std::optional<SurfaceParams>& surf
     const Real eta = sim.moisture ? sim.moisture->eta : 0;
     const Real bound = is_jw_scaled ? std::pow(1 - eta, -2.0 / 3.0) : 1.0;
     if (surface->zeta >= bound) return;
-    const std::string why = is_jw_scaled
-        ? "(1 - eta)^(-2/3) = " + g(bound) + " for /moisture/eta = " + g(eta) +
-              ": intact soil that dries fully will crack everywhere (docs/physics.md §5.5)"
-        : "1: intact material breaks at rest";
+    const std::string why =
+        is_jw_scaled
+            ? "(1 - eta)^(-2/3) = " + g(bound) + " for /moisture/eta = " + g(eta) +
+                  ": intact soil that dries fully will crack everywhere (docs/physics.md §5.5)"
+            : "1: intact material breaks at rest";
     log::warn("zeta-below-bound",
               shot_path + ": /surfacing/zeta = " + g(surface->zeta) + " is below " + why);
 }

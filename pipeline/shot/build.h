@@ -30,7 +30,8 @@ InitParams build_init(nlohmann::json& tree, const std::string& shot_path, Issues
 /// and frame ranges. The cache attributes are left at their defaults (see derive_cache).
 SimModel build_sim(nlohmann::json& tree, Issues& issues);
 
-/// /surfacing, or nullopt when the section is off; adds an issue for debris asked of a mode that has none.
+/// /surfacing, or nullopt when the section is off; adds an issue for debris asked of a mode that
+/// has none.
 std::optional<SurfaceParams> build_surface(const nlohmann::json& tree, Issues& issues);
 
 /// /render, or nullopt when the section is off.
@@ -56,9 +57,10 @@ void check_across(const nlohmann::json& tree, const InitParams& init, const SimM
 /// body (at least one cell across its thinnest side), against a given domain (at least a cell,
 /// with /colliders/domain/padding leaving a free cell between its walls) and against the domain
 /// (the grid's block count); /colliders/ground/height below the body's top and, where the body's
-/// bottom is known, within what the body falls in the shot; a lattice source's particle count against the machine's
-/// memory; /render/resolution x /render/samples against what OSMesa allocates; a camera placed by
-/// hand: finite in the renderer's single precision and away from its target.
+/// bottom is known, within what the body falls in the shot; a lattice source's particle count
+/// against the machine's memory; /render/resolution x /render/samples against what OSMesa
+/// allocates; a camera placed by hand: finite in the renderer's single precision and away from its
+/// target.
 void check_plausible(const nlohmann::json& tree, const InitParams& init, const SimModel& sim,
                      const std::optional<RenderParams>& render, Issues& issues);
 

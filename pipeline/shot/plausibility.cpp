@@ -58,8 +58,8 @@ StepBound smallest_step(const json& tree, const SimModel& sim, const Issues& iss
                                 std::abs(std::log10(sim.elastic.youngs_modulus / 1e6));
         const std::string other = is_density ? "/material/youngs_modulus" : "/material/density";
         b = {elastic, is_density ? "/material/density" : "/material/youngs_modulus",
-             "the elastic bound C_E h / c_p (c_p = " + g(dry.wave_speed()) + " m/s, with " + other + " = " +
-                 issues.value_of(tree, other) + ")"};
+             "the elastic bound C_E h / c_p (c_p = " + g(dry.wave_speed()) + " m/s, with " + other +
+                 " = " + issues.value_of(tree, other) + ")"};
     }
     // the speed it starts with, plus what gravity adds over one frame
     const Real v0 = sim.initial_velocity.norm(), fall = sim.gravity.norm() / t.fps;
@@ -82,20 +82,22 @@ void check_time_step(const json& tree, const SimModel& sim, Issues& issues) {
     const Real floor = kCollapsedDtFraction * frame;
     const StepBound b = smallest_step(tree, sim, issues);
     if (b.dt >= floor && std::isfinite(b.dt)) return;
-    const std::string floor_text = "the floor " + g(kCollapsedDtFraction) + " x the frame length 1 / fps = " +
-                                   g(floor) + " s: a frame would take more than " + g(1 / kCollapsedDtFraction) +
-                                   " substeps";
+    const std::string floor_text =
+        "the floor " + g(kCollapsedDtFraction) + " x the frame length 1 / fps = " + g(floor) +
+        " s: a frame would take more than " + g(1 / kCollapsedDtFraction) + " substeps";
     // the largest step allowed is below the floor while it would do for frames of a usual
     // length: the frames are too long
     const Real largest = sim.time.dt_fixed > 0 ? sim.time.dt_fixed : sim.time.dt_max;
     if (largest < floor && largest >= kCollapsedDtFraction * kUsualFrameLength) {
         issues.add("/frames/fps", issues.value_of(tree, "/frames/fps"),
-                   "frames of " + g(frame) + " s: the largest time step " + g(largest) + " s is below " +
-                       floor_text + "; expected frames per second of simulated time (e.g. 24)");
+                   "frames of " + g(frame) + " s: the largest time step " + g(largest) +
+                       " s is below " + floor_text +
+                       "; expected frames per second of simulated time (e.g. 24)");
         return;
     }
-    issues.add(b.pointer, issues.value_of(tree, b.pointer),
-               "gives a stable time step of " + g(b.dt) + " s (" + b.why + "), below " + floor_text);
+    issues.add(
+        b.pointer, issues.value_of(tree, b.pointer),
+        "gives a stable time step of " + g(b.dt) + " s (" + b.why + "), below " + floor_text);
 }
 
 // the body a source fills, as far as the loader knows it before mc-init: a box's and a
@@ -112,7 +114,8 @@ struct BodyBounds {
 BodyBounds body_bounds(const InitParams& init) {
     BodyBounds b;
     if (init.type == SourceType::Box) {
-        b = {true, true, init.box.max - init.box.min, init.box.min.y(), init.box.max.y(), "/source/box"};
+        b = {true,         true, init.box.max - init.box.min, init.box.min.y(), init.box.max.y(),
+             "/source/box"};
     } else if (init.type == SourceType::Heightfield) {
         const HeightfieldSource& hf = init.heightfield;
         const Real top = hf.image.empty() ? hf.base + hf.amplitude : hf.image_height;
@@ -124,7 +127,9 @@ BodyBounds body_bounds(const InitParams& init) {
     return b;
 }
 
-std::string sides_text(const Vec3& v) { return g(v.x()) + " x " + g(v.y()) + " x " + g(v.z()) + " m"; }
+std::string sides_text(const Vec3& v) {
+    return g(v.x()) + " x " + g(v.y()) + " x " + g(v.z()) + " m";
+}
 
 // what the sim grid spans: the explicit domain, else the body's extent, down to a ground below it
 // (the derived domain reaches the ground; a mesh's extent is unknown here)
@@ -145,8 +150,8 @@ bool grid_extent(const InitParams& init, const SimModel& sim, Vec3& extent) {
 // the 1.5 cells a particle's quadratic B-spline stencil reaches below it, never acts (and, with a
 // derived domain, stretches the grid down to it: -1e300 used to hang mc-sim)
 void check_ground(const json& tree, const InitParams& init, const SimModel& sim, Issues& issues) {
-    if (!sim.ground || issues.has("/colliders/ground") || issues.has("/source") || issues.has("/sim") ||
-        issues.has("/frames"))
+    if (!sim.ground || issues.has("/colliders/ground") || issues.has("/source") ||
+        issues.has("/sim") || issues.has("/frames"))
         return;
     const BodyBounds body = body_bounds(init);
     const Real height = sim.ground->height;
@@ -154,8 +159,8 @@ void check_ground(const json& tree, const InitParams& init, const SimModel& sim,
     if (body.has_extent && !(height < body.top)) {
         issues.add("/colliders/ground/height", value,
                    "is at or above the top of the body, y = " + g(body.top) + " (" + body.where +
-                       "): every particle would start inside the ground; expected a height below " + g(body.top) +
-                       ", usually the body's bottom y = " + g(body.bottom),
+                       "): every particle would start inside the ground; expected a height below " +
+                       g(body.top) + ", usually the body's bottom y = " + g(body.bottom),
                    "m");
         return;
     }
@@ -164,20 +169,26 @@ void check_ground(const json& tree, const InitParams& init, const SimModel& sim,
     const Real fall = sim.initial_velocity.norm() * t + 0.5 * sim.gravity.norm() * t * t;
     const Real lowest = body.bottom - fall - kStencilReach * sim.h;
     if (height >= lowest) return;
-    issues.add("/colliders/ground/height", value,
-               "is " + g(body.bottom - height) + " m below the body's bottom y = " + g(body.bottom) + " (" +
-                   body.where + "), which moves at most " + g(fall) + " m down in the shot's " + g(t) +
-                   " s (|/source/initial_velocity| t + |/sim/gravity| t^2 / 2): the ground would never act; "
-                   "expected a height >= " + g(lowest) + " (that fall and the 1.5 cells a particle reaches "
-                   "below it), or no /colliders/ground",
-               "m");
+    issues.add(
+        "/colliders/ground/height", value,
+        "is " + g(body.bottom - height) + " m below the body's bottom y = " + g(body.bottom) +
+            " (" + body.where + "), which moves at most " + g(fall) + " m down in the shot's " +
+            g(t) +
+            " s (|/source/initial_velocity| t + |/sim/gravity| t^2 / 2): the ground would never act; "
+            "expected a height >= " +
+            g(lowest) +
+            " (that fall and the 1.5 cells a particle reaches "
+            "below it), or no /colliders/ground",
+        "m");
 }
 
-void check_cell_size(const json& tree, const InitParams& init, const SimModel& sim, Issues& issues) {
+void check_cell_size(const json& tree, const InitParams& init, const SimModel& sim,
+                     Issues& issues) {
     if (issues.has("/sim/h") || issues.has("/source") || issues.has("/colliders")) return;
     if (sim.h < kMinCellSize) {
         issues.add("/sim/h", issues.value_of(tree, "/sim/h"),
-                   "must be >= " + g(kMinCellSize) + " (OpenVDB, which holds the caches, refuses voxels this small)",
+                   "must be >= " + g(kMinCellSize) +
+                       " (OpenVDB, which holds the caches, refuses voxels this small)",
                    "m");
         return;
     }
@@ -194,11 +205,12 @@ void check_cell_size(const json& tree, const InitParams& init, const SimModel& s
         }
         const int padding = sim.domain.padding;
         if (2.0 * padding + 1 > thinnest / sim.h) {
-            issues.add("/colliders/domain/padding", issues.value_of(tree, "/colliders/domain/padding"),
-                       "walls of " + std::to_string(padding) + " cells on both sides (at /sim/h = " + g(sim.h) +
-                           " m) leave no free cell across the domain's " + g(thinnest) +
-                           " m: expected at most " + g(std::floor((thinnest / sim.h - 1) / 2)),
-                       "cells");
+            issues.add(
+                "/colliders/domain/padding", issues.value_of(tree, "/colliders/domain/padding"),
+                "walls of " + std::to_string(padding) + " cells on both sides (at /sim/h = " +
+                    g(sim.h) + " m) leave no free cell across the domain's " + g(thinnest) +
+                    " m: expected at most " + g(std::floor((thinnest / sim.h - 1) / 2)),
+                "cells");
             return;
         }
     }
@@ -206,21 +218,24 @@ void check_cell_size(const json& tree, const InitParams& init, const SimModel& s
     // node with the air around them
     const BodyBounds body = body_bounds(init);
     if (body.has_extent && sim.h > body.extent.minCoeff()) {
-        issues.add("/sim/h", issues.value_of(tree, "/sim/h"),
-                   "is larger than the body (" + body.where + ": " + sides_text(body.extent) +
-                       "), which would be less than one cell across: expected at most its thinnest side, " +
-                       g(body.extent.minCoeff()),
-                   "m");
+        issues.add(
+            "/sim/h", issues.value_of(tree, "/sim/h"),
+            "is larger than the body (" + body.where + ": " + sides_text(body.extent) +
+                "), which would be less than one cell across: expected at most its thinnest side, " +
+                g(body.extent.minCoeff()),
+            "m");
         return;
     }
     Vec3 extent;
     if (!grid_extent(init, sim, extent)) return;
     double blocks = 1;
-    for (int d = 0; d < 3; ++d) blocks *= std::ceil((extent[d] / sim.h + 2 * sim.domain.padding) / 4) + 2;
+    for (int d = 0; d < 3; ++d)
+        blocks *= std::ceil((extent[d] / sim.h + 2 * sim.domain.padding) / 4) + 2;
     if (blocks >= kMaxGridBlocks)
         issues.add("/sim/h", issues.value_of(tree, "/sim/h"),
-                   "a grid over the domain's " + g(extent.x()) + " x " + g(extent.y()) + " x " + g(extent.z()) +
-                       " m needs " + g(blocks) + " blocks of 4^3 cells: must be < " + g(kMaxGridBlocks) +
+                   "a grid over the domain's " + g(extent.x()) + " x " + g(extent.y()) + " x " +
+                       g(extent.z()) + " m needs " + g(blocks) +
+                       " blocks of 4^3 cells: must be < " + g(kMaxGridBlocks) +
                        "; raise /sim/h or shrink the domain",
                    "m");
 }
@@ -237,35 +252,42 @@ void check_particle_memory(const json& tree, const InitParams& init, Issues& iss
     std::string pointer;
     if (init.type == SourceType::Box) {
         const Vec3 cells = (init.box.max - init.box.min) / init.box.spacing;
-        count = (std::round(cells.x()) + 1) * (std::round(cells.y()) + 1) * (std::round(cells.z()) + 1);
+        count =
+            (std::round(cells.x()) + 1) * (std::round(cells.y()) + 1) * (std::round(cells.z()) + 1);
         pointer = "/source/box/spacing";
     } else if (init.type == SourceType::Heightfield) {
         const HeightfieldSource& hf = init.heightfield;
         const Real height = hf.base + hf.amplitude + hf.image_height;
-        count = (hf.size.x() / hf.spacing + 1) * (hf.size.z() / hf.spacing + 1) * (height / hf.spacing + 1);
+        count = (hf.size.x() / hf.spacing + 1) * (hf.size.z() / hf.spacing + 1) *
+                (height / hf.spacing + 1);
         pointer = "/source/heightfield/spacing";
     }
     // past kMaxInitParticles mc-init refuses the count itself, naming it whole
     const double memory = physical_memory_bytes();
-    if (count == 0 || count > kMaxInitParticles || memory == 0 || count * kBytesPerParticle <= memory) return;
+    if (count == 0 || count > kMaxInitParticles || memory == 0 ||
+        count * kBytesPerParticle <= memory)
+        return;
     issues.add(pointer, issues.value_of(tree, pointer),
-               "makes about " + g(count) + " particles, which need about " + g(count * kBytesPerParticle / kGiB) +
-                   " GiB (" + g(kBytesPerParticle) + " bytes each) on a machine with " + g(memory / kGiB) +
-                   " GiB; raise the spacing",
+               "makes about " + g(count) + " particles, which need about " +
+                   g(count * kBytesPerParticle / kGiB) + " GiB (" + g(kBytesPerParticle) +
+                   " bytes each) on a machine with " + g(memory / kGiB) + " GiB; raise the spacing",
                "m");
 }
 
-void check_render_buffer(const json& tree, const std::optional<RenderParams>& render, Issues& issues) {
+void check_render_buffer(const json& tree, const std::optional<RenderParams>& render,
+                         Issues& issues) {
     if (!render || issues.has("/render")) return;
     // llvmpipe pads each side to its 64-pixel tiles
     const auto padded = [](int pixels) { return std::ceil(pixels / 64.0) * 64.0; };
     const double bytes = 4.0 * padded(render->width) * padded(render->height) * render->samples;
     if (bytes <= kMaxRenderBufferBytes) return;
-    issues.add("/render/resolution", issues.value_of(tree, "/render/resolution"),
-               "with /render/samples = " + std::to_string(render->samples) + ", the multisampled colour buffer needs " +
-                   g(bytes / kGiB) + " GiB; OSMesa (llvmpipe) allocates at most 1 GiB per buffer: lower "
-                   "the resolution or the samples (width x height x samples <= 268435456, each side padded to "
-                   "64 pixels)");
+    issues.add(
+        "/render/resolution", issues.value_of(tree, "/render/resolution"),
+        "with /render/samples = " + std::to_string(render->samples) +
+            ", the multisampled colour buffer needs " + g(bytes / kGiB) +
+            " GiB; OSMesa (llvmpipe) allocates at most 1 GiB per buffer: lower "
+            "the resolution or the samples (width x height x samples <= 268435456, each side padded to "
+            "64 pixels)");
 }
 
 // a camera placed by hand, as the renderer sees it: in single precision, looking somewhere
@@ -276,15 +298,17 @@ void check_camera(const json& tree, const std::optional<RenderParams>& render, I
                                          std::pair{"/render/camera/target", camera.target}}) {
         if (point.cast<float>().allFinite()) continue;
         issues.add(pointer, issues.value_of(tree, pointer),
-                   "beyond the renderer's single precision: expected coordinates below 3.4e+38", "m");
+                   "beyond the renderer's single precision: expected coordinates below 3.4e+38",
+                   "m");
         return;
     }
     // the view direction of a camera on its target is undefined: every pixel would show nothing
     if (!((camera.target.cast<float>() - camera.position.cast<float>()).norm() > 0))
-        issues.add("/render/camera/position", issues.value_of(tree, "/render/camera/position"),
-                   "is on /render/camera/target = " + issues.value_of(tree, "/render/camera/target") +
-                       ": the camera would look nowhere; expected a position away from the target",
-                   "m");
+        issues.add(
+            "/render/camera/position", issues.value_of(tree, "/render/camera/position"),
+            "is on /render/camera/target = " + issues.value_of(tree, "/render/camera/target") +
+                ": the camera would look nowhere; expected a position away from the target",
+            "m");
 }
 
 }  // namespace

@@ -39,7 +39,8 @@ void check_version(const json& tree, spec::Issues& issues) {
 const std::vector<std::vector<std::string>>& stage_pointers() {
     static const std::vector<std::vector<std::string>> pointers = {
         {"/mudcrack", "/source", "/init", "/sim/h"},
-        {"/material", "/plasticity", "/moisture", "/sim", "/frames", "/colliders", "/derived/cache"},
+        {"/material", "/plasticity", "/moisture", "/sim", "/frames", "/colliders",
+         "/derived/cache"},
         {"/surfacing"},
         {"/render"},
     };
@@ -62,7 +63,8 @@ std::string slice_text(const json& canonical, Stage stage) {
 json cache_json(const CacheAttributes& c) {
     json out = json::object();
     for (size_t i = 0; i < kCachedAttributeCount; ++i) {
-        if (kCachedAttributes[i].policy == CachePolicy::ByPhysics || c[i]) out[kCachedAttributes[i].shot_key] = c[i];
+        if (kCachedAttributes[i].policy == CachePolicy::ByPhysics || c[i])
+            out[kCachedAttributes[i].shot_key] = c[i];
     }
     return out;
 }
@@ -86,7 +88,8 @@ std::string Shot::slice_hash(Stage stage) const {
 }
 
 Shot parse_shot(const std::string& text, const std::string& path) {
-    // every duplicate key, per-key and cross-key problem is collected, then reported in one InputError
+    // every duplicate key, per-key and cross-key problem is collected, then reported in one
+    // InputError
     spec::Issues issues(path);
     const json root = spec::read_shot_json(text, issues);
     issues.set_written(root);
@@ -134,8 +137,8 @@ std::string spec_table_text() {
     };
     std::vector<Row> rows = {{"POINTER", "TYPE", "DEFAULT", "RANGE", "UNITS", "DOC"}};
     for (const spec::KeySpec& key : spec::table())
-        rows.push_back({key.pointer, spec::type_text(key), spec::default_text(key), spec::range_text(key),
-                        key.units, key.doc});
+        rows.push_back({key.pointer, spec::type_text(key), spec::default_text(key),
+                        spec::range_text(key), key.units, key.doc});
     size_t widths[5] = {0, 0, 0, 0, 0};
     for (const Row& r : rows) {
         const std::string* cells[5] = {&r.pointer, &r.type, &r.def, &r.range, &r.units};
@@ -144,7 +147,8 @@ std::string spec_table_text() {
     std::string out;
     for (const Row& r : rows) {
         const std::string* cells[5] = {&r.pointer, &r.type, &r.def, &r.range, &r.units};
-        for (int c = 0; c < 5; ++c) out += *cells[c] + std::string(widths[c] - cells[c]->size() + 2, ' ');
+        for (int c = 0; c < 5; ++c)
+            out += *cells[c] + std::string(widths[c] - cells[c]->size() + 2, ' ');
         out += r.doc + "\n";
     }
     return out;

@@ -21,8 +21,8 @@ struct Shot {
     std::string reuse;  // /reuse: a shot of this folder whose matching stages make shares, or ""
     InitParams init;    // /source, /init
     SimModel sim;       // /material, /plasticity, /moisture, /sim, /frames, /colliders
-    std::optional<SurfaceParams> surface; // /surfacing; nullopt: no surfacing stage
-    std::optional<RenderParams> render;   // /render; nullopt: no render stage
+    std::optional<SurfaceParams> surface;  // /surfacing; nullopt: no surfacing stage
+    std::optional<RenderParams> render;    // /render; nullopt: no render stage
     /// Canonical JSON (defaults filled in) of the keys each stage reads, including those of the
     /// stages before it; its hash goes in the manifest and `mc-shot slice` writes it for make.
     std::string slice_init, slice_sim, slice_surface, slice_render;

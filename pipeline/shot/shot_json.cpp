@@ -14,8 +14,10 @@ using nlohmann::json;
 // quadratic in its depth here (each level's pointer) and recursion later (dump, destruction).
 constexpr size_t kMaxDepth = 64;
 
-// nlohmann's parse_error text: "[json.exception.parse_error.101] parse error at line 3, column 5: ..."
-bool split_parse_error(const std::string& what, std::string& line, std::string& column, std::string& rest) {
+// nlohmann's parse_error text: "[json.exception.parse_error.101] parse error at line 3, column 5:
+// ..."
+bool split_parse_error(const std::string& what, std::string& line, std::string& column,
+                       std::string& rest) {
     const size_t at = what.find("line ");
     if (at == std::string::npos) return false;
     const size_t comma = what.find(", column ", at);
@@ -69,18 +71,19 @@ public:
     template <class Exception>
     bool parse_error(std::size_t, const std::string& token, const Exception& e) {
         if (e.id == kNumberOverflow)
-            throw InputError(m_issues.file() + ": " + pointer_of_next_value() + " = " + token.substr(0, 40) +
-                             ": number overflow: expected a number a double holds (magnitude below 1.8e308)");
+            throw InputError(
+                m_issues.file() + ": " + pointer_of_next_value() + " = " + token.substr(0, 40) +
+                ": number overflow: expected a number a double holds (magnitude below 1.8e308)");
         throw e;
     }
 
 private:
     struct Container {
-        json* value = nullptr;       // the object or array being filled
-        std::string pointer;         // its JSON pointer ("" for the root)
-        std::string key;             // object: the key of the member being read
+        json* value = nullptr;  // the object or array being filled
+        std::string pointer;    // its JSON pointer ("" for the root)
+        std::string key;        // object: the key of the member being read
         bool is_duplicate_key = false;
-        std::string earlier_text;    // the value the object already holds at `key`
+        std::string earlier_text;  // the value the object already holds at `key`
     };
 
     static constexpr int kNumberOverflow = 406;
@@ -89,7 +92,8 @@ private:
     std::string pointer_of_next_value() const {
         if (m_open.empty()) return "(the root)";
         const Container& c = m_open.back();
-        return c.pointer + "/" + (c.value->is_array() ? std::to_string(c.value->size()) : escape_key(c.key));
+        return c.pointer + "/" +
+               (c.value->is_array() ? std::to_string(c.value->size()) : escape_key(c.key));
     }
 
     // places a value in the innermost open container (or as the root); returns where it lives
@@ -125,8 +129,8 @@ private:
 
     bool open(json empty) {
         if (m_open.size() >= kMaxDepth)
-            throw InputError(m_issues.file() + ": JSON nested deeper than " + std::to_string(kMaxDepth) +
-                             " levels: a shot is a few levels deep");
+            throw InputError(m_issues.file() + ": JSON nested deeper than " +
+                             std::to_string(kMaxDepth) + " levels: a shot is a few levels deep");
         std::string pointer = m_open.empty() ? std::string() : pointer_of_next_value();
         Container c;
         c.value = place(std::move(empty));
@@ -152,15 +156,16 @@ private:
 json read_shot_json(const std::string& text, Issues& issues) {
     DuplicateKeyCheckingBuilder builder(issues);
     try {
-        json::sax_parse(text, &builder, json::input_format_t::json, /*strict=*/true, /*ignore_comments=*/true);
+        json::sax_parse(text, &builder, json::input_format_t::json, /*strict=*/true,
+                        /*ignore_comments=*/true);
     } catch (const json::parse_error& e) {
         // nlohmann says "[json.exception.parse_error.101] parse error at line 3, column 5: ..."
         // (no std::regex: its recursive matcher overflows the stack on a long message)
         const std::string what = e.what();
         std::string line, column, rest;
         if (split_parse_error(what, line, column, rest))
-            throw InputError(issues.file() + ":" + line + ":" + column + ": malformed JSON (line " + line +
-                             ", column " + column + "): " + rest);
+            throw InputError(issues.file() + ":" + line + ":" + column + ": malformed JSON (line " +
+                             line + ", column " + column + "): " + rest);
         throw InputError(issues.file() + ": malformed JSON: " + what);
     }
     return builder.take_root();

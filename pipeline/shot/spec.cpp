@@ -35,10 +35,10 @@ public:
     Key& required() { return presence(Presence::Required); }
     Key& derived() { return presence(Presence::Derived); }
     Key& optional() { return presence(Presence::Optional); }
-    Key& gt(double v) { m_spec.min = Bound{v, true}; return *this; }
-    Key& ge(double v) { m_spec.min = Bound{v, false}; return *this; }
-    Key& lt(double v) { m_spec.max = Bound{v, true}; return *this; }
-    Key& le(double v) { m_spec.max = Bound{v, false}; return *this; }
+    Key& gt(double v) { return bound(m_spec.min, v, true); }
+    Key& ge(double v) { return bound(m_spec.min, v, false); }
+    Key& lt(double v) { return bound(m_spec.max, v, true); }
+    Key& le(double v) { return bound(m_spec.max, v, false); }
     Key& choices(std::vector<std::string> c) {
         m_spec.choices = std::move(c);
         return *this;
@@ -47,11 +47,21 @@ public:
         m_spec.refused.emplace_back(value, why);
         return *this;
     }
-    Key& units(const char* u) { m_spec.units = u; return *this; }
-    Key& doc(const char* d) { m_spec.doc = d; return *this; }
+    Key& units(const char* u) {
+        m_spec.units = u;
+        return *this;
+    }
+    Key& doc(const char* d) {
+        m_spec.doc = d;
+        return *this;
+    }
     operator KeySpec() const { return m_spec; }  // NOLINT: the builder's purpose
 
 private:
+    Key& bound(std::optional<Bound>& end, double v, bool is_exclusive) {
+        end = Bound{v, is_exclusive};
+        return *this;
+    }
     Key& presence(Presence p) {
         m_spec.presence = p;
         return *this;
@@ -246,21 +256,26 @@ std::vector<KeySpec> build_fixed_table() {
     // clang-format on
 }
 
-// /sim/cache/<key>: one Bool per on-request cached attribute (MC_CACHED_ATTRIBUTES), after /sim's keys
+// /sim/cache/<key>: one Bool per on-request cached attribute (MC_CACHED_ATTRIBUTES), after /sim's
+// keys
 void add_cache_request_keys(std::vector<KeySpec>& rows) {
     std::vector<KeySpec> keys = {
-        Key("/sim/cache", T::Section).optional()
-            .doc("extra attributes the frame caches carry (those the shot's physics has but does not cache by "
-                 "default); omit for the default set (/derived/cache)"),
+        Key("/sim/cache", T::Section)
+            .optional()
+            .doc(
+                "extra attributes the frame caches carry (those the shot's physics has but does not cache by "
+                "default); omit for the default set (/derived/cache)"),
     };
     for (const CachedAttributeInfo& a : kCachedAttributes) {
         if (a.policy != CachePolicy::OnRequest) continue;
         const std::string pointer = std::string("/sim/cache/") + a.shot_key;
         KeySpec key = Key(pointer.c_str(), T::Bool).def(false).units("");
-        key.doc = std::string("cache \"") + a.vdb_name + "\": " + a.doc + "; needs the physics that has it";
+        key.doc = std::string("cache \"") + a.vdb_name + "\": " + a.doc +
+                  "; needs the physics that has it";
         keys.push_back(key);
     }
-    const auto frames = std::find_if(rows.begin(), rows.end(), [](const KeySpec& k) { return k.pointer == "/frames"; });
+    const auto frames = std::find_if(rows.begin(), rows.end(),
+                                     [](const KeySpec& k) { return k.pointer == "/frames"; });
     rows.insert(frames, keys.begin(), keys.end());
 }
 
@@ -333,7 +348,8 @@ std::string default_text(const KeySpec& key) {
     if (v.is_array()) {
         std::string s = "[";
         for (size_t i = 0; i < v.size(); ++i)
-            s += (i ? ", " : "") + (v[i].is_number_float() ? number_text(v[i].get<double>()) : v[i].dump());
+            s += (i ? ", " : "") +
+                 (v[i].is_number_float() ? number_text(v[i].get<double>()) : v[i].dump());
         return s + "]";
     }
     return v.dump();
@@ -344,8 +360,10 @@ std::string range_text(const KeySpec& key) {
         return std::string(key.min->is_exclusive ? "(" : "[") + number_text(key.min->value) + ", " +
                number_text(key.max->value) + (key.max->is_exclusive ? ")" : "]");
     }
-    if (key.min) return std::string(key.min->is_exclusive ? "> " : ">= ") + number_text(key.min->value);
-    if (key.max) return std::string(key.max->is_exclusive ? "< " : "<= ") + number_text(key.max->value);
+    if (key.min)
+        return std::string(key.min->is_exclusive ? "> " : ">= ") + number_text(key.min->value);
+    if (key.max)
+        return std::string(key.max->is_exclusive ? "< " : "<= ") + number_text(key.max->value);
     return "";
 }
 

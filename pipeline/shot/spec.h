@@ -18,11 +18,11 @@ enum class KeyType {
     Integer,  // a whole number
     Bool,
     String,
-    Path,     // a file path, resolved relative to the shot file's folder
-    Enum,     // one of `choices`
-    Vec3,     // [x, y, z] numbers
-    Vec2,     // [a, b] numbers
-    Vec2i,    // [a, b] whole numbers
+    Path,   // a file path, resolved relative to the shot file's folder
+    Enum,   // one of `choices`
+    Vec3,   // [x, y, z] numbers
+    Vec2,   // [a, b] numbers
+    Vec2i,  // [a, b] whole numbers
 };
 
 /// What happens when a key is absent (its section being present).
@@ -40,7 +40,7 @@ struct Bound {
 };
 
 struct KeySpec {
-    std::string pointer;               // JSON pointer, e.g. "/material/youngs_modulus"
+    std::string pointer;  // JSON pointer, e.g. "/material/youngs_modulus"
     KeyType type;
     Presence presence;
     nlohmann::json default_value;      // for Presence::Default leaves
@@ -48,8 +48,8 @@ struct KeySpec {
     /// Enum values users will try that are refused on purpose: {value, why not}.
     std::vector<std::pair<std::string, std::string>> refused;
     std::optional<Bound> min, max;
-    std::string units;                 // "Pa", "m", "-" (dimensionless), "" (not a quantity)
-    std::string doc;                   // one line
+    std::string units;  // "Pa", "m", "-" (dimensionless), "" (not a quantity)
+    std::string doc;    // one line
 };
 
 /// The table, parents before children.

@@ -28,8 +28,10 @@ std::string with_units(const std::string& units) {
 }
 
 bool in_range(const KeySpec& key, double v) {
-    if (key.min && (key.min->is_exclusive ? !(v > key.min->value) : !(v >= key.min->value))) return false;
-    if (key.max && (key.max->is_exclusive ? !(v < key.max->value) : !(v <= key.max->value))) return false;
+    if (key.min && (key.min->is_exclusive ? !(v > key.min->value) : !(v >= key.min->value)))
+        return false;
+    if (key.max && (key.max->is_exclusive ? !(v < key.max->value) : !(v <= key.max->value)))
+        return false;
     return true;
 }
 
@@ -67,8 +69,8 @@ std::optional<json> check_number(const KeySpec& key, const json& v, bool is_inte
     // the stages hold integers in an int: a larger one would wrap into another value
     constexpr double kMaxInt = std::numeric_limits<int>::max();
     if (is_integer && !key.max && !(std::fabs(d) <= kMaxInt)) {
-        issues.add(pointer, value_text(&v), "must be <= " + std::to_string(int(kMaxInt)) + " (the largest int)",
-                   key.units);
+        issues.add(pointer, value_text(&v),
+                   "must be <= " + std::to_string(int(kMaxInt)) + " (the largest int)", key.units);
         return std::nullopt;
     }
     if (is_integer) return json(static_cast<std::int64_t>(d));
@@ -77,8 +79,9 @@ std::optional<json> check_number(const KeySpec& key, const json& v, bool is_inte
 
 std::optional<json> check_vector(const KeySpec& key, const json& v, size_t n, bool is_integer,
                                  const std::string& pointer, Issues& issues) {
-    const bool is_shaped = v.is_array() && v.size() == n &&
-                           std::all_of(v.begin(), v.end(), [](const json& c) { return c.is_number(); });
+    const bool is_shaped =
+        v.is_array() && v.size() == n &&
+        std::all_of(v.begin(), v.end(), [](const json& c) { return c.is_number(); });
     if (!is_shaped) {
         const std::string what = n == 3 ? "[x, y, z]" : "[a, b]";
         issues.add(pointer, value_text(&v),
@@ -91,8 +94,10 @@ std::optional<json> check_vector(const KeySpec& key, const json& v, size_t n, bo
     bool is_ok = true;
     for (size_t i = 0; i < n; ++i) {
         auto c = check_number(key, v[i], is_integer, pointer + "/" + std::to_string(i), issues);
-        if (c) out.push_back(*c);
-        else is_ok = false;
+        if (c)
+            out.push_back(*c);
+        else
+            is_ok = false;
     }
     if (!is_ok) return std::nullopt;
     return out;
@@ -121,14 +126,16 @@ std::optional<json> check_leaf(const KeySpec& key, const json& v, const std::str
         case KeyType::Enum: {
             if (v.is_string()) {
                 const std::string s = v.get<std::string>();
-                if (std::find(key.choices.begin(), key.choices.end(), s) != key.choices.end()) return v;
+                if (std::find(key.choices.begin(), key.choices.end(), s) != key.choices.end())
+                    return v;
                 for (const auto& [refused, why] : key.refused) {
                     if (s != refused) continue;
                     issues.add(pointer, value_text(&v), why);
                     return std::nullopt;
                 }
-                issues.add(pointer, value_text(&v),
-                           "must be one of " + choices_text(key.choices) + suggest_choice(s, key.choices));
+                issues.add(
+                    pointer, value_text(&v),
+                    "must be one of " + choices_text(key.choices) + suggest_choice(s, key.choices));
             } else {
                 issues.add(pointer, value_text(&v), "must be one of " + choices_text(key.choices));
             }
@@ -150,8 +157,10 @@ void check_object(const json& in, const std::string& prefix, json& out, Issues& 
         }
         if (key->type == KeyType::Section) {
             json section = json::object();
-            if (value.is_object()) check_object(value, pointer, section, issues);
-            else issues.add(pointer, value_text(&value), "must be an object (a section of keys)");
+            if (value.is_object())
+                check_object(value, pointer, section, issues);
+            else
+                issues.add(pointer, value_text(&value), "must be an object (a section of keys)");
             out[name] = std::move(section);
             continue;
         }
@@ -173,16 +182,20 @@ json* section_at(json& root, const std::string& pointer) {
 std::string escape_key(const std::string& key) {
     std::string out;
     for (char c : key) {
-        if (c == '~') out += "~0";
-        else if (c == '/') out += "~1";
-        else out += c;
+        if (c == '~')
+            out += "~0";
+        else if (c == '/')
+            out += "~1";
+        else
+            out += c;
     }
     return out;
 }
 
-void Issues::add(const std::string& pointer, const std::string& value, const std::string& expectation,
-                 const std::string& units) {
-    m_lines.push_back(m_file + ": " + pointer + " = " + value + ": " + expectation + with_units(units));
+void Issues::add(const std::string& pointer, const std::string& value,
+                 const std::string& expectation, const std::string& units) {
+    m_lines.push_back(m_file + ": " + pointer + " = " + value + ": " + expectation +
+                      with_units(units));
     m_pointers.insert(pointer);
 }
 
@@ -233,17 +246,19 @@ json check_and_fill(const json& root, Issues& issues) {
         const bool was_bad = issues.has(key.pointer);
         switch (key.presence) {
             case Presence::Default:
-                (*section)[name] = key.type == KeyType::Section ? json::object() : key.default_value;
+                (*section)[name] =
+                    key.type == KeyType::Section ? json::object() : key.default_value;
                 break;
             case Presence::Required:
                 if (was_bad) break;
                 if (key.type == KeyType::Section)
                     issues.add(key.pointer, "(missing)", "required section");
                 else if (key.type == KeyType::Enum)
-                    issues.add(key.pointer, "(missing)", "required; one of " + choices_text(key.choices));
+                    issues.add(key.pointer, "(missing)",
+                               "required; one of " + choices_text(key.choices));
                 else
-                    issues.add(key.pointer, "(missing)", "required " + type_text(key) + " (" + key.doc + ")",
-                               key.units);
+                    issues.add(key.pointer, "(missing)",
+                               "required " + type_text(key) + " (" + key.doc + ")", key.units);
                 if (key.type == KeyType::Section) (*section)[name] = json::object();
                 break;
             case Presence::Derived:
@@ -289,7 +304,8 @@ std::string suggest_key(const std::string& pointer) {
     // this section beats one elsewhere
     if (best_global && global_distance == 0 && local_distance > 0)
         return " (did you mean " + best_global->pointer + "?)";
-    if (best_local && is_close(name, local_distance)) return " (did you mean " + best_local->pointer + "?)";
+    if (best_local && is_close(name, local_distance))
+        return " (did you mean " + best_local->pointer + "?)";
     if (best_global && is_close(name, global_distance))
         return " (did you mean " + best_global->pointer + "?)";
     return "";

@@ -14,15 +14,15 @@ struct FrameRange {
 };
 
 struct StageOptions {
-    std::string program;       // e.g. "mc-sim"
-    std::string shot;          // --shot
-    std::string out;           // --out: the shot's output root (stages write DIR/<stage>/)
-    std::string frames;        // --frames A-B or N (as given)
-    FrameRange frame_range;    // parsed --frames
-    int threads = 0;           // --threads (0 = all cores)
-    unsigned seed = 0;         // --seed (0 = the shot's)
-    bool quiet = false;        // --quiet: errors and warnings only
-    bool keep_partial = false; // --keep-partial: keep .partial/ folders of a failed run
+    std::string program;        // e.g. "mc-sim"
+    std::string shot;           // --shot
+    std::string out;            // --out: the shot's output root (stages write DIR/<stage>/)
+    std::string frames;         // --frames A-B or N (as given)
+    FrameRange frame_range;     // parsed --frames
+    int threads = 0;            // --threads (0 = all cores)
+    unsigned seed = 0;          // --seed (0 = the shot's)
+    bool quiet = false;         // --quiet: errors and warnings only
+    bool keep_partial = false;  // --keep-partial: keep .partial/ folders of a failed run
     std::string log_level = "info";
 };
 
@@ -32,6 +32,7 @@ struct StageOptions {
 /// within `available`.
 /// @param available the frames the stage's input holds (the shot's, or a manifest's /frames)
 /// @param where what `available` comes from, for the message (a file, with its keys)
-FrameRange frames_to_process(const StageOptions& options, const FrameRange& available, const std::string& where);
+FrameRange frames_to_process(const StageOptions& options, const FrameRange& available,
+                             const std::string& where);
 
 }  // namespace mudcrack

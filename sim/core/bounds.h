@@ -26,7 +26,8 @@ struct Bounds {
     Vec3f center() const { return 0.5f * (min + max); }
     /// Corner i of 8: bit 0 picks max x, bit 1 max y, bit 2 max z.
     Vec3f corner(int i) const {
-        return Vec3f((i & 1) ? max.x() : min.x(), (i & 2) ? max.y() : min.y(), (i & 4) ? max.z() : min.z());
+        return Vec3f((i & 1) ? max.x() : min.x(), (i & 2) ? max.y() : min.y(),
+                     (i & 4) ? max.z() : min.z());
     }
     /// Half the diagonal [m].
     float radius() const { return 0.5f * (max - min).norm(); }

@@ -5,25 +5,25 @@
 #include <cstdlib>
 #include <sstream>
 
-#define MC_CHECK(cond)                                                                   \
-    do {                                                                                 \
-        if (!(cond)) {                                                                   \
-            std::fprintf(stderr, "%s:%d: check failed: %s\n", __FILE__, __LINE__, #cond); \
-            std::abort();                                                                \
-        }                                                                                \
-    } while (0)
-
-#define MC_CHECK_OP(a, op, b)                                                             \
+#define MC_CHECK(cond)                                                                    \
     do {                                                                                  \
-        const auto& mc_a_ = (a);                                                          \
-        const auto& mc_b_ = (b);                                                          \
-        if (!(mc_a_ op mc_b_)) {                                                          \
-            std::ostringstream mc_os_;                                                    \
-            mc_os_ << __FILE__ << ":" << __LINE__ << ": check failed: " #a " " #op " " #b \
-                   << " (" << mc_a_ << " vs " << mc_b_ << ")\n";                          \
-            std::fputs(mc_os_.str().c_str(), stderr);                                     \
+        if (!(cond)) {                                                                    \
+            std::fprintf(stderr, "%s:%d: check failed: %s\n", __FILE__, __LINE__, #cond); \
             std::abort();                                                                 \
         }                                                                                 \
+    } while (0)
+
+#define MC_CHECK_OP(a, op, b)                                                                     \
+    do {                                                                                          \
+        const auto& mc_a_ = (a);                                                                  \
+        const auto& mc_b_ = (b);                                                                  \
+        if (!(mc_a_ op mc_b_)) {                                                                  \
+            std::ostringstream mc_os_;                                                            \
+            mc_os_ << __FILE__ << ":" << __LINE__ << ": check failed: " #a " " #op " " #b << " (" \
+                   << mc_a_ << " vs " << mc_b_ << ")\n";                                          \
+            std::fputs(mc_os_.str().c_str(), stderr);                                             \
+            std::abort();                                                                         \
+        }                                                                                         \
     } while (0)
 
 #define MC_CHECK_EQ(a, b) MC_CHECK_OP(a, ==, b)

@@ -45,7 +45,8 @@ int warning_count() {
 void summarize_warnings() {
     std::lock_guard<std::mutex> lock(g_mutex);
     for (const auto& [kind, n] : g_warnings)
-        if (n > kPrintedPerKind) std::fprintf(stderr, "%s: warning: %s x%d\n", g_program.c_str(), kind.c_str(), n);
+        if (n > kPrintedPerKind)
+            std::fprintf(stderr, "%s: warning: %s x%d\n", g_program.c_str(), kind.c_str(), n);
 }
 
 void reset_warnings() {

@@ -30,14 +30,17 @@ enum class CachePolicy {
 
 // X(type, frame member, shot key, VDB attribute name, physics, policy, doc), in the VDB file's
 // attribute order (within each of float, vector and matrix). type: float, Vec3f or Mat3f.
-#define MC_CACHED_ATTRIBUTES(X)                                                                              \
-    X(Vec3f, v, velocity, "v", Always, ByPhysics, "velocity [m/s]")                                         \
-    X(float, theta, theta, "theta", Moisture, ByPhysics, "volumetric water content in [0, eta]")          \
-    X(float, saturation, saturation, "saturation", Moisture, ByPhysics, "s = theta/eta in [0,1]")         \
-    X(float, alpha, alpha, "alpha", Plasticity, ByPhysics, "NACC hardening state (log Jp plus eps log Jw)") \
-    X(float, Jw, Jw, "Jw", Moisture, ByPhysics, "pore deformation determinant, 1 - eta (1 - s)")          \
-    X(Mat3f, Fe, Fe, "Fe", Surfacing, ByPhysics, "elastic deformation gradient (the core rotation of Eq. 13)") \
-    X(float, damage, damage, "damage", Damage, OnRequest, "tensile damage d in [0, 1]: where the soil tore")
+#define MC_CACHED_ATTRIBUTES(X)                                                                   \
+    X(Vec3f, v, velocity, "v", Always, ByPhysics, "velocity [m/s]")                               \
+    X(float, theta, theta, "theta", Moisture, ByPhysics, "volumetric water content in [0, eta]")  \
+    X(float, saturation, saturation, "saturation", Moisture, ByPhysics, "s = theta/eta in [0,1]") \
+    X(float, alpha, alpha, "alpha", Plasticity, ByPhysics,                                        \
+      "NACC hardening state (log Jp plus eps log Jw)")                                            \
+    X(float, Jw, Jw, "Jw", Moisture, ByPhysics, "pore deformation determinant, 1 - eta (1 - s)")  \
+    X(Mat3f, Fe, Fe, "Fe", Surfacing, ByPhysics,                                                  \
+      "elastic deformation gradient (the core rotation of Eq. 13)")                               \
+    X(float, damage, damage, "damage", Damage, OnRequest,                                         \
+      "tensile damage d in [0, 1]: where the soil tore")
 
 /// How an attribute is stored: one float, a vector or a matrix per particle.
 enum class AttributeKind { Float, Vector, Matrix };
@@ -46,15 +49,18 @@ template <class T>
 constexpr AttributeKind attribute_kind() {
     static_assert(std::is_same_v<T, float> || std::is_same_v<T, Vec3f> || std::is_same_v<T, Mat3f>,
                   "a cached attribute is a float, Vec3f or Mat3f");
-    if constexpr (std::is_same_v<T, float>) return AttributeKind::Float;
-    else if constexpr (std::is_same_v<T, Vec3f>) return AttributeKind::Vector;
-    else return AttributeKind::Matrix;
+    if constexpr (std::is_same_v<T, float>)
+        return AttributeKind::Float;
+    else if constexpr (std::is_same_v<T, Vec3f>)
+        return AttributeKind::Vector;
+    else
+        return AttributeKind::Matrix;
 }
 
 /// One row of MC_CACHED_ATTRIBUTES, for code that iterates at run time.
 struct CachedAttributeInfo {
-    const char* shot_key;   // /derived/cache and /sim/cache key
-    const char* vdb_name;   // attribute name in the frame caches
+    const char* shot_key;  // /derived/cache and /sim/cache key
+    const char* vdb_name;  // attribute name in the frame caches
     AttributeKind kind;
     CachePhysics physics;
     CachePolicy policy;

@@ -10,10 +10,10 @@
 namespace mudcrack {
 
 struct ParticleFrame {
-    int frame = 0;                 // 1-based frame number
-    double time = 0;               // simulated time at the end of the frame [s]
-    int substeps = 0;              // MPM steps taken during this frame
-    std::vector<Vec3f> P;          // positions [m], (n_particles), index = particle id
+    int frame = 0;         // 1-based frame number
+    double time = 0;       // simulated time at the end of the frame [s]
+    int substeps = 0;      // MPM steps taken during this frame
+    std::vector<Vec3f> P;  // positions [m], (n_particles), index = particle id
     // one array per cached attribute (MC_CACHED_ATTRIBUTES), (n_particles), index = particle id
 #define MC_FRAME_ARRAY(T, member, key, vdb, physics, policy, doc) std::vector<T> member;
     MC_CACHED_ATTRIBUTES(MC_FRAME_ARRAY)

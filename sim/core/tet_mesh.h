@@ -9,10 +9,10 @@
 namespace mudcrack {
 
 struct TetMesh {
-    std::vector<Vec3> X;                          // rest positions [m], (n_vertices)
-    std::vector<Tet> tets;                        // positively oriented corners, (n_tets)
-    std::vector<Tri> boundary;                    // boundary faces, outward (CCW), (n_boundary)
-    std::vector<std::array<Vec2, 3>> boundary_uv; // per-corner UVs of `boundary`, (n_boundary)
+    std::vector<Vec3> X;                           // rest positions [m], (n_vertices)
+    std::vector<Tet> tets;                         // positively oriented corners, (n_tets)
+    std::vector<Tri> boundary;                     // boundary faces, outward (CCW), (n_boundary)
+    std::vector<std::array<Vec2, 3>> boundary_uv;  // per-corner UVs of `boundary`, (n_boundary)
 };
 
 /// Signed volume of tet (a,b,c,d): positive when (b-a, c-a, d-a) is right-handed [m^3].

@@ -20,7 +20,9 @@ struct SymMat3 {
     Real xx, yy, zz, xy, xz, yz;
 
     /// The Frobenius norm squared (the off-diagonal entries count twice).
-    Real squared_norm() const { return xx * xx + yy * yy + zz * zz + 2 * (xy * xy + xz * xz + yz * yz); }
+    Real squared_norm() const {
+        return xx * xx + yy * yy + zz * zz + 2 * (xy * xy + xz * xz + yz * yz);
+    }
     Mat3 matrix() const {
         Mat3 m;
         m << xx, xy, xz, xy, yy, yz, xz, yz, zz;

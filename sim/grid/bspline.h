@@ -13,10 +13,10 @@ constexpr Real kInertiaInvScale = 4;
 
 /// One axis of the quadratic B-spline stencil: nodes base, base+1, base+2.
 struct AxisWeights {
-    int base = 0;      // first stencil node index along this axis
-    Real fx = 0;       // particle position relative to base, in cells, in [0.5, 1.5)
-    Real w[3] = {};    // weights of the three nodes
-    Real dw[3] = {};   // d w / d fx (divide by h for world units)
+    int base = 0;     // first stencil node index along this axis
+    Real fx = 0;      // particle position relative to base, in cells, in [0.5, 1.5)
+    Real w[3] = {};   // weights of the three nodes
+    Real dw[3] = {};  // d w / d fx (divide by h for world units)
 };
 
 /// Fills `a` with the weights along one axis for a particle at grid coordinate xg = (x - origin)/h.

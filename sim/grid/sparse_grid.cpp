@@ -21,8 +21,8 @@ GridGeometry make_grid_geometry(const Vec3& domain_min, const Vec3& domain_max, 
         const Real extent = domain_max[d] - domain_min[d];
         if (!(extent > 4 * h)) {
             std::ostringstream os;
-            os << "simulation domain axis " << d << " spans " << extent << " m: must be > 4 h = "
-               << 4 * h << " m";
+            os << "simulation domain axis " << d << " spans " << extent
+               << " m: must be > 4 h = " << 4 * h << " m";
             throw InputError(os.str());
         }
         g.cells[d] = static_cast<int>(std::ceil(extent / h - 1e-9));
@@ -32,8 +32,8 @@ GridGeometry make_grid_geometry(const Vec3& domain_min, const Vec3& domain_max, 
     }
     if (total_blocks >= 4.0e9) {
         std::ostringstream os;
-        os << "simulation domain of " << g.cells.transpose() << " cells at h = " << h
-           << " m needs " << total_blocks << " grid blocks: must be < 4e9 (enlarge h or shrink the domain)";
+        os << "simulation domain of " << g.cells.transpose() << " cells at h = " << h << " m needs "
+           << total_blocks << " grid blocks: must be < 4e9 (enlarge h or shrink the domain)";
         throw InputError(os.str());
     }
     return g;
@@ -61,10 +61,12 @@ int32_t SparseGrid::find_block(uint32_t key) const {
 }
 
 int64_t SparseGrid::memory_bytes() const {
-    int64_t total = capacity_bytes(particle_key) + capacity_bytes(order) + capacity_bytes(pblock_key) +
-                    capacity_bytes(pblock_begin) + capacity_bytes(pblock_neighbors) + capacity_bytes(block_keys) +
-                    capacity_bytes(nodes) + capacity_bytes(sort_key_tmp) + capacity_bytes(sort_idx_tmp) +
-                    capacity_bytes(radix_count) + capacity_bytes(neighbor_keys_tmp);
+    int64_t total = capacity_bytes(particle_key) + capacity_bytes(order) +
+                    capacity_bytes(pblock_key) + capacity_bytes(pblock_begin) +
+                    capacity_bytes(pblock_neighbors) + capacity_bytes(block_keys) +
+                    capacity_bytes(nodes) + capacity_bytes(sort_key_tmp) +
+                    capacity_bytes(sort_idx_tmp) + capacity_bytes(radix_count) +
+                    capacity_bytes(neighbor_keys_tmp);
     for (const auto& c : color_pblocks) total += capacity_bytes(c);
     for (const auto& c : color_prefix) total += capacity_bytes(c);
     return total;
@@ -73,8 +75,8 @@ int64_t SparseGrid::memory_bytes() const {
 namespace {
 
 // one stable counting-sort pass of the slots in `idx` by bits [shift, shift + 11) of key[slot]
-void radix_pass(const uint32_t* key, int shift, std::vector<int32_t>& idx, std::vector<int32_t>& idx_tmp,
-                std::vector<uint32_t>& count) {
+void radix_pass(const uint32_t* key, int shift, std::vector<int32_t>& idx,
+                std::vector<int32_t>& idx_tmp, std::vector<uint32_t>& count) {
     constexpr int kDigitBits = 11;
     constexpr uint32_t kBuckets = 1u << kDigitBits;
     const size_t n = idx.size();
@@ -87,7 +89,8 @@ void radix_pass(const uint32_t* key, int shift, std::vector<int32_t>& idx, std::
         c = sum;
         sum += here;
     }
-    for (size_t i = 0; i < n; ++i) idx_tmp[count[(key[idx[i]] >> shift) & (kBuckets - 1)]++] = idx[i];
+    for (size_t i = 0; i < n; ++i)
+        idx_tmp[count[(key[idx[i]] >> shift) & (kBuckets - 1)]++] = idx[i];
     idx.swap(idx_tmp);
 }
 
@@ -109,8 +112,7 @@ void bin_particles(SparseGrid& grid, const std::vector<Vec3>& x, const std::vect
     parallel_for(n, [&](int64_t p) {
         const Vec3 xg = geo.to_grid(x[p]);
         int b[3];
-        for (int d = 0; d < 3; ++d)
-            b[d] = static_cast<int>(std::floor(xg[d] - Real(0.5))) >> 2;
+        for (int d = 0; d < 3; ++d) b[d] = static_cast<int>(std::floor(xg[d] - Real(0.5))) >> 2;
         grid.particle_key[p] = geo.block_key(b[0], b[1], b[2]);
         grid.order[p] = static_cast<int32_t>(p);
     });
@@ -127,9 +129,11 @@ void bin_particles(SparseGrid& grid, const std::vector<Vec3>& x, const std::vect
         const int id_bits = bits_for(static_cast<uint64_t>(n));
         const int block_bits =
             bits_for(static_cast<uint64_t>(geo.blocks.x()) * geo.blocks.y() * geo.blocks.z());
-        for (int shift = 0; shift < id_bits; shift += 11) radix_pass(id_key, shift, grid.order, grid.sort_idx_tmp, grid.radix_count);
+        for (int shift = 0; shift < id_bits; shift += 11)
+            radix_pass(id_key, shift, grid.order, grid.sort_idx_tmp, grid.radix_count);
         for (int shift = 0; shift < block_bits; shift += 11)
-            radix_pass(grid.particle_key.data(), shift, grid.order, grid.sort_idx_tmp, grid.radix_count);
+            radix_pass(grid.particle_key.data(), shift, grid.order, grid.sort_idx_tmp,
+                       grid.radix_count);
     }
     std::vector<uint32_t>& sorted_key = grid.sort_key_tmp;
     sorted_key.resize(n);
@@ -155,7 +159,8 @@ void bin_particles(SparseGrid& grid, const std::vector<Vec3>& x, const std::vect
         const Vec3i b = geo.block_coord(k);
         for (int dx = 0; dx < 2; ++dx)
             for (int dy = 0; dy < 2; ++dy)
-                for (int dz = 0; dz < 2; ++dz) keys.push_back(geo.block_key(b.x() + dx, b.y() + dy, b.z() + dz));
+                for (int dz = 0; dz < 2; ++dz)
+                    keys.push_back(geo.block_key(b.x() + dx, b.y() + dy, b.z() + dz));
     }
     std::sort(keys.begin(), keys.end());
     keys.erase(std::unique(keys.begin(), keys.end()), keys.end());

@@ -17,21 +17,21 @@
 
 namespace mudcrack::mpm {
 
-constexpr int kBlockWidth = 4;                        // nodes per block edge
-constexpr int kBlockNodes = 64;                       // nodes per block
-constexpr int kWindowWidth = 6;                       // nodes per window edge
-constexpr int kWindowNodes = 216;                     // nodes per window
-constexpr int kNodeFields = 4;                        // mass, then momentum / velocity (x, y, z)
+constexpr int kBlockWidth = 4;     // nodes per block edge
+constexpr int kBlockNodes = 64;    // nodes per block
+constexpr int kWindowWidth = 6;    // nodes per window edge
+constexpr int kWindowNodes = 216;  // nodes per window
+constexpr int kNodeFields = 4;     // mass, then momentum / velocity (x, y, z)
 
 /// The conceptually dense grid over the domain box: node i sits at origin + h i, with
 /// i in [0, cells] per axis.
 struct GridGeometry {
-    Vec3 origin = Vec3::Zero();     // domain minimum corner [m]
-    Real h = 1;                     // node spacing [m]
-    Real inv_h = 1;                 // 1/h [1/m]
-    Vec3i cells = Vec3i::Zero();    // cells per axis (nodes per axis minus one)
-    Vec3i blocks = Vec3i::Zero();   // block-grid dimensions (with a spare +1 layer)
-    int padding = 3;                // wall band width [cells]
+    Vec3 origin = Vec3::Zero();    // domain minimum corner [m]
+    Real h = 1;                    // node spacing [m]
+    Real inv_h = 1;                // 1/h [1/m]
+    Vec3i cells = Vec3i::Zero();   // cells per axis (nodes per axis minus one)
+    Vec3i blocks = Vec3i::Zero();  // block-grid dimensions (with a spare +1 layer)
+    int padding = 3;               // wall band width [cells]
 
     uint32_t block_key(int bx, int by, int bz) const {
         return static_cast<uint32_t>(bx + blocks.x() * (by + blocks.y() * bz));
@@ -48,7 +48,8 @@ struct GridGeometry {
 
 /// Grid over [domain_min, domain_max] with spacing h. Throws InputError if the box has more
 /// blocks than a 32-bit key can index.
-GridGeometry make_grid_geometry(const Vec3& domain_min, const Vec3& domain_max, Real h, int padding);
+GridGeometry make_grid_geometry(const Vec3& domain_min, const Vec3& domain_max, Real h,
+                                int padding);
 
 /// Maps each of the 216 window nodes to (which of the 8 neighbour blocks, node within it).
 struct WindowMap {
@@ -66,17 +67,20 @@ struct SparseGrid {
     GridGeometry geo;
 
     // particle binning, rebuilt every step by bin_particles
-    std::vector<uint32_t> particle_key;     // block key of each slot's stencil base, (n_particles)
-    std::vector<int32_t> order;             // slots grouped by particle block, stable, (n_particles)
-    std::vector<uint32_t> pblock_key;       // key of each particle block, ascending
-    std::vector<int32_t> pblock_begin;      // range of each particle block in `order`, (n_pblocks+1)
+    std::vector<uint32_t> particle_key;  // block key of each slot's stencil base, (n_particles)
+    // slots grouped by particle block, stable, (n_particles)
+    std::vector<int32_t> order;
+    std::vector<uint32_t> pblock_key;  // key of each particle block, ascending
+    // range of each particle block in `order`, (n_pblocks+1)
+    std::vector<int32_t> pblock_begin;
     std::vector<std::array<int32_t, 8>> pblock_neighbors;  // block slots of pblock + {0,1}^3
     std::array<std::vector<int32_t>, 8> color_pblocks;     // particle blocks by colour
-    std::array<std::vector<int32_t>, 8> color_prefix;      // particles in the first k blocks of a colour
+    // particles in the first k blocks of a colour
+    std::array<std::vector<int32_t>, 8> color_prefix;
 
     // allocated blocks and their nodes
-    std::vector<uint32_t> block_keys;       // ascending, (n_blocks)
-    std::vector<Real> nodes;                // (n_blocks * 64, kNodeFields): m, (m v) or v
+    std::vector<uint32_t> block_keys;  // ascending, (n_blocks)
+    std::vector<Real> nodes;           // (n_blocks * 64, kNodeFields): m, (m v) or v
 
     // sort scratch, reused between steps
     std::vector<uint32_t> sort_key_tmp;
@@ -120,7 +124,9 @@ inline void flush_window(const SparseGrid& grid, int32_t pblock, const Real* win
     const WindowMap& map = window_map();
     const std::array<int32_t, 8>& nb = grid.pblock_neighbors[pblock];
     for (int n = 0; n < kWindowNodes; ++n) {
-        Real* dst = field + (static_cast<int64_t>(nb[map.neighbor[n]]) * kBlockNodes + map.local[n]) * kCount;
+        Real* dst =
+            field +
+            (static_cast<int64_t>(nb[map.neighbor[n]]) * kBlockNodes + map.local[n]) * kCount;
         const Real* src = win + n * kStride;
         for (int c = 0; c < kCount; ++c) dst[c] += src[c];
     }
@@ -129,12 +135,15 @@ inline void flush_window(const SparseGrid& grid, int32_t pblock, const Real* win
 /// Copies a node field (kCount values per node, starting at component `first` of kFieldStride)
 /// into a window with kStride values per node.
 template <int kCount, int kFieldStride, int kStride>
-inline void gather_window(const SparseGrid& grid, int32_t pblock, const Real* field, int first, Real* win) {
+inline void gather_window(const SparseGrid& grid, int32_t pblock, const Real* field, int first,
+                          Real* win) {
     const WindowMap& map = window_map();
     const std::array<int32_t, 8>& nb = grid.pblock_neighbors[pblock];
     for (int n = 0; n < kWindowNodes; ++n) {
-        const Real* src =
-            field + (static_cast<int64_t>(nb[map.neighbor[n]]) * kBlockNodes + map.local[n]) * kFieldStride + first;
+        const Real* src = field +
+                          (static_cast<int64_t>(nb[map.neighbor[n]]) * kBlockNodes + map.local[n]) *
+                              kFieldStride +
+                          first;
         Real* dst = win + n * kStride;
         for (int c = 0; c < kCount; ++c) dst[c] = src[c];
     }
@@ -146,7 +155,8 @@ template <class Fn>
 void for_each_balanced(const std::vector<int32_t>& prefix, size_t count, Fn&& fn) {
     const int64_t total = prefix[count];
     parallel_chunks(total, [&](int t, int64_t b, int64_t e) {
-        size_t k = static_cast<size_t>(std::lower_bound(prefix.begin(), prefix.begin() + count, b) - prefix.begin());
+        size_t k = static_cast<size_t>(std::lower_bound(prefix.begin(), prefix.begin() + count, b) -
+                                       prefix.begin());
         for (; k < count && prefix[k] < e; ++k) fn(t, k);
     });
 }
@@ -156,13 +166,15 @@ void for_each_pblock_colored(const SparseGrid& grid, Fn&& fn) {
     for (int color = 0; color < 8; ++color) {
         const std::vector<int32_t>& list = grid.color_pblocks[color];
         if (list.empty()) continue;
-        for_each_balanced(grid.color_prefix[color], list.size(), [&](int t, size_t k) { fn(t, list[k]); });
+        for_each_balanced(grid.color_prefix[color], list.size(),
+                          [&](int t, size_t k) { fn(t, list[k]); });
     }
 }
 
 template <class Fn>
 void for_each_pblock(const SparseGrid& grid, Fn&& fn) {
-    for_each_balanced(grid.pblock_begin, grid.n_pblocks(), [&](int t, size_t k) { fn(t, static_cast<int32_t>(k)); });
+    for_each_balanced(grid.pblock_begin, grid.n_pblocks(),
+                      [&](int t, size_t k) { fn(t, static_cast<int32_t>(k)); });
 }
 
 }  // namespace mudcrack::mpm

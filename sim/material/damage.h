@@ -18,7 +18,8 @@ namespace mudcrack {
 /// The damage after a return mapping that moved alpha from alpha_before to alpha_after:
 /// d + max(alpha_after - alpha_before, 0) / damage_strain, at most 1. Hardening returns
 /// (alpha falls) leave d unchanged. @param damage_strain > 0 [-]
-inline Real damage_after_return(Real damage, Real alpha_before, Real alpha_after, Real damage_strain) {
+inline Real damage_after_return(Real damage, Real alpha_before, Real alpha_after,
+                                Real damage_strain) {
     const Real softening = alpha_after - alpha_before;
     if (!(softening > 0)) return damage;
     return std::min(Real(1), damage + softening / damage_strain);

@@ -66,7 +66,10 @@ inline Real nacc_p0_lower_bound(Real alpha, Real xi, Real kappa) {
         // multiplications by the reciprocals (rounded: the few ulps above), not divisions
         constexpr Real c3 = Real(1) / 6, c5 = Real(1) / 20, c7 = Real(1) / 42, c9 = Real(1) / 72,
                        c11 = Real(1) / 110, c13 = Real(1) / 156;
-        sinh_x = x * (1 + x2 * c3 * (1 + x2 * c5 * (1 + x2 * c7 * (1 + x2 * c9 * (1 + x2 * c11 * (1 + x2 * c13))))));
+        sinh_x =
+            x * (1 + x2 * c3 *
+                         (1 + x2 * c5 *
+                                  (1 + x2 * c7 * (1 + x2 * c9 * (1 + x2 * c11 * (1 + x2 * c13))))));
     } else {
         const Real e = std::exp(x);
         sinh_x = Real(0.5) * (e - 1 / e);
@@ -109,13 +112,15 @@ inline Vec3 volume_preserving_sigma(const Vec3& d, Real m_start, Real J) {
 inline int nacc_yield_case(Real p, Real s_norm, Real p0, Real beta, Real M, Real kappa) {
     if (p > p0) return kNaccCompressionTip;
     if (p < -beta * p0) return kNaccTensionTip;
-    return nacc_yield(p, s_norm, p0, beta, M) < kNaccInsideTolerance * kappa * kappa ? kNaccInside
-                                                                                    : kNaccProjected;
+    return nacc_yield(p, s_norm, p0, beta, M) < kNaccInsideTolerance * kappa * kappa
+               ? kNaccInside
+               : kNaccProjected;
 }
 
 /// |J| clamped to the normal doubles: keeps logs and powers finite for J -> 0 and huge stretch.
 inline Real nacc_safe_J(Real J) {
-    return std::min(std::max(std::abs(J), std::numeric_limits<Real>::min()), std::numeric_limits<Real>::max());
+    return std::min(std::max(std::abs(J), std::numeric_limits<Real>::min()),
+                    std::numeric_limits<Real>::max());
 }
 
 /// Result of a return mapping in principal space.
@@ -164,9 +169,11 @@ inline NaccPrincipalReturn nacc_return_principal(const Vec3& sigma, Real alpha, 
     const Real J_two_thirds = std::cbrt(J) * std::cbrt(J);
     const Real scale = dev_b_norm > 0 ? J_two_thirds / mu * s_norm_new / dev_b_norm : Real(0);
     if (preserve_volume) {
-        out.sigma = volume_preserving_sigma(dev_b * (scale * cbrt_inv_sq(J)), mean_b * cbrt_inv_sq(J), J);
+        out.sigma =
+            volume_preserving_sigma(dev_b * (scale * cbrt_inv_sq(J)), mean_b * cbrt_inv_sq(J), J);
     } else {
-        for (int k = 0; k < 3; ++k) out.sigma(k) = std::sqrt(std::max(mean_b + scale * dev_b(k), Real(0)));
+        for (int k = 0; k < 3; ++k)
+            out.sigma(k) = std::sqrt(std::max(mean_b + scale * dev_b(k), Real(0)));
     }
 
     // "Fake p" hardening: intersect the ray from the ellipse centre through the trial point
@@ -223,7 +230,8 @@ inline NaccReturn nacc_return_map(const Svd3& trial, const Mat3& Fe_trial, Real 
 inline NaccReturn nacc_return_map(const Mat3& Fe_trial, Real alpha, Real beta,
                                   const NaccParams& nacc, const LameParams& lame,
                                   bool preserve_volume = false, Real strength = 1) {
-    return nacc_return_map(svd3(Fe_trial), Fe_trial, alpha, beta, nacc, lame, preserve_volume, strength);
+    return nacc_return_map(svd3(Fe_trial), Fe_trial, alpha, beta, nacc, lame, preserve_volume,
+                           strength);
 }
 
 /// Result of nacc_project: a NaccReturn without the SVD.
@@ -239,8 +247,9 @@ struct NaccProjection {
 /// ||dev(sigma^2)||), and the SVD is computed only for states that leave the yield surface.
 /// Inside states (the common case) cost no SVD and come back bitwise unchanged. Up to round-off
 /// in states within ~1e-15 of the yield surface, the result equals nacc_return_map's.
-inline NaccProjection nacc_project(const Mat3& Fe_trial, Real alpha, Real beta, const NaccParams& nacc,
-                                   const LameParams& lame, bool preserve_volume = false) {
+inline NaccProjection nacc_project(const Mat3& Fe_trial, Real alpha, Real beta,
+                                   const NaccParams& nacc, const LameParams& lame,
+                                   bool preserve_volume = false) {
     const Real J = nacc_safe_J(Fe_trial.determinant());
     Mat3 dev_b = Fe_trial * Fe_trial.transpose();
     dev_b.diagonal().array() -= dev_b.trace() / 3;

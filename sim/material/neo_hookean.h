@@ -55,19 +55,22 @@ struct NeoHookeanTerms {
 };
 
 /// The terms of Fe. Defined for any Fe; shear is +infinity at J = 0. Every product-sum is an
-/// explicit fused_madd, so the terms (and tau) round alike wherever they are inlined: the stress G2P
-/// caches for the next P2G and the stress P2G computes itself are the same bits.
+/// explicit fused_madd, so the terms (and tau) round alike wherever they are inlined: the stress
+/// G2P caches for the next P2G and the stress P2G computes itself are the same bits.
 inline NeoHookeanTerms neo_hookean_terms(const Mat3& F, const LameParams& p) {
     const auto dot3 = [](Real a0, Real a1, Real a2, Real b0, Real b1, Real b2) {
         return fused_madd(a2, b2, fused_madd(a1, b1, a0 * b0));
     };
-    const auto row_dot = [&](int i, int j) { return dot3(F(i, 0), F(i, 1), F(i, 2), F(j, 0), F(j, 1), F(j, 2)); };
+    const auto row_dot = [&](int i, int j) {
+        return dot3(F(i, 0), F(i, 1), F(i, 2), F(j, 0), F(j, 1), F(j, 2));
+    };
     NeoHookeanTerms t;
     const Real c0 = fused_madd(F(1, 1), F(2, 2), -(F(1, 2) * F(2, 1)));
     const Real c1 = fused_madd(F(1, 0), F(2, 2), -(F(1, 2) * F(2, 0)));
     const Real c2 = fused_madd(F(1, 0), F(2, 1), -(F(1, 1) * F(2, 0)));
     t.J = fused_madd(F(0, 2), c2, fused_madd(-F(0, 1), c1, F(0, 0) * c0));
-    t.b = {row_dot(0, 0), row_dot(1, 1), row_dot(2, 2), row_dot(0, 1), row_dot(0, 2), row_dot(1, 2)};
+    t.b = {row_dot(0, 0), row_dot(1, 1), row_dot(2, 2),
+           row_dot(0, 1), row_dot(0, 2), row_dot(1, 2)};
     t.mean_b = (t.b.xx + t.b.yy + t.b.zz) / 3;
     t.shear = p.mu * cbrt_inv_sq(t.J);
     return t;
@@ -77,8 +80,12 @@ inline NeoHookeanTerms neo_hookean_terms(const Mat3& F, const LameParams& p) {
 inline SymMat3 neo_hookean_kirchhoff(const NeoHookeanTerms& t, const LameParams& p) {
     const Real volumetric = p.kappa / 2 * fused_madd(t.J, t.J, Real(-1));
     const Real diagonal = fused_madd(-t.shear, t.mean_b, volumetric);
-    return {fused_madd(t.shear, t.b.xx, diagonal), fused_madd(t.shear, t.b.yy, diagonal),
-            fused_madd(t.shear, t.b.zz, diagonal), t.shear * t.b.xy, t.shear * t.b.xz, t.shear * t.b.yz};
+    return {fused_madd(t.shear, t.b.xx, diagonal),
+            fused_madd(t.shear, t.b.yy, diagonal),
+            fused_madd(t.shear, t.b.zz, diagonal),
+            t.shear * t.b.xy,
+            t.shear * t.b.xz,
+            t.shear * t.b.yz};
 }
 
 /// Kirchhoff stress tau = dpsi/dFe Fe^T [Pa]. Requires det Fe != 0.

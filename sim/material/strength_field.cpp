@@ -13,7 +13,9 @@ namespace {
 // uniform in (0, 1) from 53 random bits of the generator: mt19937_64's output is specified
 // bit for bit by the standard, std::uniform_real_distribution's and std::normal_distribution's
 // algorithms are not, so the field is the same with any standard library
-Real open_unit(std::mt19937_64& rng) { return (static_cast<Real>(rng() >> 11) + Real(0.5)) * 0x1.0p-53; }
+Real open_unit(std::mt19937_64& rng) {
+    return (static_cast<Real>(rng() >> 11) + Real(0.5)) * 0x1.0p-53;
+}
 
 // one standard normal by Box-Muller (the cosine branch)
 Real standard_normal(std::mt19937_64& rng) {
@@ -42,7 +44,8 @@ StrengthField make_strength_field(const StrengthFieldParams& params, uint64_t se
 
 Real strength_field_gaussian(const StrengthField& field, const Vec3& x) {
     Real sum = 0;
-    for (size_t k = 0; k < field.phase.size(); ++k) sum += std::cos(field.frequency[k].dot(x) + field.phase[k]);
+    for (size_t k = 0; k < field.phase.size(); ++k)
+        sum += std::cos(field.frequency[k].dot(x) + field.phase[k]);
     return std::sqrt(Real(2) / static_cast<Real>(field.phase.size())) * sum;
 }
 
@@ -55,7 +58,8 @@ Real weibull_of_gaussian(Real g, Real modulus, Real scale) {
 std::vector<Real> strength_multipliers(const StrengthField& field, const std::vector<Vec3>& rest) {
     std::vector<Real> m(rest.size());
     parallel_for(static_cast<int64_t>(rest.size()), [&](int64_t p) {
-        m[p] = weibull_of_gaussian(strength_field_gaussian(field, rest[p]), field.weibull_modulus, field.weibull_scale);
+        m[p] = weibull_of_gaussian(strength_field_gaussian(field, rest[p]), field.weibull_modulus,
+                                   field.weibull_scale);
     });
     return m;
 }

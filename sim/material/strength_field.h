@@ -31,7 +31,7 @@ struct StrengthField {
     std::vector<Vec3> frequency;  // w_k [1/m]
     std::vector<Real> phase;      // phi_k [rad]
     Real weibull_modulus = 4;
-    Real weibull_scale = 1;       // 1 / Gamma(1 + 1/m): the multipliers' mean is 1
+    Real weibull_scale = 1;  // 1 / Gamma(1 + 1/m): the multipliers' mean is 1
 };
 
 /// Modes of the field used by every shot (enough that the values are Gaussian to the eye and the

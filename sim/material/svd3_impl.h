@@ -60,17 +60,20 @@ inline Vec3 eigenvector_of_simple_eigenvalue(const Mat3& S, Real lambda) {
 /// An orthonormal eigenbasis of S = A^T A (det +1), accurate to ~eps ||S|| / gap in the common
 /// case: closed-form eigenvalues (a Halley-refined root of the characteristic cubic), the
 /// eigenvector of the best-separated one from cross products (always well conditioned), and the
-/// eigenvector of the other extreme eigenvalue made orthogonal to it. When that second eigenvalue is nearly repeated the basis
-/// may be mixed within the near-degenerate plane; svd3's one-sided polish repairs exactly that.
+/// eigenvector of the other extreme eigenvalue made orthogonal to it. When that second eigenvalue
+/// is nearly repeated the basis may be mixed within the near-degenerate plane; svd3's one-sided
+/// polish repairs exactly that.
 inline Mat3 eigenbasis(const Mat3& S) {
     const Real m = S.trace() / 3;
     const Real k00 = S(0, 0) - m, k11 = S(1, 1) - m, k22 = S(2, 2) - m;
     const Real s01 = S(0, 1), s02 = S(0, 2), s12 = S(1, 2);
-    const Real p2 = (k00 * k00 + k11 * k11 + k22 * k22 + 2 * (s01 * s01 + s02 * s02 + s12 * s12)) / 6;
+    const Real p2 =
+        (k00 * k00 + k11 * k11 + k22 * k22 + 2 * (s01 * s01 + s02 * s02 + s12 * s12)) / 6;
     // S = m I to round-off: every basis is an eigenbasis
     if (!(p2 > Real(1e-34) * m * m)) return Mat3::Identity();
     const Real p = std::sqrt(p2);
-    const Real det_k = k00 * (k11 * k22 - s12 * s12) - s01 * (s01 * k22 - s12 * s02) + s02 * (s01 * s12 - k11 * s02);
+    const Real det_k = k00 * (k11 * k22 - s12 * s12) - s01 * (s01 * k22 - s12 * s02) +
+                       s02 * (s01 * s12 - k11 * s02);
     // The eigenvalues are m + p x with x the roots of x^3 - 3x - 2r = 0, r = det(K/p)/2 in
     // [-1, 1] (x = 2 cos(acos(r)/3 + 2 pi k/3)). The root at the end of [-2, 2] on r's side is
     // the best-separated eigenvalue (r >= 0: the largest); by symmetry it is sign(r) times the
@@ -89,7 +92,9 @@ inline Mat3 eigenbasis(const Mat3& S) {
     const Real x_isolated = isolated_is_largest ? x : -x;
     // the other extreme root, from the deflated quadratic x'^2 + x x' + x^2 - 3 = 0 (inaccurate
     // only when it is nearly double, which svd3's polish repairs)
-    const Real x_other = -x_isolated / 2 - std::copysign(std::sqrt(std::max(12 - 3 * x * x, Real(0))), x_isolated) / 2;
+    const Real x_other =
+        -x_isolated / 2 -
+        std::copysign(std::sqrt(std::max(12 - 3 * x * x, Real(0))), x_isolated) / 2;
     const Real isolated = m + p * x_isolated;
     const Real other = m + p * x_other;
     const Vec3 v = eigenvector_of_simple_eigenvalue(S, isolated);
@@ -196,9 +201,18 @@ inline Svd3 svd3(const Mat3& F) {
     }
 
     // sort B's columns by decreasing norm (the singular values' order)
-    if (n0 < n1) { swap_columns(B, V, 0, 1); std::swap(n0, n1); }
-    if (n0 < n2) { swap_columns(B, V, 0, 2); std::swap(n0, n2); }
-    if (n1 < n2) { swap_columns(B, V, 1, 2); std::swap(n1, n2); }
+    if (n0 < n1) {
+        swap_columns(B, V, 0, 1);
+        std::swap(n0, n1);
+    }
+    if (n0 < n2) {
+        swap_columns(B, V, 0, 2);
+        std::swap(n0, n2);
+    }
+    if (n1 < n2) {
+        swap_columns(B, V, 1, 2);
+        std::swap(n1, n2);
+    }
 
     // QR of B by Gram-Schmidt: B = U R with U = [u0, u1, u0 x u1] (det +1 by construction) and
     // R upper triangular; R's off-diagonal is below 1e-15 sigma_0 after the polish and is
@@ -224,7 +238,8 @@ inline Svd3 svd3(const Mat3& F) {
         swap_singular(U, sigma, V, 1, 2);
         if (sigma(0) < std::abs(sigma(1))) swap_singular(U, sigma, V, 0, 1);
     }
-    if (exponent != 0) sigma = sigma.unaryExpr([exponent](Real x) { return std::scalbn(x, exponent); });
+    if (exponent != 0)
+        sigma = sigma.unaryExpr([exponent](Real x) { return std::scalbn(x, exponent); });
     out.U = U;
     out.sigma = sigma;
     out.V = V;

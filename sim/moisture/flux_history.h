@@ -37,11 +37,13 @@ struct MoistureFluxHistory {
 /// middle of this step of length dt; the newest flux when only one is recorded; 0 on the
 /// blocks the history has none for.
 /// @pre history.count > 0
-void predict_moisture_flux(MoistureFluxHistory& history, const mpm::SparseGrid& grid, Real dt, Real* flux);
+void predict_moisture_flux(MoistureFluxHistory& history, const mpm::SparseGrid& grid, Real dt,
+                           Real* flux);
 
 /// Records a solve's nodal fluxes (n_blocks * 64 values on the current grid) over a step dt.
 /// A block the history lacks takes this solve's flux as its previous one as well: no slope
 /// there, rather than one from zero.
-void record_moisture_flux(MoistureFluxHistory& history, const mpm::SparseGrid& grid, const Real* flux, Real dt);
+void record_moisture_flux(MoistureFluxHistory& history, const mpm::SparseGrid& grid,
+                          const Real* flux, Real dt);
 
 }  // namespace mudcrack

@@ -20,11 +20,14 @@ using mpm::SparseGrid;
 
 namespace {
 
-int64_t node_count(const SparseGrid& grid) { return static_cast<int64_t>(grid.n_blocks()) * kBlockNodes; }
+int64_t node_count(const SparseGrid& grid) {
+    return static_cast<int64_t>(grid.n_blocks()) * kBlockNodes;
+}
 
 void resize_zero(std::vector<Real>& v, int64_t n) {
     v.resize(n);
-    parallel_chunks(n, [&](int, int64_t b, int64_t e) { std::fill(v.begin() + b, v.begin() + e, Real(0)); });
+    parallel_chunks(
+        n, [&](int, int64_t b, int64_t e) { std::fill(v.begin() + b, v.begin() + e, Real(0)); });
 }
 
 // The N sums over nodes of what body(node, sums) adds to them, taken per block and then over the
@@ -57,7 +60,8 @@ void build_face_neighbors(const SparseGrid& grid, MoistureGrid& mg) {
                 Vec3i q = c;
                 q[d] += side ? 1 : -1;
                 int32_t slot = -1;
-                if (q[d] >= 0 && q[d] < grid.geo.blocks[d]) slot = grid.find_block(grid.geo.block_key(q.x(), q.y(), q.z()));
+                if (q[d] >= 0 && q[d] < grid.geo.blocks[d])
+                    slot = grid.find_block(grid.geo.block_key(q.x(), q.y(), q.z()));
                 mg.block_face_neighbors[b][2 * d + side] = slot;
             }
     });
@@ -90,7 +94,8 @@ void mark_surface_nodes(const SparseGrid& grid, const MoistureSeal& seal, Moistu
         const int32_t self = static_cast<int32_t>(b);
         for (int a = 0; a < kBlockWidth; ++a)
             for (int bb = 0; bb < kBlockWidth; ++bb)
-                for (int c = 0; c < kBlockWidth; ++c) filled[at(a + 1, bb + 1, c + 1)] = has_mass(self, a, bb, c);
+                for (int c = 0; c < kBlockWidth; ++c)
+                    filled[at(a + 1, bb + 1, c + 1)] = has_mass(self, a, bb, c);
         // the halo: the facing layer of each face neighbour (none allocated: empty)
         for (int d = 0; d < 3; ++d)
             for (int side = 0; side < 2; ++side) {
@@ -146,18 +151,18 @@ constexpr Real kExposedVolumeFraction = 0.75;
 // The evaporation pass (docs/physics.md §4.2, §4.4): finds the boundary particles (a surface node
 // in their stencil; the containing-cell variant of docs/physics.md §4.4 misses flat faces: with 2
 // particles per cell the last massive node lies 1.25 h above the top layer, outside its cell)
-// and scatters their evaporation: r into mg.evaporation (zeroed), and lambda S w^2 into mg.diag when
-// the Robin term is implicit. Particle blocks whose window holds no surface node are skipped.
-void evaporation_pass(const MoistureParams& mp, const SparseGrid& grid, const MoistureParticles& pp, MoistureGrid& mg,
-                      std::vector<std::vector<Real>>& windows) {
+// and scatters their evaporation: r into mg.evaporation (zeroed), and lambda S w^2 into mg.diag
+// when the Robin term is implicit. Particle blocks whose window holds no surface node are skipped.
+void evaporation_pass(const MoistureParams& mp, const SparseGrid& grid, const MoistureParticles& pp,
+                      MoistureGrid& mg, std::vector<std::vector<Real>>& windows) {
     const mpm::GridGeometry& geo = grid.geo;
     const bool implicit_robin = mp.implicit_robin;
     const bool surface_layer = mp.evaporation == MoistureParams::Evaporation::Surface;
     const Real inv_cell_volume = geo.inv_h * geo.inv_h * geo.inv_h;
     mpm::for_each_pblock_colored(grid, [&](int t, int32_t pb) {
-        Real* sw = windows[t].data();       // surface flags
-        Real* rw = sw + kWindowStride;      // evaporation r
-        Real* dw = rw + kWindowStride;      // Robin diagonal
+        Real* sw = windows[t].data();   // surface flags
+        Real* rw = sw + kWindowStride;  // evaporation r
+        Real* dw = rw + kWindowStride;  // Robin diagonal
         mpm::gather_window<1, 1, 1>(grid, pb, mg.surface.data(), 0, sw);
         const bool any_surface = std::any_of(sw, sw + kWindowNodes, [](Real f) { return f > 0; });
         if (!any_surface) {
@@ -166,11 +171,12 @@ void evaporation_pass(const MoistureParams& mp, const SparseGrid& grid, const Mo
             return;
         }
         std::fill(rw, rw + 2 * kWindowStride, Real(0));
-        Real* ww = dw + kWindowStride;      // W_i (surface evaporation)
+        Real* ww = dw + kWindowStride;  // W_i (surface evaporation)
         if (surface_layer) mpm::gather_window<1, 1, 1>(grid, pb, mg.W.data(), 0, ww);
         // which of the block's 4x4x4 stencil bases have a surface node in their 3x3x3 stencil: a
         // separable 3-wide "any" over the window, along z, then y, then x
-        bool along_z[kWindowWidth][kWindowWidth][kBlockWidth], along_yz[kWindowWidth][kBlockWidth][kBlockWidth];
+        bool along_z[kWindowWidth][kWindowWidth][kBlockWidth],
+            along_yz[kWindowWidth][kBlockWidth][kBlockWidth];
         bool touches_surface[kBlockWidth][kBlockWidth][kBlockWidth];
         for (int a = 0; a < kWindowWidth; ++a)
             for (int b = 0; b < kWindowWidth; ++b)
@@ -181,11 +187,13 @@ void evaporation_pass(const MoistureParams& mp, const SparseGrid& grid, const Mo
         for (int a = 0; a < kWindowWidth; ++a)
             for (int b = 0; b < kBlockWidth; ++b)
                 for (int c = 0; c < kBlockWidth; ++c)
-                    along_yz[a][b][c] = along_z[a][b][c] || along_z[a][b + 1][c] || along_z[a][b + 2][c];
+                    along_yz[a][b][c] =
+                        along_z[a][b][c] || along_z[a][b + 1][c] || along_z[a][b + 2][c];
         for (int a = 0; a < kBlockWidth; ++a)
             for (int b = 0; b < kBlockWidth; ++b)
                 for (int c = 0; c < kBlockWidth; ++c)
-                    touches_surface[a][b][c] = along_yz[a][b][c] || along_yz[a + 1][b][c] || along_yz[a + 2][b][c];
+                    touches_surface[a][b][c] =
+                        along_yz[a][b][c] || along_yz[a + 1][b][c] || along_yz[a + 2][b][c];
         bool any_boundary = false;
         const Vec3i origin = geo.block_coord(grid.pblock_key[pb]) * kBlockWidth;
         for (int32_t i = grid.pblock_begin[pb]; i < grid.pblock_begin[pb + 1]; ++i) {
@@ -193,7 +201,8 @@ void evaporation_pass(const MoistureParams& mp, const SparseGrid& grid, const Mo
             // the stencil base first: the weights are needed only on boundary particles
             const Vec3 xg = geo.to_grid(pp.x[p]);
             int o[3];
-            for (int d = 0; d < 3; ++d) o[d] = static_cast<int>(std::floor(xg[d] - Real(0.5))) - origin[d];
+            for (int d = 0; d < 3; ++d)
+                o[d] = static_cast<int>(std::floor(xg[d] - Real(0.5))) - origin[d];
             const bool is_boundary = touches_surface[o[0]][o[1]][o[2]];
             mg.particle_is_boundary[p] = is_boundary;
             if (!is_boundary) continue;
@@ -209,7 +218,8 @@ void evaporation_pass(const MoistureParams& mp, const SparseGrid& grid, const Mo
                 for (int a = 0; a < 3; ++a)
                     for (int b = 0; b < 3; ++b) {
                         const Real* row = ww + mpm::window_index(o0 + a, o1 + b, o2);
-                        fraction += ax.w[a] * ay.w[b] * (az.w[0] * row[0] + az.w[1] * row[1] + az.w[2] * row[2]);
+                        fraction += ax.w[a] * ay.w[b] *
+                                    (az.w[0] * row[0] + az.w[1] * row[1] + az.w[2] * row[2]);
                     }
                 mg.particle_is_boundary[p] = fraction * inv_cell_volume < kExposedVolumeFraction;
                 continue;
@@ -217,7 +227,8 @@ void evaporation_pass(const MoistureParams& mp, const SparseGrid& grid, const Mo
             const Real lambda_S = mp.lambda * particle_area(pp.V0[p] * pp.J[p]);
             // explicit: r_i = -S lambda (theta_p - theta_0) w_ip; implicit: r_0,i =
             // S lambda theta_0 w_ip, and S lambda w_ip^2 on the diagonal
-            const Real source = implicit_robin ? lambda_S * mp.theta0 : -lambda_S * (pp.theta[p] - mp.theta0);
+            const Real source =
+                implicit_robin ? lambda_S * mp.theta0 : -lambda_S * (pp.theta[p] - mp.theta0);
             // z rows of 4 lanes (4th z weight 0), as in the operator pass
             const Lanes wz(az.w[0], az.w[1], az.w[2], 0);
             for (int a = 0; a < 3; ++a)
@@ -255,9 +266,13 @@ constexpr int kOperatorBatch = 32;
 // gather contracts the rows over y, then over x; the scatter builds the z-row profiles per y once
 // and combines them per x. Particles go in batches, all gathers then all scatters: one particle's
 // gather-reduce-scatter is a long dependency chain, and the batch's gathers are independent.
+// @note Longer than a page on purpose: it is the CG's hot loop, one call per iteration (measured
+// by mpm_bench's Moisture cases and tools/bench_moisture_cost.sh), its batch's gathers and
+// scatters sharing the window and the row weights in one pass.
 template <bool kImplicitRobin>
 void operator_pass(const MoistureParams& mp, const SparseGrid& grid, const MoistureParticles& pp,
-                   const MoistureGrid& mg, const Real* x, Real* y, std::vector<std::vector<Real>>& windows) {
+                   const MoistureGrid& mg, const Real* x, Real* y,
+                   std::vector<std::vector<Real>>& windows) {
     const int64_t n_nodes = node_count(grid);
     parallel_chunks(n_nodes, [&](int, int64_t b, int64_t e) { std::fill(y + b, y + e, Real(0)); });
     const mpm::GridGeometry& geo = grid.geo;
@@ -272,7 +287,8 @@ void operator_pass(const MoistureParams& mp, const SparseGrid& grid, const Moist
         std::fill(xw + kWindowNodes, xw + kWindowStride, Real(0));
         std::fill(yw, yw + kWindowStride, Real(0));
         const Vec3i origin = geo.block_coord(grid.pblock_key[pb]) * kBlockWidth;
-        for (int32_t first = grid.pblock_begin[pb]; first < grid.pblock_begin[pb + 1]; first += kOperatorBatch) {
+        for (int32_t first = grid.pblock_begin[pb]; first < grid.pblock_begin[pb + 1];
+             first += kOperatorBatch) {
             const int count = std::min<int32_t>(kOperatorBatch, grid.pblock_begin[pb + 1] - first);
             // the batch's stencils first: its 4-lane z weights are built from scalar stores, and
             // a 4-lane load right after them stalls until they retire; a batch later they have
@@ -281,7 +297,8 @@ void operator_pass(const MoistureParams& mp, const SparseGrid& grid, const Moist
                 OperatorParticle& op = batch[k];
                 const mpm::Stencil st = mpm::make_stencil(geo.to_grid(pp.x[p]));
                 const mpm::AxisWeights &ax = st.axis[0], &ay = st.axis[1], &az = st.axis[2];
-                op.offset = mpm::window_index(ax.base - origin.x(), ay.base - origin.y(), az.base - origin.z());
+                op.offset = mpm::window_index(ax.base - origin.x(), ay.base - origin.y(),
+                                              az.base - origin.z());
                 for (int a = 0; a < 3; ++a) {
                     op.wx[a] = ax.w[a];
                     op.dwx[a] = ax.dw[a];
@@ -300,7 +317,8 @@ void operator_pass(const MoistureParams& mp, const SparseGrid& grid, const Moist
                 Lanes rx = Lanes::Zero(), ry = Lanes::Zero(), rs = Lanes::Zero();
                 for (int a = 0; a < 3; ++a) {
                     const Real* plane = xrow + a * kPlane;
-                    const Lanes r0 = load_lanes(plane), r1 = load_lanes(plane + kRow), r2 = load_lanes(plane + 2 * kRow);
+                    const Lanes r0 = load_lanes(plane), r1 = load_lanes(plane + kRow),
+                                r2 = load_lanes(plane + 2 * kRow);
                     const Lanes wy_rows = op.wy[0] * r0 + op.wy[1] * r1 + op.wy[2] * r2;
                     const Lanes dwy_rows = op.dwy[0] * r0 + op.dwy[1] * r1 + op.dwy[2] * r2;
                     rs += op.wx[a] * wy_rows;
@@ -315,7 +333,8 @@ void operator_pass(const MoistureParams& mp, const SparseGrid& grid, const Moist
                 op.gz = scale * (rs * op.dwz).sum();
                 op.robin = 0;
                 if constexpr (kImplicitRobin) {
-                    if (mg.particle_is_boundary[p]) op.robin = mp.lambda * particle_area(V) * (rs * op.wz).sum();
+                    if (mg.particle_is_boundary[p])
+                        op.robin = mp.lambda * particle_area(V) * (rs * op.wz).sum();
                 }
             }
             // scatter V D grad w_ip . g_p and the implicit Robin term lambda S w_ip s_p: per z row,
@@ -328,7 +347,8 @@ void operator_pass(const MoistureParams& mp, const SparseGrid& grid, const Moist
             auto flush_run = [&] {
                 if (run_offset < 0) return;
                 for (int a = 0; a < 3; ++a)
-                    for (int b = 0; b < 3; ++b) add_lanes(yw + run_offset + a * kPlane + b * kRow, rows[3 * a + b]);
+                    for (int b = 0; b < 3; ++b)
+                        add_lanes(yw + run_offset + a * kPlane + b * kRow, rows[3 * a + b]);
             };
             for (int k = 0; k < count; ++k) {
                 const OperatorParticle& op = batch[k];
@@ -357,7 +377,8 @@ void operator_pass(const MoistureParams& mp, const SparseGrid& grid, const Moist
 
 // y = L x (+ R x when the evaporation is implicit and on)
 void apply_stiffness(const MoistureParams& mp, const SparseGrid& grid, const MoistureParticles& pp,
-                     const MoistureGrid& mg, const Real* x, Real* y, std::vector<std::vector<Real>>& windows) {
+                     const MoistureGrid& mg, const Real* x, Real* y,
+                     std::vector<std::vector<Real>>& windows) {
     if (mp.implicit_robin && mp.lambda > 0)
         operator_pass<true>(mp, grid, pp, mg, x, y, windows);
     else
@@ -374,10 +395,10 @@ Real particle_area(Real volume) {
 }
 
 int64_t MoistureGrid::memory_bytes() const {
-    return capacity_bytes(W) + capacity_bytes(theta) + capacity_bytes(diag) + capacity_bytes(evaporation) +
-           capacity_bytes(x) + capacity_bytes(r) + capacity_bytes(p) + capacity_bytes(Ap) +
-           capacity_bytes(surface) + capacity_bytes(particle_is_boundary) + capacity_bytes(block_partial) +
-           capacity_bytes(block_face_neighbors);
+    return capacity_bytes(W) + capacity_bytes(theta) + capacity_bytes(diag) +
+           capacity_bytes(evaporation) + capacity_bytes(x) + capacity_bytes(r) + capacity_bytes(p) +
+           capacity_bytes(Ap) + capacity_bytes(surface) + capacity_bytes(particle_is_boundary) +
+           capacity_bytes(block_partial) + capacity_bytes(block_face_neighbors);
 }
 
 void begin_moisture_p2g(MoistureGrid& mg, const SparseGrid& grid) {
@@ -392,9 +413,10 @@ namespace {
 // Jacobi-preconditioned conjugate gradients on (M + L [+ R]) x = b, from the x, r and p that
 // solve_moisture set up (mg.diag holds the inverse Jacobi diagonal); b2 = |b|^2, rz0 = r.p,
 // r2 = |r|^2 of that start
-MoistureSolveStats conjugate_gradients(const MoistureParams& mp, const SparseGrid& grid, const MoistureParticles& pp,
-                                       Real dt, MoistureGrid& mg, std::vector<std::vector<Real>>& windows, Real b2,
-                                       Real rz0, Real r2) {
+MoistureSolveStats conjugate_gradients(const MoistureParams& mp, const SparseGrid& grid,
+                                       const MoistureParticles& pp, Real dt, MoistureGrid& mg,
+                                       std::vector<std::vector<Real>>& windows, Real b2, Real rz0,
+                                       Real r2) {
     const int64_t n_nodes = node_count(grid);
     const Real inv_dt = 1 / dt;
     const std::vector<Real>& inv_diag = mg.diag;
@@ -408,23 +430,26 @@ MoistureSolveStats conjugate_gradients(const MoistureParams& mp, const SparseGri
             // Ap = (M + L [+ R]) p
             apply_stiffness(mp, grid, pp, mg, mg.p.data(), mg.Ap.data(), windows);
             ++stats.iterations;
-            const Real pAp = block_sums<1>(grid, mg.block_partial, [&](int64_t i, std::array<Real, 1>& sum) {
-                mg.Ap[i] += mg.W[i] * inv_dt * mg.p[i];
-                sum[0] += mg.p[i] * mg.Ap[i];
-            })[0];
+            const Real pAp =
+                block_sums<1>(grid, mg.block_partial, [&](int64_t i, std::array<Real, 1>& sum) {
+                    mg.Ap[i] += mg.W[i] * inv_dt * mg.p[i];
+                    sum[0] += mg.p[i] * mg.Ap[i];
+                })[0];
             if (!(pAp > 0)) break;  // converged to round-off (or lost positivity): keep x
             const Real step = rz / pAp;
             // x += step p, r -= step Ap, and the new |r|^2 and r.D^-1 r
-            const std::array<Real, 2> next = block_sums<2>(grid, mg.block_partial, [&](int64_t i, std::array<Real, 2>& sum) {
-                mg.x[i] += step * mg.p[i];
-                mg.r[i] -= step * mg.Ap[i];
-                sum[0] += mg.r[i] * mg.r[i];
-                sum[1] += mg.r[i] * mg.r[i] * inv_diag[i];
-            });
+            const std::array<Real, 2> next =
+                block_sums<2>(grid, mg.block_partial, [&](int64_t i, std::array<Real, 2>& sum) {
+                    mg.x[i] += step * mg.p[i];
+                    mg.r[i] -= step * mg.Ap[i];
+                    sum[0] += mg.r[i] * mg.r[i];
+                    sum[1] += mg.r[i] * mg.r[i] * inv_diag[i];
+                });
             r_norm = std::sqrt(next[0]);
             const Real beta = next[1] / rz;
             rz = next[1];
-            parallel_for(n_nodes, [&](int64_t i) { mg.p[i] = mg.r[i] * inv_diag[i] + beta * mg.p[i]; });
+            parallel_for(n_nodes,
+                         [&](int64_t i) { mg.p[i] = mg.r[i] * inv_diag[i] + beta * mg.p[i]; });
         }
         stats.residual = r_norm / b_norm;
     }
@@ -433,9 +458,10 @@ MoistureSolveStats conjugate_gradients(const MoistureParams& mp, const SparseGri
 
 }  // namespace
 
-MoistureSolveStats solve_moisture(const MoistureParams& mp, const MoistureSeal& seal, const SparseGrid& grid,
-                                  const MoistureParticles& pp, Real dt, MoistureGrid& mg,
-                                  MoistureFluxHistory& history, std::vector<std::vector<Real>>& windows) {
+MoistureSolveStats solve_moisture(const MoistureParams& mp, const MoistureSeal& seal,
+                                  const SparseGrid& grid, const MoistureParticles& pp, Real dt,
+                                  MoistureGrid& mg, MoistureFluxHistory& history,
+                                  std::vector<std::vector<Real>>& windows) {
     const mpm::GridGeometry& geo = grid.geo;
     const int64_t n_nodes = node_count(grid);
     const Real inv_dt = 1 / dt;
@@ -466,8 +492,10 @@ MoistureSolveStats solve_moisture(const MoistureParams& mp, const MoistureSeal& 
     // plus the Jacobi step on the explicit evaporation, r / diag (it takes most of the
     // evaporation's share of the initial residual), plus the increment dt F / W of the flux F
     // the history predicts (most of the diffusion's share); x holds x0 - theta^n
-    if (mp.lambda > 0) evaporation_pass(mp, grid, pp, mg, windows);
-    else std::fill(mg.particle_is_boundary.begin(), mg.particle_is_boundary.end(), uint8_t(0));
+    if (mp.lambda > 0)
+        evaporation_pass(mp, grid, pp, mg, windows);
+    else
+        std::fill(mg.particle_is_boundary.begin(), mg.particle_is_boundary.end(), uint8_t(0));
     const bool explicit_evaporation =
         !mp.implicit_robin && mp.lambda > 0 && mp.evaporation == MoistureParams::Evaporation::Grid;
     const bool predicted = history.count > 0;
@@ -490,24 +518,25 @@ MoistureSolveStats solve_moisture(const MoistureParams& mp, const MoistureSeal& 
     // the small terms (the M theta^n parts cancel exactly); the first direction p = D^-1 r; and
     // with them |b|^2, r.p and |r|^2
     enum { kB2, kRZ, kR2 };
-    const std::array<Real, 3> initial = block_sums<3>(grid, mg.block_partial, [&](int64_t i, std::array<Real, 3>& sum) {
-        if (mg.W[i] > 0) {
-            const Real m = mg.W[i] * inv_dt;
-            const Real b = mg.evaporation[i] + m * mg.theta[i];
-            mg.r[i] = mg.evaporation[i] - m * mg.x[i] - mg.Ap[i];
-            mg.x[i] += mg.theta[i];
-            sum[kB2] += b * b;
-        } else {
-            mg.r[i] = mg.x[i] = 0;
-        }
-        mg.p[i] = mg.r[i] * inv_diag[i];
-        sum[kRZ] += mg.r[i] * mg.p[i];
-        sum[kR2] += mg.r[i] * mg.r[i];
-    });
+    const std::array<Real, 3> initial =
+        block_sums<3>(grid, mg.block_partial, [&](int64_t i, std::array<Real, 3>& sum) {
+            if (mg.W[i] > 0) {
+                const Real m = mg.W[i] * inv_dt;
+                const Real b = mg.evaporation[i] + m * mg.theta[i];
+                mg.r[i] = mg.evaporation[i] - m * mg.x[i] - mg.Ap[i];
+                mg.x[i] += mg.theta[i];
+                sum[kB2] += b * b;
+            } else {
+                mg.r[i] = mg.x[i] = 0;
+            }
+            mg.p[i] = mg.r[i] * inv_diag[i];
+            sum[kRZ] += mg.r[i] * mg.p[i];
+            sum[kR2] += mg.r[i] * mg.r[i];
+        });
 
     // Jacobi-preconditioned conjugate gradients
-    const MoistureSolveStats stats = conjugate_gradients(mp, grid, pp, dt, mg, windows, initial[kB2], initial[kRZ],
-                                                         initial[kR2]);
+    const MoistureSolveStats stats = conjugate_gradients(mp, grid, pp, dt, mg, windows,
+                                                         initial[kB2], initial[kRZ], initial[kR2]);
 
     // increment theta^{n+1} - theta^n for the FLIP G2P; the history records its part beyond the
     // evaporation's Jacobi step as a flux, (W / dt)(increment - r / diag), in the free Ap
@@ -518,7 +547,8 @@ MoistureSolveStats solve_moisture(const MoistureParams& mp, const MoistureSeal& 
         }
         const Real m = mg.W[i] * inv_dt;
         mg.x[i] -= mg.theta[i];
-        const Real evaporation_step = explicit_evaporation ? mg.evaporation[i] * inv_diag[i] : Real(0);
+        const Real evaporation_step =
+            explicit_evaporation ? mg.evaporation[i] * inv_diag[i] : Real(0);
         mg.Ap[i] = m * (mg.x[i] - evaporation_step);
     });
     record_moisture_flux(history, grid, mg.Ap.data(), dt);

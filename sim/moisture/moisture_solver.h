@@ -1,7 +1,8 @@
 #pragma once
 /// The implicit moisture diffusion on the MPM grid (Tu et al. 2023 Section 5.2; docs/physics.md
 /// §4):   (M + L) theta^{n+1} = M theta^n + r,   M_ii = W_i/dt,  W_i = sum_p V_p w_ip,
-///   L_ij = sum_p V_p D grad w_ip . grad w_jp,   r_i = -sum_{p boundary} S_p lambda (theta_p - theta_0) w_ip
+///   L_ij = sum_p V_p D grad w_ip . grad w_jp,   r_i = -sum_{p boundary} S_p lambda (theta_p -
+///   theta_0) w_ip
 /// (the minus sign of r is required, docs/physics.md §4.2), solved matrix-free with
 /// Jacobi-preconditioned CG from theta^n plus one Jacobi step on the explicit evaporation, theta^n
 /// + r / diag (that step removes most of the initial residual: usually one CG iteration reaches
@@ -11,24 +12,27 @@
 #include <vector>
 
 #include "sim/core/types.h"
-#include "sim/moisture/flux_history.h"
-#include "sim/model.h"
 #include "sim/grid/sparse_grid.h"
+#include "sim/model.h"
+#include "sim/moisture/flux_history.h"
 
 namespace mudcrack {
 
 /// Moisture node fields, (n_blocks * 64) each, and per-particle boundary flags.
 struct MoistureGrid {
-    std::vector<Real> W;        // sum_p V_p w_ip [m^3]
-    std::vector<Real> theta;    // (V theta)_i after the P2G, then theta_i^n
-    std::vector<Real> diag;     // sum_p V_p |grad w_ip|^2 after the P2G, the Jacobi diagonal, its inverse
-    std::vector<Real> evaporation;  // r (explicit), or r_0 = sum S lambda theta_0 w (implicit Robin)
-    std::vector<Real> x;        // CG iterate; after the solve: theta^{n+1} - theta^n
-    std::vector<Real> r, p, Ap; // CG residual, direction, operator times direction
-    std::vector<Real> surface;  // 1 at surface nodes (docs/physics.md §4.4), else 0
+    std::vector<Real> W;      // sum_p V_p w_ip [m^3]
+    std::vector<Real> theta;  // (V theta)_i after the P2G, then theta_i^n
+    // sum_p V_p |grad w_ip|^2 after the P2G, the Jacobi diagonal, its inverse
+    std::vector<Real> diag;
+    // r (explicit), or r_0 = sum S lambda theta_0 w (implicit Robin)
+    std::vector<Real> evaporation;
+    std::vector<Real> x;         // CG iterate; after the solve: theta^{n+1} - theta^n
+    std::vector<Real> r, p, Ap;  // CG residual, direction, operator times direction
+    std::vector<Real> surface;   // 1 at surface nodes (docs/physics.md §4.4), else 0
     std::vector<uint8_t> particle_is_boundary;  // per slot: evaporates this step
     std::vector<Real> block_partial;            // per-block partial sums (deterministic dots)
-    std::vector<std::array<int32_t, 6>> block_face_neighbors;  // slots of the 6 face-adjacent blocks or -1
+    // slots of the 6 face-adjacent blocks or -1
+    std::vector<std::array<int32_t, 6>> block_face_neighbors;
 
     int64_t memory_bytes() const;
 };
@@ -36,9 +40,9 @@ struct MoistureGrid {
 /// Which empty neighbours of a surface node are walls rather than air (docs/physics.md §4.4 item
 /// 3).
 struct MoistureSeal {
-    bool seal_colliders = true;   // faces against the ground / domain walls do not evaporate
+    bool seal_colliders = true;  // faces against the ground / domain walls do not evaporate
     bool has_ground = false;
-    Real ground_height = 0;       // [m]
+    Real ground_height = 0;  // [m]
 };
 
 /// The particles as the moisture solve reads them, in slot order.
@@ -50,8 +54,8 @@ struct MoistureParticles {
 };
 
 struct MoistureSolveStats {
-    int iterations = 0;      // CG iterations (operator applications after the initial residual)
-    Real residual = 0;       // final ||b - A x|| / ||b||
+    int iterations = 0;  // CG iterations (operator applications after the initial residual)
+    Real residual = 0;   // final ||b - A x|| / ||b||
 };
 
 /// Resizes and zeroes the node fields the P2G accumulates (W, theta, diag) for the current grid.

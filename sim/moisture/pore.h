@@ -41,9 +41,9 @@ constexpr Real kPoreSeriesLimit = 1e-3;
 
 /// One step of the pore update of a particle.
 struct PoreStep {
-    Real Jw = 1;        // new pore determinant
-    Real Fe_scale = 1;  // multiply Fe (trial) by this: (Jw_old / Jw_new)^(1/3)  (Eq. 10)
-    Real log_ratio = 0; // log(Jw_new / Jw_old), for the hardening alpha += eps log_ratio (Eq. 12)
+    Real Jw = 1;         // new pore determinant
+    Real Fe_scale = 1;   // multiply Fe (trial) by this: (Jw_old / Jw_new)^(1/3)  (Eq. 10)
+    Real log_ratio = 0;  // log(Jw_new / Jw_old), for the hardening alpha += eps log_ratio (Eq. 12)
 };
 
 /// Moves J_w towards the target 1 - eta (1 - s) of the particle's current saturation, with
@@ -65,13 +65,17 @@ inline PoreStep pore_step(Real Jw_old, Real saturation, Real eta, Real max_log_s
         // and side by side rather than one after the other: they sit on the particle loop's
         // dependency chain
         const Real l =
-            rel * (1 - rel * (Real(1) / 2 -
-                              rel * (Real(1) / 3 - rel * (Real(1) / 4 - rel * (Real(1) / 5 - rel * (Real(1) / 6))))));
+            rel *
+            (1 - rel * (Real(1) / 2 -
+                        rel * (Real(1) / 3 -
+                               rel * (Real(1) / 4 - rel * (Real(1) / 5 - rel * (Real(1) / 6))))));
         r.log_ratio = l;
         r.Jw = target;
-        r.Fe_scale = 1 + rel * (Real(-1) / 3 +
-                                rel * (Real(2) / 9 +
-                                       rel * (Real(-14) / 81 + rel * (Real(35) / 243 + rel * (Real(-91) / 729)))));
+        r.Fe_scale =
+            1 +
+            rel * (Real(-1) / 3 +
+                   rel * (Real(2) / 9 + rel * (Real(-14) / 81 +
+                                               rel * (Real(35) / 243 + rel * (Real(-91) / 729)))));
         if (max_log_step <= 0 || std::abs(l) <= max_log_step) return r;
     }
     const Real log_ratio = std::log1p(rel);

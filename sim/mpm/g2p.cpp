@@ -4,11 +4,11 @@
 
 #include <immintrin.h>
 
+#include "sim/grid/bspline.h"
 #include "sim/material/damage.h"
 #include "sim/material/nacc.h"
 #include "sim/material/neo_hookean.h"
 #include "sim/moisture/pore.h"
-#include "sim/grid/bspline.h"
 #include "sim/mpm/transfer.h"
 
 namespace mudcrack::mpm {
@@ -25,8 +25,9 @@ constexpr Real kInsideMargin = 1e-9;
 // (J = det Fe; ||dev b_hat|| is the rotation-invariant ||dev(Fe Fe^T)||). True only when the
 // state is inside with a relative margin, so the return map (which would return Fe unchanged) can
 // be skipped; near the surface and at the tips the full kernel decides.
-inline bool clearly_inside_yield_surface(const NeoHookeanTerms& fe, Real alpha, Real beta, Real strength,
-                                         const NaccParams& nacc, const LameParams& lame) {
+inline bool clearly_inside_yield_surface(const NeoHookeanTerms& fe, Real alpha, Real beta,
+                                         Real strength, const NaccParams& nacc,
+                                         const LameParams& lame) {
     const Real J = fe.J;
     if (!(J > 0)) return false;
     // p0 from below (its ulps of rounding are far inside kInsideMargin): a smaller ellipse,
@@ -48,13 +49,15 @@ inline bool clearly_inside_yield_surface(const NeoHookeanTerms& fe, Real alpha, 
 // fused-multiply-added into B_p; w dtheta_i fused into dth) in both versions below, so their
 // results are the same bits.
 template <bool kTheta>
-inline void gather_velocity(const Real* win, int o0, int o1, int o2, const AxisWeights& ax, const AxisWeights& ay,
-                            const AxisWeights& az, Vec3& vp, Mat3& B, Real& dth) {
+inline void gather_velocity(const Real* win, int o0, int o1, int o2, const AxisWeights& ax,
+                            const AxisWeights& ay, const AxisWeights& az, Vec3& vp, Mat3& B,
+                            Real& dth) {
 #if defined(__AVX__) && defined(__FMA__)
     // one node's (v, dtheta) as a 4-lane vector: each update is one instruction for v_p and one
     // per column of B_p, instead of a 2-lane and a scalar one
     __m256d v_sum = _mm256_setzero_pd(), b0 = v_sum, b1 = v_sum, b2 = v_sum, th_sum = v_sum;
-    const __m256d dz[3] = {_mm256_set1_pd(0 - az.fx), _mm256_set1_pd(1 - az.fx), _mm256_set1_pd(2 - az.fx)};
+    const __m256d dz[3] = {_mm256_set1_pd(0 - az.fx), _mm256_set1_pd(1 - az.fx),
+                           _mm256_set1_pd(2 - az.fx)};
     for (int a = 0; a < 3; ++a)
         for (int b = 0; b < 3; ++b) {
             const Real wab = ax.w[a] * ay.w[b];
@@ -108,8 +111,9 @@ inline void gather_velocity(const Real* win, int o0, int o1, int o2, const AxisW
 // plasticity, advection, checks) sharing locals in one pass; the kernels it calls are the
 // small, tested functions.
 template <bool kTheta, bool kPore, bool kNacc>
-G2PResult g2p_impl(const SimModel& model, SimState& state, const SparseGrid& grid, const MoistureUpdate& moisture,
-                   Real dt, std::vector<std::vector<Real>>& windows, SymMat3* tau) {
+G2PResult g2p_impl(const SimModel& model, SimState& state, const SparseGrid& grid,
+                   const MoistureUpdate& moisture, Real dt, std::vector<std::vector<Real>>& windows,
+                   SymMat3* tau) {
     const Real* dtheta = moisture.dtheta;
     const GridGeometry& geo = grid.geo;
     const Real h = geo.h;
@@ -125,7 +129,8 @@ G2PResult g2p_impl(const SimModel& model, SimState& state, const SparseGrid& gri
     // surface evaporation: theta - theta0 decays as exp(-lambda S_p dt_m / V_p) on the exposed
     // layer, with S_p = c V_p^(2/3) (particle_area), so the rate is lambda c V_p^(-1/3)
     const uint8_t* evaporating = kTheta ? moisture.evaporating : nullptr;
-    const Real evaporation_rate_dt = evaporating ? moist.lambda * moisture.dt * particle_area(1) : Real(0);
+    const Real evaporation_rate_dt =
+        evaporating ? moist.lambda * moisture.dt * particle_area(1) : Real(0);
     // particles stay inside the box with a full stencil on the grid
     const Vec3 lo = geo.origin + Vec3::Constant(h);
     const Vec3 hi = geo.origin + (geo.cells.cast<Real>() - Vec3::Ones()) * h;
@@ -142,7 +147,8 @@ G2PResult g2p_impl(const SimModel& model, SimState& state, const SparseGrid& gri
             const WindowMap& map = window_map();
             const std::array<int32_t, 8>& nb = grid.pblock_neighbors[pb];
             for (int n = 0; n < kWindowNodes; ++n)
-                win[n * kStride + 3] = dtheta[static_cast<int64_t>(nb[map.neighbor[n]]) * kBlockNodes + map.local[n]];
+                win[n * kStride + 3] =
+                    dtheta[static_cast<int64_t>(nb[map.neighbor[n]]) * kBlockNodes + map.local[n]];
         }
         const Vec3i origin = geo.block_coord(grid.pblock_key[pb]) * kBlockWidth;
         Real speed2 = max_speed2[t];
@@ -150,7 +156,8 @@ G2PResult g2p_impl(const SimModel& model, SimState& state, const SparseGrid& gri
             const int32_t p = grid.order[i];
             const Stencil st = make_stencil(geo.to_grid(state.x[p]));
             const AxisWeights &ax = st.axis[0], &ay = st.axis[1], &az = st.axis[2];
-            const int o0 = ax.base - origin.x(), o1 = ay.base - origin.y(), o2 = az.base - origin.z();
+            const int o0 = ax.base - origin.x(), o1 = ay.base - origin.y(),
+                      o2 = az.base - origin.z();
 
             // gather v_p, B_p = sum w v_i (x_i - x_p)^T / h and the theta increment
             Vec3 vp;
@@ -176,8 +183,9 @@ G2PResult g2p_impl(const SimModel& model, SimState& state, const SparseGrid& gri
                     theta = std::clamp(theta + dth, Real(0), moist.eta);
                     if (evaporating && evaporating[p]) {
                         const Real V = state.V0[p] * J_start;
-                        theta = moist.theta0 + (theta - moist.theta0) *
-                                                   std::exp(-evaporation_rate_dt * std::exp(-std::log(V) / 3));
+                        theta = moist.theta0 +
+                                (theta - moist.theta0) *
+                                    std::exp(-evaporation_rate_dt * std::exp(-std::log(V) / 3));
                     }
                 }
                 state.theta[p] = theta;
@@ -200,19 +208,24 @@ G2PResult g2p_impl(const SimModel& model, SimState& state, const SparseGrid& gri
             if constexpr (kNacc) {
                 const Real strength = has_strength ? state.strength[p] : Real(1);
                 if (has_damage) beta = damaged_cohesion(beta, state.damage[p]);
-                is_elastic = clearly_inside_yield_surface(trial_terms, alpha, beta, strength, nacc, lame);
+                is_elastic =
+                    clearly_inside_yield_surface(trial_terms, alpha, beta, strength, nacc, lame);
                 if (is_elastic) {
-                    state.alpha[p] = alpha;  // and Fe_trial is what the return map returns (case 3a)
+                    // and Fe_trial is what the return map returns (case 3a)
+                    state.alpha[p] = alpha;
                 } else {
-                    const NaccReturn r = nacc_return_map(Fe_trial, alpha, beta, nacc, lame, false, strength);
+                    const NaccReturn r =
+                        nacc_return_map(Fe_trial, alpha, beta, nacc, lame, false, strength);
                     if (has_damage)
-                        state.damage[p] = damage_after_return(state.damage[p], alpha, r.alpha, nacc.damage_strain);
+                        state.damage[p] = damage_after_return(state.damage[p], alpha, r.alpha,
+                                                              nacc.damage_strain);
                     state.Fe[p] = r.Fe;
                     state.alpha[p] = r.alpha;
                 }
             }
             if (is_elastic) state.Fe[p] = Fe_trial;
-            tau[p] = neo_hookean_kirchhoff(is_elastic ? trial_terms : neo_hookean_terms(state.Fe[p], lame), lame);
+            tau[p] = neo_hookean_kirchhoff(
+                is_elastic ? trial_terms : neo_hookean_terms(state.Fe[p], lame), lame);
 
             // advect, clamped into the domain box
             Vec3 x = state.x[p] + dt * vp;
@@ -226,7 +239,8 @@ G2PResult g2p_impl(const SimModel& model, SimState& state, const SparseGrid& gri
             Real check = x.sum() + vp.sum() + state.Fe[p].sum() + state.J[p];
             if constexpr (kNacc) check += state.alpha[p];
             if constexpr (kPore) check += state.theta[p];
-            if ((!std::isfinite(check) || !(state.J[p] > 0)) && (bad[t] < 0 || p < bad[t])) bad[t] = p;
+            if ((!std::isfinite(check) || !(state.J[p] > 0)) && (bad[t] < 0 || p < bad[t]))
+                bad[t] = p;
             speed2 = std::max(speed2, vp.squaredNorm());
         }
         max_speed2[t] = speed2;
@@ -235,16 +249,18 @@ G2PResult g2p_impl(const SimModel& model, SimState& state, const SparseGrid& gri
     G2PResult result;
     for (int t = 0; t < nt; ++t) {
         result.max_speed = std::max(result.max_speed, std::sqrt(max_speed2[t]));
-        if (bad[t] >= 0 && (result.bad_slot < 0 || bad[t] < result.bad_slot)) result.bad_slot = bad[t];
+        if (bad[t] >= 0 && (result.bad_slot < 0 || bad[t] < result.bad_slot))
+            result.bad_slot = bad[t];
     }
     return result;
 }
 
 template <bool kTheta, bool kPore>
 G2PResult dispatch_nacc(const SimModel& model, SimState& state, const SparseGrid& grid,
-                        const MoistureUpdate& moisture, Real dt, std::vector<std::vector<Real>>& windows,
-                        SymMat3* tau) {
-    if (model.nacc) return g2p_impl<kTheta, kPore, true>(model, state, grid, moisture, dt, windows, tau);
+                        const MoistureUpdate& moisture, Real dt,
+                        std::vector<std::vector<Real>>& windows, SymMat3* tau) {
+    if (model.nacc)
+        return g2p_impl<kTheta, kPore, true>(model, state, grid, moisture, dt, windows, tau);
     return g2p_impl<kTheta, kPore, false>(model, state, grid, moisture, dt, windows, tau);
 }
 
@@ -253,8 +269,10 @@ G2PResult dispatch_nacc(const SimModel& model, SimState& state, const SparseGrid
 G2PResult grid_to_particle(const SimModel& model, SimState& state, const SparseGrid& grid,
                            const MoistureUpdate& moisture, bool pore_update, Real dt,
                            std::vector<std::vector<Real>>& windows, SymMat3* tau) {
-    if (moisture.dtheta) return dispatch_nacc<true, true>(model, state, grid, moisture, dt, windows, tau);
-    if (pore_update) return dispatch_nacc<false, true>(model, state, grid, MoistureUpdate{}, dt, windows, tau);
+    if (moisture.dtheta)
+        return dispatch_nacc<true, true>(model, state, grid, moisture, dt, windows, tau);
+    if (pore_update)
+        return dispatch_nacc<false, true>(model, state, grid, MoistureUpdate{}, dt, windows, tau);
     return dispatch_nacc<false, false>(model, state, grid, MoistureUpdate{}, dt, windows, tau);
 }
 

@@ -22,9 +22,7 @@ inline void apply_friction(Vec3& v, Real v_n, Real mu_f) {
 inline void apply_ground(const GroundParams& g, Vec3& v) {
     const Real v_n = v.y();
     switch (g.mode) {
-        case ColliderMode::Sticky:
-            v.setZero();
-            return;
+        case ColliderMode::Sticky: v.setZero(); return;
         case ColliderMode::Slip:
             v.y() = 0;
             apply_friction(v, v_n, g.friction);
@@ -64,7 +62,8 @@ void update_grid_velocity(const SimModel& model, SparseGrid& grid, Real dt) {
                            node[3] * inv_m + dv_gravity.z());
                     const Vec3i g = corner + Vec3i(a, bb, c);
                     // ground collider on nodes inside or on the plane
-                    if (has_ground && geo.origin.y() + geo.h * g.y() <= ground.height) apply_ground(ground, v);
+                    if (has_ground && geo.origin.y() + geo.h * g.y() <= ground.height)
+                        apply_ground(ground, v);
                     // domain walls: nodes in the padding band lose their outward component
                     for (int d = 0; d < 3; ++d) {
                         if (g[d] < pad && v[d] < 0) v[d] = 0;

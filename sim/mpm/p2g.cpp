@@ -7,8 +7,8 @@
 #include <Eigen/Core>
 
 #include "sim/core/parallel.h"
-#include "sim/material/neo_hookean.h"
 #include "sim/grid/bspline.h"
+#include "sim/material/neo_hookean.h"
 #include "sim/mpm/transfer.h"
 
 namespace mudcrack::mpm {
@@ -21,9 +21,12 @@ namespace {
 constexpr int kMoistureStride = kWindowNodes + 8;
 using Lanes = Eigen::Array<Real, 4, 1>;
 
+// @note Longer than a page on purpose: its body is the step's per-particle scatter, a hot loop
+// (the P2G share of mpm_bench's particle-steps/s), each particle's weights, stress and moisture
+// terms sharing locals in one pass over its window.
 template <bool kMoisture>
-void p2g_impl(const SimState& state, const SymMat3* kirchhoff, SparseGrid& grid,
-              MoistureGrid* mg, Real dt, std::vector<std::vector<Real>>& windows) {
+void p2g_impl(const SimState& state, const SymMat3* kirchhoff, SparseGrid& grid, MoistureGrid* mg,
+              Real dt, std::vector<std::vector<Real>>& windows) {
     constexpr int kStride = kNodeFields;
     const GridGeometry& geo = grid.geo;
     const Real h = geo.h;
@@ -39,13 +42,15 @@ void p2g_impl(const SimState& state, const SymMat3* kirchhoff, SparseGrid& grid,
     for_each_pblock_colored(grid, [&](int t, int32_t pb) {
         Real* win = windows[t].data();
         Real* mw = win + kWindowNodes * kStride;  // moisture windows
-        std::fill(win, win + kWindowNodes * kStride + (kMoisture ? 3 * kMoistureStride : 0), Real(0));
+        std::fill(win, win + kWindowNodes * kStride + (kMoisture ? 3 * kMoistureStride : 0),
+                  Real(0));
         const Vec3i origin = geo.block_coord(grid.pblock_key[pb]) * kBlockWidth;
         for (int32_t i = grid.pblock_begin[pb]; i < grid.pblock_begin[pb + 1]; ++i) {
             const int32_t p = grid.order[i];
             const Stencil st = make_stencil(geo.to_grid(x[p]));
             const AxisWeights &ax = st.axis[0], &ay = st.axis[1], &az = st.axis[2];
-            const int o0 = ax.base - origin.x(), o1 = ay.base - origin.y(), o2 = az.base - origin.z();
+            const int o0 = ax.base - origin.x(), o1 = ay.base - origin.y(),
+                      o2 = az.base - origin.z();
 
             // affine momentum with the stress folded in: A_p = m C - dt V0 (4/h^2) tau
             const Real m = mass[p];
@@ -60,7 +65,8 @@ void p2g_impl(const SimState& state, const SymMat3* kirchhoff, SparseGrid& grid,
             const Real dc[4] = {0, Ah(0, 2), Ah(1, 2), Ah(2, 2)};
             // the moisture rows' z profiles, scaled once per particle: V wz, V theta wz, V wz^2
             // and V dwz^2 (each row then takes one multiply-add per field)
-            Lanes V_wz = Lanes::Zero(), Vtheta_wz = Lanes::Zero(), V_wz2 = Lanes::Zero(), V_dwz2 = Lanes::Zero();
+            Lanes V_wz = Lanes::Zero(), Vtheta_wz = Lanes::Zero(), V_wz2 = Lanes::Zero(),
+                  V_dwz2 = Lanes::Zero();
             if constexpr (kMoisture) {
                 const Real V = V0[p] * J[p];
                 const Lanes wz(az.w[0], az.w[1], az.w[2], 0);
@@ -80,14 +86,16 @@ void p2g_impl(const SimState& state, const SymMat3* kirchhoff, SparseGrid& grid,
                     // the loop below as 4-lane vectors with each product fused into its sum, as
                     // the compiler contracts the scalar loop (a da, b db and c dc are exact for
                     // 0, 1, 2, so fused or not those sums round alike): the same window bits
-                    const __m256d q = _mm256_fmadd_pd(_mm256_set1_pd(Real(b)), _mm256_loadu_pd(db),
-                                                      _mm256_fmadd_pd(_mm256_set1_pd(Real(a)), _mm256_loadu_pd(da),
-                                                                      _mm256_loadu_pd(base)));
+                    const __m256d q = _mm256_fmadd_pd(
+                        _mm256_set1_pd(Real(b)), _mm256_loadu_pd(db),
+                        _mm256_fmadd_pd(_mm256_set1_pd(Real(a)), _mm256_loadu_pd(da),
+                                        _mm256_loadu_pd(base)));
                     const __m256d dc4 = _mm256_loadu_pd(dc);
                     for (int c = 0; c < 3; ++c) {
                         Real* node = row + c * kStride;
                         const __m256d t = _mm256_fmadd_pd(_mm256_set1_pd(Real(c)), dc4, q);
-                        _mm256_storeu_pd(node, _mm256_fmadd_pd(_mm256_set1_pd(wab * az.w[c]), t, _mm256_loadu_pd(node)));
+                        _mm256_storeu_pd(node, _mm256_fmadd_pd(_mm256_set1_pd(wab * az.w[c]), t,
+                                                               _mm256_loadu_pd(node)));
                     }
 #else
                     Real q[4];
@@ -127,8 +135,9 @@ void p2g_impl(const SimState& state, const SymMat3* kirchhoff, SparseGrid& grid,
 void kirchhoff_stresses(const SimModel& model, const SimState& state, std::vector<SymMat3>& tau) {
     const LameParams lame = lame_params(model.elastic);
     tau.resize(state.size());
-    parallel_for(static_cast<int64_t>(state.size()),
-                 [&](int64_t p) { tau[p] = neo_hookean_kirchhoff(neo_hookean_terms(state.Fe[p], lame), lame); });
+    parallel_for(static_cast<int64_t>(state.size()), [&](int64_t p) {
+        tau[p] = neo_hookean_kirchhoff(neo_hookean_terms(state.Fe[p], lame), lame);
+    });
 }
 
 void particle_to_grid(const SimState& state, const SymMat3* tau, SparseGrid& grid,

@@ -30,20 +30,23 @@ constexpr Real kAutoDomainMargin = 0.5;
 // reorders an array of Real-component elements (Real, Vec3, Mat3) so slot i takes slot order[i],
 // one component at a time through an n-Real buffer
 template <class T>
-void permute_components(std::vector<T>& a, const std::vector<int32_t>& order, std::vector<Real>& buf) {
+void permute_components(std::vector<T>& a, const std::vector<int32_t>& order,
+                        std::vector<Real>& buf) {
     if (a.empty()) return;
     constexpr int kComp = static_cast<int>(sizeof(T) / sizeof(Real));
     static_assert(kComp * sizeof(Real) == sizeof(T), "element must be made of Reals");
     Real* data = reinterpret_cast<Real*>(a.data());
     const int64_t n = static_cast<int64_t>(a.size());
     for (int k = 0; k < kComp; ++k) {
-        parallel_for(n, [&](int64_t i) { buf[i] = data[static_cast<int64_t>(order[i]) * kComp + k]; });
+        parallel_for(n,
+                     [&](int64_t i) { buf[i] = data[static_cast<int64_t>(order[i]) * kComp + k]; });
         parallel_for(n, [&](int64_t i) { data[i * kComp + k] = buf[i]; });
     }
 }
 
 // reorders a slot-index array (id) through the same Real buffer: int32 values are exact in a double
-void permute_components(std::vector<int32_t>& a, const std::vector<int32_t>& order, std::vector<Real>& buf) {
+void permute_components(std::vector<int32_t>& a, const std::vector<int32_t>& order,
+                        std::vector<Real>& buf) {
     const int64_t n = static_cast<int64_t>(a.size());
     parallel_for(n, [&](int64_t i) { buf[i] = static_cast<Real>(a[order[i]]); });
     parallel_for(n, [&](int64_t i) { a[i] = static_cast<int32_t>(buf[i]); });
@@ -51,7 +54,8 @@ void permute_components(std::vector<int32_t>& a, const std::vector<int32_t>& ord
 
 void permute_state(SimState& s, const std::vector<int32_t>& order, std::vector<Real>& buf) {
     buf.resize(s.size());
-    s.for_each_array([&](const char*, auto& array, ArrayPresence) { permute_components(array, order, buf); });
+    s.for_each_array(
+        [&](const char*, auto& array, ArrayPresence) { permute_components(array, order, buf); });
 }
 
 bool is_identity(const std::vector<int32_t>& order) {
@@ -62,7 +66,8 @@ bool is_identity(const std::vector<int32_t>& order) {
 
 SimWorkspace& ensure_workspace(const SimModel& model, SimState& state) {
     SimWorkspace& ws = state.workspace.get_or_create();
-    ws.grid.geo = mpm::make_grid_geometry(state.domain_min, state.domain_max, model.h, model.domain.padding);
+    ws.grid.geo =
+        mpm::make_grid_geometry(state.domain_min, state.domain_max, model.h, model.domain.padding);
     const int nt = std::max(1, thread_count());
     ws.windows.resize(nt);
     for (auto& w : ws.windows) w.resize(mpm::kWindowNodes * 8);
@@ -76,7 +81,8 @@ void bin_and_sort(SimState& state, SimWorkspace& ws, bool force_sort, bool tau_i
     if ((force_sort || state.step_count % kResortInterval == 0) && !is_identity(ws.grid.order)) {
         permute_state(state, ws.grid.order, ws.permute_buffer);
         if (tau_is_current) permute_components(ws.tau, ws.grid.order, ws.permute_buffer);
-        for (size_t i = 0; i < ws.grid.order.size(); ++i) ws.grid.order[i] = static_cast<int32_t>(i);
+        for (size_t i = 0; i < ws.grid.order.size(); ++i)
+            ws.grid.order[i] = static_cast<int32_t>(i);
     }
 }
 
@@ -101,8 +107,9 @@ std::string describe_non_finite(const SimState& s, size_t p, int64_t substep) {
         what = "non-finite water content theta";
     if (!what) return {};
     std::ostringstream os;
-    os << "substep " << substep << ": particle " << s.id[p] << " has " << what << " (theta="
-       << (s.theta.empty() ? std::string("n/a") : std::to_string(s.theta[p])) << ", J=" << s.J[p]
+    os << "substep " << substep << ": particle " << s.id[p] << " has " << what
+       << " (theta=" << (s.theta.empty() ? std::string("n/a") : std::to_string(s.theta[p]))
+       << ", J=" << s.J[p]
        << ", alpha=" << (s.alpha.empty() ? std::string("n/a") : std::to_string(s.alpha[p]))
        << ", |v|=" << s.v[p].norm() << ")";
     return os.str();
@@ -119,22 +126,27 @@ std::string find_non_finite(const SimState& s, int64_t substep) {
 }
 
 // the initial particles' checks: sizes agree, positions and volumes finite, strengths > 0
-void check_initial_particles(const SimModel& model, const std::vector<Vec3>& X, const std::vector<Real>& V0,
-                             const std::vector<Real>& strength) {
+void check_initial_particles(const SimModel& model, const std::vector<Vec3>& X,
+                             const std::vector<Real>& V0, const std::vector<Real>& strength) {
     const size_t n = X.size();
-    if (n == 0) throw InputError("initial particles: the particle set is empty: need at least one particle");
+    if (n == 0)
+        throw InputError(
+            "initial particles: the particle set is empty: need at least one particle");
     if (V0.size() != n) {
         std::ostringstream os;
-        os << "initial particles: " << V0.size() << " rest volumes for " << n << " positions: must match";
+        os << "initial particles: " << V0.size() << " rest volumes for " << n
+           << " positions: must match";
         throw InputError(os.str());
     }
     // the shot spec refuses a bad /sim/h with the file, key and value; here it is a precondition
     MC_CHECK(model.h > 0 && std::isfinite(model.h));
     if (!strength.empty()) {
-        if (!model.nacc) throw InputError("initial particles: a strength field needs plasticity (/plasticity)");
+        if (!model.nacc)
+            throw InputError("initial particles: a strength field needs plasticity (/plasticity)");
         if (strength.size() != n) {
             std::ostringstream os;
-            os << "initial particles: " << strength.size() << " strength values for " << n << " positions: must match";
+            os << "initial particles: " << strength.size() << " strength values for " << n
+               << " positions: must match";
             throw InputError(os.str());
         }
         for (size_t p = 0; p < n; ++p)
@@ -148,8 +160,8 @@ void check_initial_particles(const SimModel& model, const std::vector<Vec3>& X, 
     for (size_t p = 0; p < n; ++p) {
         if (!X[p].allFinite() || !(V0[p] > 0) || !std::isfinite(V0[p])) {
             std::ostringstream os;
-            os << "initial particles: particle " << p << " has position (" << X[p].transpose() << ") and volume0 "
-               << V0[p] << ": need a finite position and a finite volume > 0";
+            os << "initial particles: particle " << p << " has position (" << X[p].transpose()
+               << ") and volume0 " << V0[p] << ": need a finite position and a finite volume > 0";
             throw InputError(os.str());
         }
     }
@@ -167,7 +179,9 @@ void set_domain(const SimModel& model, const std::vector<Vec3>& X, SimState& s) 
     if (model.domain.is_auto) {
         const Vec3 extent = hi - lo;
         for (int d = 0; d < 3; ++d) {
-            const Real margin = std::max(kAutoDomainMargin * extent[d], Real(kAutoDomainCellsBelow) * h) + (pad + 1) * h;
+            const Real margin =
+                std::max(kAutoDomainMargin * extent[d], Real(kAutoDomainCellsBelow) * h) +
+                (pad + 1) * h;
             s.domain_min[d] = lo[d] - margin;
             s.domain_max[d] = hi[d] + margin;
             // a free body: whole cells on both sides of a node at the particles' centre. On a
@@ -183,11 +197,13 @@ void set_domain(const SimModel& model, const std::vector<Vec3>& X, SimState& s) 
         }
         // with a ground: below, a few free cells under the ground or the lowest particle
         if (model.ground)
-            s.domain_min.y() = std::min(lo.y(), model.ground->height) - (kAutoDomainCellsBelow + pad + 1) * h;
+            s.domain_min.y() =
+                std::min(lo.y(), model.ground->height) - (kAutoDomainCellsBelow + pad + 1) * h;
     } else {
         s.domain_min = model.domain.min;
         s.domain_max = model.domain.max;
-        const Vec3 inner_lo = s.domain_min + Vec3::Constant(h), inner_hi = s.domain_max - Vec3::Constant(h);
+        const Vec3 inner_lo = s.domain_min + Vec3::Constant(h),
+                   inner_hi = s.domain_max - Vec3::Constant(h);
         if (!((lo.array() >= inner_lo.array()).all() && (hi.array() <= inner_hi.array()).all())) {
             std::ostringstream os;
             os << "domain [" << s.domain_min.transpose() << "] - [" << s.domain_max.transpose()
@@ -200,8 +216,8 @@ void set_domain(const SimModel& model, const std::vector<Vec3>& X, SimState& s) 
 
 }  // namespace
 
-SimState make_initial_state(const SimModel& model, const std::vector<Vec3>& X, const std::vector<Real>& V0,
-                            const std::vector<Real>& strength) {
+SimState make_initial_state(const SimModel& model, const std::vector<Vec3>& X,
+                            const std::vector<Real>& V0, const std::vector<Real>& strength) {
     check_initial_particles(model, X, V0, strength);
     const size_t n = X.size();
 
@@ -224,7 +240,8 @@ SimState make_initial_state(const SimModel& model, const std::vector<Vec3>& X, c
         const Real sat = saturation_of(theta, mp.eta);
         s.theta.assign(n, theta);
         s.Jw.assign(n, pore_jw(sat, mp.eta));
-        for (size_t p = 0; p < n; ++p) s.mass[p] = moist_mass(V0[p], model.elastic.density, sat, mp);
+        for (size_t p = 0; p < n; ++p)
+            s.mass[p] = moist_mass(V0[p], model.elastic.density, sat, mp);
     } else {
         for (size_t p = 0; p < n; ++p) s.mass[p] = V0[p] * model.elastic.density;
     }
@@ -259,7 +276,8 @@ Real stable_dt(const SimModel& model, const SimState& state) {
     if (c_p > 0) dt = std::min(dt, model.time.cfl_elastic * model.h / c_p);
     // velocity bound
     const Real max_v2 = parallel_reduce(
-        static_cast<int64_t>(state.size()), Real(0), [&](int64_t p) { return state.v[p].squaredNorm(); },
+        static_cast<int64_t>(state.size()), Real(0),
+        [&](int64_t p) { return state.v[p].squaredNorm(); },
         [](Real a, Real b) { return std::max(a, b); });
     if (max_v2 > 0) dt = std::min(dt, model.time.cfl_velocity * model.h / std::sqrt(max_v2));
     return dt;
@@ -306,9 +324,11 @@ StepStats step(const SimModel& model, SimState& state, Real dt) {
         seal.seal_colliders = model.moisture->seal_colliders;
         seal.has_ground = model.ground.has_value();
         if (seal.has_ground) seal.ground_height = model.ground->height;
-        const MoistureParticles mp{state.x.data(), state.V0.data(), state.J.data(), state.theta.data()};
-        const MoistureSolveStats ms = solve_moisture(*model.moisture, seal, ws.grid, mp, interval * dt, *mg,
-                                                     state.moisture_flux, ws.windows);
+        const MoistureParticles mp{state.x.data(), state.V0.data(), state.J.data(),
+                                   state.theta.data()};
+        const MoistureSolveStats ms =
+            solve_moisture(*model.moisture, seal, ws.grid, mp, interval * dt, *mg,
+                           state.moisture_flux, ws.windows);
         stats.cg_iterations = ms.iterations;
         stats.cg_residual = ms.residual;
     }
@@ -318,11 +338,12 @@ StepStats step(const SimModel& model, SimState& state, Real dt) {
     if (mg) {
         moisture_update.dtheta = mg->x.data();
         moisture_update.dt = interval * dt;
-        if (model.moisture->evaporation == MoistureParams::Evaporation::Surface && model.moisture->lambda > 0)
+        if (model.moisture->evaporation == MoistureParams::Evaporation::Surface &&
+            model.moisture->lambda > 0)
             moisture_update.evaporating = mg->particle_is_boundary.data();
     }
-    const mpm::G2PResult g2p =
-        mpm::grid_to_particle(model, state, ws.grid, moisture_update, has_pores, dt, ws.windows, ws.tau.data());
+    const mpm::G2PResult g2p = mpm::grid_to_particle(model, state, ws.grid, moisture_update,
+                                                     has_pores, dt, ws.windows, ws.tau.data());
     state.time += dt;
     state.step_count = substep;
     if (g2p.bad_slot >= 0) {
@@ -341,20 +362,23 @@ StepStats step(const SimModel& model, SimState& state, Real dt) {
         std::ostringstream os;
         os << "substep " << substep << ": max |v| = " << g2p.max_speed << " m/s moves particles "
            << g2p.max_speed * dt / model.h << " cells in one step of dt = " << dt
-           << " s (h = " << model.h << " m): the time step is unstable; lower /sim/dt or /sim/cfl_velocity";
+           << " s (h = " << model.h
+           << " m): the time step is unstable; lower /sim/dt or /sim/cfl_velocity";
         throw RuntimeError(os.str());
     }
 
     stats.active_nodes = 0;
     const int64_t n_nodes = static_cast<int64_t>(ws.grid.n_blocks()) * mpm::kBlockNodes;
-    for (int64_t i = 0; i < n_nodes; ++i) stats.active_nodes += ws.grid.nodes[i * mpm::kNodeFields] > 0;
+    for (int64_t i = 0; i < n_nodes; ++i)
+        stats.active_nodes += ws.grid.nodes[i * mpm::kNodeFields] > 0;
     stats.allocated_nodes = n_nodes;
     stats.max_speed = g2p.max_speed;
     ws.tau_step = state.step_count;  // the step succeeded: tau is the new Fe's
     return stats;
 }
 
-ParticleFrame state_to_frame(const SimModel& model, const SimState& state, const CacheAttributes& attrs) {
+ParticleFrame state_to_frame(const SimModel& model, const SimState& state,
+                             const CacheAttributes& attrs) {
     const size_t n = state.size();
     ParticleFrame f;
     f.time = state.time;
@@ -368,7 +392,7 @@ ParticleFrame state_to_frame(const SimModel& model, const SimState& state, const
         MC_CHECK(id >= 0 && static_cast<size_t>(id) < n);
         f.P[id] = state.x[p].cast<float>();
 #define MC_FILL_CACHED(T, member, key, vdb, physics, policy, doc) \
-        if (attrs.key) f.member[id] = cached_value::member(model, state, p);
+    if (attrs.key) f.member[id] = cached_value::member(model, state, p);
         MC_CACHED_ATTRIBUTES(MC_FILL_CACHED)
 #undef MC_FILL_CACHED
     }
@@ -377,7 +401,8 @@ ParticleFrame state_to_frame(const SimModel& model, const SimState& state, const
 
 int64_t state_memory_bytes(const SimState& s) {
     int64_t total = 0;
-    s.for_each_array([&](const char*, const auto& array, ArrayPresence) { total += capacity_bytes(array); });
+    s.for_each_array(
+        [&](const char*, const auto& array, ArrayPresence) { total += capacity_bytes(array); });
     total += s.moisture_flux.memory_bytes();
     if (s.workspace) total += s.workspace->memory_bytes();
     return total;

@@ -20,19 +20,19 @@ struct SimWorkspace;  // grid and scratch, rebuilt every step; carries nothing f
 // declaration, slot reordering, memory accounting and the checkpoint's save and load (a new
 // array changes what a checkpoint holds: bump kSimCheckpointVersion, sim_checkpoint.cpp).
 // X(element type, name, presence, doc); presence Always: n elements, Optional: n or none.
-#define MC_SIM_STATE_ARRAYS(X)                                                                    \
-    X(int32_t, id, Always, "particle id per slot")                                                \
-    X(Vec3, x, Always, "position [m]")                                                            \
-    X(Vec3, v, Always, "velocity [m/s]")                                                          \
-    X(Mat3, C, Always, "APIC affine velocity [1/s]")                                              \
-    X(Mat3, Fe, Always, "elastic deformation gradient")                                           \
-    X(Real, J, Always, "det of the total deformation gradient (volume tracking)")                 \
-    X(Real, alpha, Optional, "NACC hardening state (empty without plasticity)")                   \
-    X(Real, V0, Always, "rest volume [m^3]")                                                      \
-    X(Real, mass, Always, "[kg]")                                                                 \
-    X(Real, theta, Optional, "water content in [0, eta] (moisture only)")                         \
-    X(Real, Jw, Optional, "pore determinant 1 - eta (1 - s) (moisture only)")                     \
-    X(Real, strength, Optional, "p0 multiplier of a heterogeneous soil (empty: uniform)")         \
+#define MC_SIM_STATE_ARRAYS(X)                                                            \
+    X(int32_t, id, Always, "particle id per slot")                                        \
+    X(Vec3, x, Always, "position [m]")                                                    \
+    X(Vec3, v, Always, "velocity [m/s]")                                                  \
+    X(Mat3, C, Always, "APIC affine velocity [1/s]")                                      \
+    X(Mat3, Fe, Always, "elastic deformation gradient")                                   \
+    X(Real, J, Always, "det of the total deformation gradient (volume tracking)")         \
+    X(Real, alpha, Optional, "NACC hardening state (empty without plasticity)")           \
+    X(Real, V0, Always, "rest volume [m^3]")                                              \
+    X(Real, mass, Always, "[kg]")                                                         \
+    X(Real, theta, Optional, "water content in [0, eta] (moisture only)")                 \
+    X(Real, Jw, Optional, "pore determinant 1 - eta (1 - s) (moisture only)")             \
+    X(Real, strength, Optional, "p0 multiplier of a heterogeneous soil (empty: uniform)") \
     X(Real, damage, Optional, "tensile damage in [0, 1], never decreasing (NACC with damage)")
 
 /// Whether a state array may be empty (the model lacks its physics) or always has n elements.
@@ -44,13 +44,13 @@ enum class ArrayPresence { Always, Optional };
 /// and restored in any slot order (e.g. by id) continues bit for bit. Moisture arrays are empty
 /// when the model has no moisture section; alpha is empty without plasticity.
 struct SimState {
-    double time = 0;               // simulated time [s]
-    int64_t step_count = 0;        // substeps taken since t = 0
+    double time = 0;         // simulated time [s]
+    int64_t step_count = 0;  // substeps taken since t = 0
 #define MC_STATE_ARRAY_MEMBER(T, name, presence, doc) std::vector<T> name;
     MC_SIM_STATE_ARRAYS(MC_STATE_ARRAY_MEMBER)
 #undef MC_STATE_ARRAY_MEMBER
-    Vec3 domain_min = Vec3::Zero(); // simulation box, fixed at t = 0 (derived once when the
-    Vec3 domain_max = Vec3::Zero(); //   model's domain is auto) [m]; part of the checkpoint
+    Vec3 domain_min = Vec3::Zero();     // simulation box, fixed at t = 0 (derived once when the
+    Vec3 domain_max = Vec3::Zero();     //   model's domain is auto) [m]; part of the checkpoint
     MoistureFluxHistory moisture_flux;  // the moisture CG's last two solves (its initial guess);
                                         //   part of the checkpoint, so a resumed run is exact
     Scratch<SimWorkspace> workspace;    // a copy gets its own, recreated on demand
@@ -74,11 +74,11 @@ struct SimState {
 
 /// Counters of one step, for progress lines and the manifest.
 struct StepStats {
-    int cg_iterations = 0;         // moisture CG iterations (0 without moisture)
-    double cg_residual = 0;        // final relative residual
-    int64_t active_nodes = 0;      // grid nodes with mass
-    int64_t allocated_nodes = 0;   // grid nodes allocated (sparse blocks)
-    Real max_speed = 0;            // max |v_p| after the step [m/s]
+    int cg_iterations = 0;        // moisture CG iterations (0 without moisture)
+    double cg_residual = 0;       // final relative residual
+    int64_t active_nodes = 0;     // grid nodes with mass
+    int64_t allocated_nodes = 0;  // grid nodes allocated (sparse blocks)
+    Real max_speed = 0;           // max |v_p| after the step [m/s]
 };
 
 /// Initial state: particles at rest positions X with rest volumes V0 (from the tet mesh), moving
@@ -101,7 +101,8 @@ Real stable_dt(const SimModel& model, const SimState& state);
 StepStats step(const SimModel& model, SimState& state, Real dt);
 
 /// The cacheable view of the state in particle-id order, with only the requested attributes.
-ParticleFrame state_to_frame(const SimModel& model, const SimState& state, const CacheAttributes& attrs);
+ParticleFrame state_to_frame(const SimModel& model, const SimState& state,
+                             const CacheAttributes& attrs);
 
 /// Bytes held by the state's particle arrays and workspace (for bytes-per-particle reports).
 int64_t state_memory_bytes(const SimState& state);

@@ -47,10 +47,11 @@ StepAttempt RetryingStepper::attempt(const SimModel& model, SimState& state, Rea
     // the floor: the step's own message, and how far the retries went
     if (m_halvings >= m_policy.max_halvings) {
         char note[200];
-        std::snprintf(note, sizeof note,
-                      "; retried from t = %.9g s with the time step halved %d times, down to dt = %.6g s "
-                      "(the floor: 1/%d of the stable step)",
-                      m_snapshot.time, m_halvings, double(dt), 1 << m_policy.max_halvings);
+        std::snprintf(
+            note, sizeof note,
+            "; retried from t = %.9g s with the time step halved %d times, down to dt = %.6g s "
+            "(the floor: 1/%d of the stable step)",
+            m_snapshot.time, m_halvings, double(dt), 1 << m_policy.max_halvings);
         throw RuntimeError(a.failure + note);
     }
 

@@ -8,8 +8,8 @@
 /// every frame start), every RetryPolicy::snapshot_interval accepted steps, and before dt grows
 /// back; a failure rolls back to it and redoes the steps since then at the smaller dt. A copy
 /// per substep would cost a pass over every particle array on every step; one every 64 steps
-/// costs a 64th of that (measured in docs/reliability.md). Rolling back the whole interval also undoes an
-/// instability that built up over several steps before a particle inverted.
+/// costs a 64th of that (measured in docs/reliability.md). Rolling back the whole interval also
+/// undoes an instability that built up over several steps before a particle inverted.
 ///
 /// Deterministic: a rollback restores every SimState array bit for bit and forgets the step
 /// history (the moisture CG's initial guess), so the redone steps are a function of the state
@@ -70,9 +70,9 @@ private:
     void take_snapshot(const SimState& state);
 
     RetryPolicy m_policy;
-    SimState m_snapshot;        // the rollback point (no workspace)
-    int m_halvings = 0;         // dt = stable dt / 2^m_halvings
-    int m_accepted_since = 0;   // accepted steps since the rollback point
+    SimState m_snapshot;       // the rollback point (no workspace)
+    int m_halvings = 0;        // dt = stable dt / 2^m_halvings
+    int m_accepted_since = 0;  // accepted steps since the rollback point
     int64_t m_retries = 0;
 };
 

@@ -6,10 +6,10 @@
 #include <vector>
 
 #include "sim/core/types.h"
-#include "sim/model.h"
-#include "sim/mpm/simulation.h"
 #include "sim/grid/sparse_grid.h"
+#include "sim/model.h"
 #include "sim/moisture/moisture_solver.h"
+#include "sim/mpm/simulation.h"
 
 namespace mudcrack::mpm {
 
@@ -21,8 +21,8 @@ namespace mudcrack::mpm {
 /// tau_p is read from `tau` (per slot, the Kirchhoff stress of Fe: what the last G2P left, or
 /// kirchhoff_stresses).
 /// @param dt time step [s]  @param windows per-thread scratch of 8 * 216 values
-void particle_to_grid(const SimState& state, const SymMat3* tau, SparseGrid& grid, MoistureGrid* moisture,
-                      Real dt, std::vector<std::vector<Real>>& windows);
+void particle_to_grid(const SimState& state, const SymMat3* tau, SparseGrid& grid,
+                      MoistureGrid* moisture, Real dt, std::vector<std::vector<Real>>& windows);
 
 /// Each slot's Kirchhoff stress of its Fe, into `tau` (resized to n): P2G's input when the last
 /// G2P's is not at hand (the first step, after a checkpoint load, a rollback or a failed step).
@@ -34,15 +34,16 @@ void update_grid_velocity(const SimModel& model, SparseGrid& grid, Real dt);
 
 /// What G2P found.
 struct G2PResult {
-    Real max_speed = 0;        // max |v_p| after the step [m/s]
-    int32_t bad_slot = -1;     // a slot whose state is not finite, or -1
+    Real max_speed = 0;     // max |v_p| after the step [m/s]
+    int32_t bad_slot = -1;  // a slot whose state is not finite, or -1
 };
 
 /// What the moisture solve of this step hands to G2P (all null when it did not run).
 struct MoistureUpdate {
-    const Real* dtheta = nullptr;          // node field theta^{n+1} - theta^n
-    const uint8_t* evaporating = nullptr;  // per slot: the particle loses water itself (surface evaporation)
-    Real dt = 0;                           // the moisture step dt_m = k dt [s]
+    const Real* dtheta = nullptr;  // node field theta^{n+1} - theta^n
+    // per slot: the particle loses water itself (surface evaporation)
+    const uint8_t* evaporating = nullptr;
+    Real dt = 0;  // the moisture step dt_m = k dt [s]
 };
 
 /// G2P and the particle update of docs/physics.md §7 steps 4-8: v, C, theta (FLIP increment from

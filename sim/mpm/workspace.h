@@ -7,16 +7,16 @@
 #include <vector>
 
 #include "sim/core/stats.h"
-#include "sim/moisture/moisture_solver.h"
 #include "sim/grid/sparse_grid.h"
+#include "sim/moisture/moisture_solver.h"
 
 namespace mudcrack {
 
 struct SimWorkspace {
     mpm::SparseGrid grid;
-    MoistureGrid moisture;                      // allocated only when a moisture solve runs
-    std::vector<std::vector<Real>> windows;     // per thread, 8 values per window node
-    std::vector<Real> permute_buffer;           // one attribute's values while reordering slots
+    MoistureGrid moisture;                   // allocated only when a moisture solve runs
+    std::vector<std::vector<Real>> windows;  // per thread, 8 values per window node
+    std::vector<Real> permute_buffer;        // one attribute's values while reordering slots
     // Kirchhoff stress of each slot's Fe as the last step's G2P left it, for the next P2G
     // (docs/physics.md §7): G2P has J, b and J^(-2/3) in hand for the inside test, so P2G need
     // not read Fe and recompute them. Current only while tau_step == SimState::step_count; a
@@ -28,8 +28,8 @@ struct SimWorkspace {
     int64_t tau_step = -1;
 
     int64_t memory_bytes() const {
-        int64_t total = grid.memory_bytes() + moisture.memory_bytes() + capacity_bytes(permute_buffer) +
-                        capacity_bytes(tau);
+        int64_t total = grid.memory_bytes() + moisture.memory_bytes() +
+                        capacity_bytes(permute_buffer) + capacity_bytes(tau);
         for (const auto& w : windows) total += capacity_bytes(w);
         return total;
     }

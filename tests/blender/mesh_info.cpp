@@ -43,10 +43,11 @@ void print_debris_info(const char* path) {
         ids += d.id[i];
         pieces += d.piece[i];
     }
-    std::printf("\"%s\": {\"points\": %zu, \"position_sum\": [%.9g, %.9g, %.9g], \"velocity_sum\": [%.9g, %.9g, %.9g], "
-                "\"pscale_sum\": %.9g, \"id_sum\": %lld, \"piece_sum\": %lld}",
-                path, d.size(), position[0], position[1], position[2], velocity[0], velocity[1], velocity[2], pscale,
-                static_cast<long long>(ids), static_cast<long long>(pieces));
+    std::printf(
+        "\"%s\": {\"points\": %zu, \"position_sum\": [%.9g, %.9g, %.9g], \"velocity_sum\": [%.9g, %.9g, %.9g], "
+        "\"pscale_sum\": %.9g, \"id_sum\": %lld, \"piece_sum\": %lld}",
+        path, d.size(), position[0], position[1], position[2], velocity[0], velocity[1],
+        velocity[2], pscale, static_cast<long long>(ids), static_cast<long long>(pieces));
 }
 
 // the piece keys of a mesh file's faces (nothing when it has no fragment ids)
@@ -99,19 +100,22 @@ int main(int argc, char** argv) {
             faces += m.faces.size();
             normals = normals && m.normals.size() == m.positions.size();
             uvs = uvs && m.uvs.size() == m.positions.size();
-            colors = colors && m.saturation.size() == m.positions.size() && m.alpha.size() == m.positions.size();
+            colors = colors && m.saturation.size() == m.positions.size() &&
+                     m.alpha.size() == m.positions.size();
             for (const Vec3f& p : m.positions)
                 for (int k = 0; k < 3; ++k) sum[k] += p[k];
         }
-        std::printf("%s\n\"%s\": {\"vertices\": %zu, \"faces\": %zu, \"normals\": %s, \"uvs\": %s, \"colors\": %s, "
-                    "\"position_sum\": [%.9g, %.9g, %.9g]",
-                    i > 1 ? "," : "", argv[i], vertices, faces, normals ? "true" : "false", uvs ? "true" : "false",
-                    colors ? "true" : "false", sum[0], sum[1], sum[2]);
+        std::printf(
+            "%s\n\"%s\": {\"vertices\": %zu, \"faces\": %zu, \"normals\": %s, \"uvs\": %s, \"colors\": %s, "
+            "\"position_sum\": [%.9g, %.9g, %.9g]",
+            i > 1 ? "," : "", argv[i], vertices, faces, normals ? "true" : "false",
+            uvs ? "true" : "false", colors ? "true" : "false", sum[0], sum[1], sum[2]);
         if (!meshes.empty() && !meshes[0].positions.empty()) {
             const TriMesh& m = meshes[0];
             if (uvs) std::printf(", \"uv0\": [%.9g, %.9g]", m.uvs[0].x(), m.uvs[0].y());
             if (colors)
-                std::printf(", \"color0\": [%.9g, %.9g]", m.saturation[0], 1.0 / (1.0 + std::exp(-double(m.alpha[0]))));
+                std::printf(", \"color0\": [%.9g, %.9g]", m.saturation[0],
+                            1.0 / (1.0 + std::exp(-double(m.alpha[0]))));
         }
         print_piece_info(meshes);
         std::printf("}");

@@ -64,7 +64,8 @@ json tiny_shot() {
     std::ifstream is(kSource / "shots/fig8_a.json");
     json shot = json::parse(is, nullptr, true, /*ignore_comments=*/true);
     shot["name"] = "hostile";
-    shot["source"]["box"] = {{"min", {-0.1, 0.0, -0.1}}, {"max", {0.1, 0.1, 0.1}}, {"spacing", 0.05}};
+    shot["source"]["box"] = {
+        {"min", {-0.1, 0.0, -0.1}}, {"max", {0.1, 0.1, 0.1}}, {"spacing", 0.05}};
     shot["frames"]["end"] = 3;
     shot["render"] = {{"resolution", {48, 32}}, {"turntable", {{"views", 2}}}};
     return shot;
@@ -78,7 +79,8 @@ struct Result {
 // a stage binary run in the background, stderr into a file
 class Process {
 public:
-    Process(const std::string& program, const std::vector<std::string>& args, const fs::path& err_file)
+    Process(const std::string& program, const std::vector<std::string>& args,
+            const fs::path& err_file)
         : m_err_file(err_file) {
         std::vector<std::string> all = {(kBin / program).string()};
         all.insert(all.end(), args.begin(), args.end());
@@ -118,7 +120,8 @@ protected:
         std::string name = std::string(info->test_suite_name()) + "_" + info->name();
         for (char& c : name)
             if (c == '/') c = '_';
-        m_dir = fs::temp_directory_path() / ("mc_hostile_" + name + "_" + std::to_string(::getpid()));
+        m_dir =
+            fs::temp_directory_path() / ("mc_hostile_" + name + "_" + std::to_string(::getpid()));
         fs::remove_all(m_dir);
         fs::create_directories(m_dir);
     }
@@ -134,18 +137,22 @@ protected:
     fs::path out() const { return m_dir / "out"; }
 
     // --shot SHOT --out OUT, one thread unless `extra` says otherwise, then `extra`
-    std::vector<std::string> stage_args(const fs::path& shot, const std::vector<std::string>& extra) const {
+    std::vector<std::string> stage_args(const fs::path& shot,
+                                        const std::vector<std::string>& extra) const {
         std::vector<std::string> args = {"--shot", shot.string(), "--out", out().string()};
         if (std::find(extra.begin(), extra.end(), "--threads") == extra.end())
             args.insert(args.end(), {"--threads", "1"});
         args.insert(args.end(), extra.begin(), extra.end());
         return args;
     }
-    Result run(const std::string& stage, const fs::path& shot, const std::vector<std::string>& extra = {}) {
+    Result run(const std::string& stage, const fs::path& shot,
+               const std::vector<std::string>& extra = {}) {
         return Process("mc-" + stage, stage_args(shot, extra), m_dir / "stderr.txt").wait();
     }
-    Process start(const std::string& stage, const fs::path& shot, const std::vector<std::string>& extra = {}) {
-        return Process("mc-" + stage, stage_args(shot, extra), m_dir / ("stderr_" + stage + ".txt"));
+    Process start(const std::string& stage, const fs::path& shot,
+                  const std::vector<std::string>& extra = {}) {
+        return Process("mc-" + stage, stage_args(shot, extra),
+                       m_dir / ("stderr_" + stage + ".txt"));
     }
 
     // runs the stages before `stage` (they must succeed)
@@ -168,7 +175,8 @@ protected:
         }
     }
     // one error line, prefixed with the stage, holding every `needle`
-    static void expect_error(const Result& r, const std::string& stage, const std::vector<std::string>& needles) {
+    static void expect_error(const Result& r, const std::string& stage,
+                             const std::vector<std::string>& needles) {
         EXPECT_NE(r.err.find("mc-" + stage + ": error: "), std::string::npos) << r.err;
         for (const std::string& n : needles)
             EXPECT_NE(r.err.find(n), std::string::npos) << "no \"" << n << "\" in\n" << r.err;
@@ -216,7 +224,8 @@ const UsageCase kUsageCases[] = {
     {{"--no-such-flag"}, "--no-such-flag"},
 };
 
-class UsageErrors : public HostileInput, public ::testing::WithParamInterface<std::tuple<std::string, int>> {};
+class UsageErrors : public HostileInput,
+                    public ::testing::WithParamInterface<std::tuple<std::string, int>> {};
 
 TEST_P(UsageErrors, ExitTwoNamingTheFlag) {
     const auto& [stage, index] = GetParam();
@@ -233,7 +242,8 @@ INSTANTIATE_TEST_SUITE_P(AllStages, UsageErrors,
                          ::testing::Combine(::testing::ValuesIn(kStages),
                                             ::testing::Range(0, int(std::size(kUsageCases)))),
                          [](const auto& info) {
-                             return std::get<0>(info.param) + "_" + std::to_string(std::get<1>(info.param));
+                             return std::get<0>(info.param) + "_" +
+                                    std::to_string(std::get<1>(info.param));
                          });
 
 // a stage's own flags: an empty value or one the stage refuses is a usage error too
@@ -260,12 +270,13 @@ TEST_P(StageFlags, ExitTwoNamingTheFlag) {
 
 INSTANTIATE_TEST_SUITE_P(
     Stages, StageFlags,
-    ::testing::Values(StageFlagCase{"surface", {"--format", ""}, "--format = \"\": expected a value"},
-                      StageFlagCase{"surface", {"--format", "fbx"}, "--format fbx: fbx is not supported"},
-                      StageFlagCase{"surface", {"--format", "stl"}, "--format stl: "},
-                      StageFlagCase{"measure", {"--json", ""}, "--json = \"\": expected a value"},
-                      StageFlagCase{"sim", {"--seed", ""}, "--seed = \"\": expected a value"},
-                      StageFlagCase{"render", {"--log-level", ""}, "--log-level"}),
+    ::testing::Values(
+        StageFlagCase{"surface", {"--format", ""}, "--format = \"\": expected a value"},
+        StageFlagCase{"surface", {"--format", "fbx"}, "--format fbx: fbx is not supported"},
+        StageFlagCase{"surface", {"--format", "stl"}, "--format stl: "},
+        StageFlagCase{"measure", {"--json", ""}, "--json = \"\": expected a value"},
+        StageFlagCase{"sim", {"--seed", ""}, "--seed = \"\": expected a value"},
+        StageFlagCase{"render", {"--log-level", ""}, "--log-level"}),
     [](const auto& info) { return info.param.stage + "_" + std::to_string(info.index); });
 
 TEST_F(HostileInput, MissingOutIsAUsageErrorWithThePrefix) {
@@ -313,12 +324,13 @@ TEST_P(FramesPastTheShot, RefusedAsAUsageError) {
     const fs::path shot = write_shot(tiny_shot());
     run_before(stage, shot);
     const fs::path where = stage == "init" || stage == "sim" ? shot
-                           : stage == "render"              ? out() / "surface" / "manifest.json"
-                                                            : out() / "sim" / "manifest.json";
+                           : stage == "render"               ? out() / "surface" / "manifest.json"
+                                                             : out() / "sim" / "manifest.json";
     for (const std::string frames : {"99-100", "2-4", "3-9"}) {
         const Result r = run(stage, shot, {"--frames", frames});
         EXPECT_EQ(r.code, 2) << r.err;
-        expect_error(r, stage, {"--frames " + frames + ": outside the frames 1-3 of " + where.string()});
+        expect_error(r, stage,
+                     {"--frames " + frames + ": outside the frames 1-3 of " + where.string()});
         EXPECT_FALSE(fs::exists(out() / stage)) << "nothing written";
         expect_no_debris(out());
     }
@@ -335,14 +347,19 @@ TEST_F(HostileInput, InjectedNanFrameOutsideTheRunIsAUsageError) {
     const fs::path shot = write_shot(tiny_shot());
     run_before("sim", shot);
     const std::vector<std::pair<std::vector<std::string>, std::string>> cases = {
-        {{"--inject-nan-at-frame", "4"}, "--inject-nan-at-frame 4: outside the frames 1-3 this run simulates (" +
-                                             shot.string() + " (/frames/start, /frames/end))"},
-        {{"--inject-nan-at-frame", "999999999"}, "--inject-nan-at-frame 999999999: outside the frames 1-3"},
+        {{"--inject-nan-at-frame", "4"},
+         "--inject-nan-at-frame 4: outside the frames 1-3 this run simulates (" + shot.string() +
+             " (/frames/start, /frames/end))"},
+        {{"--inject-nan-at-frame", "999999999"},
+         "--inject-nan-at-frame 999999999: outside the frames 1-3"},
         {{"--inject-nan-at-frame", "-1"}, "--inject-nan-at-frame -1: outside the frames 1-3"},
         {{"--frames", "1-2", "--inject-nan-at-frame", "3"},
-         "--inject-nan-at-frame 3: outside the frames 1-2 this run simulates (--frames 1-2 of " + shot.string()},
-        {{"--inject-nan-at-frame", "99999999999"}, "--inject-nan-at-frame = \"99999999999\": expected a frame number"},
-        {{"--inject-nan-at-frame", "3x"}, "--inject-nan-at-frame = \"3x\": expected a frame number"},
+         "--inject-nan-at-frame 3: outside the frames 1-2 this run simulates (--frames 1-2 of " +
+             shot.string()},
+        {{"--inject-nan-at-frame", "99999999999"},
+         "--inject-nan-at-frame = \"99999999999\": expected a frame number"},
+        {{"--inject-nan-at-frame", "3x"},
+         "--inject-nan-at-frame = \"3x\": expected a frame number"},
         {{"--inject-nan-at-frame", ""}, "--inject-nan-at-frame = \"\": expected a value"},
     };
     for (const auto& [args, names] : cases) {
@@ -375,29 +392,64 @@ struct ShotCase {
 
 const ShotCase kShotCases[] = {
     {"density_1e_300", [](json& s) { s["material"]["density"] = 1e-300; }, "/material/density"},
-    {"youngs_modulus_1e300", [](json& s) { s["material"]["youngs_modulus"] = 1e300; }, "/material/youngs_modulus"},
+    {"youngs_modulus_1e300", [](json& s) { s["material"]["youngs_modulus"] = 1e300; },
+     "/material/youngs_modulus"},
     {"dt_1e_300", [](json& s) { s["sim"]["dt"] = 1e-300; }, "/sim/dt"},
     {"dt_max_1e_300", [](json& s) { s["sim"]["dt_max"] = 1e-300; }, "/sim/dt_max"},
     {"fps_1e_300", [](json& s) { s["frames"]["fps"] = 1e-300; }, "/frames/fps"},
-    {"initial_velocity_1e30", [](json& s) { s["source"]["initial_velocity"] = {1e30, 0, 0}; },
+    {"initial_velocity_1e30",
+     [](json& s) {
+         s["source"]["initial_velocity"] = {1e30, 0, 0};
+     },
      "/source/initial_velocity"},
-    {"gravity_1e30", [](json& s) { s["sim"]["gravity"] = {0, -1e30, 0}; }, "/sim/gravity"},
+    {"gravity_1e30",
+     [](json& s) {
+         s["sim"]["gravity"] = {0, -1e30, 0};
+     },
+     "/sim/gravity"},
     {"h_1e_5", [](json& s) { s["sim"]["h"] = 1e-5; }, "/sim/h"},
     {"h_1e_300", [](json& s) { s["sim"]["h"] = 1e-300; }, "/sim/h"},
     {"domain_too_large_for_h",
-     [](json& s) { s["colliders"]["domain"] = {{"min", {-1e4, -1e4, -1e4}}, {"max", {1e4, 1e4, 1e4}}}; },
+     [](json& s) {
+         s["colliders"]["domain"] = {{"min", {-1e4, -1e4, -1e4}}, {"max", {1e4, 1e4, 1e4}}};
+     },
      "/sim/h"},
-    {"resolution_16384", [](json& s) { s["render"]["resolution"] = {16384, 16384}; }, "/render/resolution"},
-    {"resolution_16384x8192", [](json& s) { s["render"]["resolution"] = {16384, 8192}; }, "/render/resolution"},
-    {"samples_64_at_4k", [](json& s) { s["render"]["resolution"] = {4096, 2160}; s["render"]["samples"] = 64; },
+    {"resolution_16384",
+     [](json& s) {
+         s["render"]["resolution"] = {16384, 16384};
+     },
      "/render/resolution"},
-    {"camera_on_its_target", [](json& s) { s["render"]["camera"] = {{"position", {1, 2, 3}}, {"target", {1, 2, 3}}}; },
+    {"resolution_16384x8192",
+     [](json& s) {
+         s["render"]["resolution"] = {16384, 8192};
+     },
+     "/render/resolution"},
+    {"samples_64_at_4k",
+     [](json& s) {
+         s["render"]["resolution"] = {4096, 2160};
+         s["render"]["samples"] = 64;
+     },
+     "/render/resolution"},
+    {"camera_on_its_target",
+     [](json& s) {
+         s["render"]["camera"] = {{"position", {1, 2, 3}}, {"target", {1, 2, 3}}};
+     },
      "/render/camera/position = [1,2,3]: is on /render/camera/target"},
-    {"camera_beyond_float", [](json& s) { s["render"]["camera"] = {{"position", {1e300, 0, 0}}}; },
+    {"camera_beyond_float",
+     [](json& s) {
+         s["render"]["camera"] = {{"position", {1e300, 0, 0}}};
+     },
      "/render/camera/position"},
-    {"target_beyond_float", [](json& s) { s["render"]["camera"] = {{"target", {0, -1e39, 0}}}; },
+    {"target_beyond_float",
+     [](json& s) {
+         s["render"]["camera"] = {{"target", {0, -1e39, 0}}};
+     },
      "/render/camera/target"},
-    {"fov_1e_300", [](json& s) { s["render"]["camera"] = {{"fov", 1e-300}}; }, "/render/camera/fov"},
+    {"fov_1e_300",
+     [](json& s) {
+         s["render"]["camera"] = {{"fov", 1e-300}};
+     },
+     "/render/camera/fov"},
     {"render_fps_1e_300", [](json& s) { s["render"]["fps"] = 1e-300; }, "/render/fps"},
     {"render_fps_1e300", [](json& s) { s["render"]["fps"] = 1e300; }, "/render/fps"},
     // h against the body (0.2 x 0.1 x 0.2 m) and a given domain, and the domain's walls
@@ -410,17 +462,24 @@ const ShotCase kShotCases[] = {
      },
      "/sim/h = 0.25: is larger than the domain"},
     {"padding_fills_the_domain",
-     [](json& s) { s["colliders"]["domain"] = {{"min", {-0.15, -0.05, -0.15}}, {"max", {0.15, 0.15, 0.15}}, {"padding", 2}}; },
+     [](json& s) {
+         s["colliders"]["domain"] = {
+             {"min", {-0.15, -0.05, -0.15}}, {"max", {0.15, 0.15, 0.15}}, {"padding", 2}};
+     },
      "/colliders/domain/padding = 2: walls of 2 cells"},
     // a lattice whose count overflows on one axis only needs the others thinner than any cell
     // (h >= 1e-4 m): refused at load by h against the body, before mc-init counts it
     {"box_overflowing_one_axis",
-     [](json& s) { s["source"]["box"] = {{"min", {0, 0, 0}}, {"max", {1e-299, 1e-299, 1}}, {"spacing", 1e-300}}; },
+     [](json& s) {
+         s["source"]["box"] = {
+             {"min", {0, 0, 0}}, {"max", {1e-299, 1e-299, 1}}, {"spacing", 1e-300}};
+     },
      "/sim/h = 0.05: is larger than the body (/source/box: 1e-299 x 1e-299 x 1 m)"},
     {"heightfield_overflowing_layers",
      [](json& s) {
          s["source"] = {{"type", "heightfield"},
-                        {"heightfield", {{"size", {1e-299, 1e-299}}, {"channel_depth", 0}, {"spacing", 1e-300}}}};
+                        {"heightfield",
+                         {{"size", {1e-299, 1e-299}}, {"channel_depth", 0}, {"spacing", 1e-300}}}};
      },
      "/sim/h = 0.05: is larger than the body (/source/heightfield: 1e-299 x 0.35 x 1e-299 m)"},
     // a ground far above or below the body (bottom y = 0, top 0.1, 3 frames of falling)
@@ -433,11 +492,17 @@ const ShotCase kShotCases[] = {
     {"ground_out_of_reach", [](json& s) { s["colliders"]["ground"]["height"] = -10; },
      "/colliders/ground/height = -10: is 10 m below the body's bottom y = 0 (/source/box), which moves at most"},
     // frame names hold four digits (name.####.ext); an int holds the rest of the integers
-    {"frames_end_1e9", [](json& s) { s["frames"]["end"] = 1000000000; }, "/frames/end = 1000000000: must be in [1, 9999]"},
-    {"frames_end_10000", [](json& s) { s["frames"]["end"] = 10000; }, "/frames/end = 10000: must be in [1, 9999]"},
-    {"frames_end_beyond_int", [](json& s) { s["frames"]["end"] = 100000000000LL; }, "/frames/end = 100000000000"},
+    {"frames_end_1e9", [](json& s) { s["frames"]["end"] = 1000000000; },
+     "/frames/end = 1000000000: must be in [1, 9999]"},
+    {"frames_end_10000", [](json& s) { s["frames"]["end"] = 10000; },
+     "/frames/end = 10000: must be in [1, 9999]"},
+    {"frames_end_beyond_int", [](json& s) { s["frames"]["end"] = 100000000000LL; },
+     "/frames/end = 100000000000"},
     {"padding_beyond_int",
-     [](json& s) { s["colliders"]["domain"] = {{"min", {-1, -1, -1}}, {"max", {1, 1, 1}}, {"padding", 1000000000000LL}}; },
+     [](json& s) {
+         s["colliders"]["domain"] = {
+             {"min", {-1, -1, -1}}, {"max", {1, 1, 1}}, {"padding", 1000000000000LL}};
+     },
      "/colliders/domain/padding = 1000000000000: must be <= 2147483647"},
 };
 
@@ -447,7 +512,8 @@ struct OverflowCase {
 };
 const OverflowCase kOverflowCases[] = {
     {"density", "\"density\": 1,", "\"density\": 1e400,", "/material/density"},
-    {"negative_youngs", "\"youngs_modulus\": 2000", "\"youngs_modulus\": -1e400", "/material/youngs_modulus"},
+    {"negative_youngs", "\"youngs_modulus\": 2000", "\"youngs_modulus\": -1e400",
+     "/material/youngs_modulus"},
     {"array_element", "\"h\": 0.05", "\"h\": 0.05, \"gravity\": [0, -1e999, 0]", "/sim/gravity/1"},
     {"fps", "\"fps\": 24", "\"fps\": 24e500", "/frames/fps"},
 };
@@ -472,7 +538,8 @@ INSTANTIATE_TEST_SUITE_P(InitSimAndRender, ShotValues,
                          ::testing::Combine(::testing::Values("init", "sim", "render"),
                                             ::testing::Range(0, int(std::size(kShotCases)))),
                          [](const auto& info) {
-                             return std::get<0>(info.param) + "_" + kShotCases[std::get<1>(info.param)].name;
+                             return std::get<0>(info.param) + "_" +
+                                    kShotCases[std::get<1>(info.param)].name;
                          });
 
 // a lattice that fits mc-init's own limit (5e7 particles) but not this machine's memory, at the
@@ -501,9 +568,12 @@ struct SpacingCase {
     std::string key;
 };
 const SpacingCase kSpacingCases[] = {
-    {"box", [](json& s) { s["source"]["box"]["spacing"] = 1e-300; }, "/source/box/spacing = 1e-300: gives inf"},
+    {"box", [](json& s) { s["source"]["box"]["spacing"] = 1e-300; },
+     "/source/box/spacing = 1e-300: gives inf"},
     {"heightfield_columns",
-     [](json& s) { s["source"] = {{"type", "heightfield"}, {"heightfield", {{"spacing", 1e-300}}}}; },
+     [](json& s) {
+         s["source"] = {{"type", "heightfield"}, {"heightfield", {{"spacing", 1e-300}}}};
+     },
      "/source/heightfield/spacing = 1e-300: gives inf columns"},
 };
 
@@ -555,10 +625,12 @@ struct MeshCase {
 };
 const char* const kTetrahedronFaces = "f 1 3 2\nf 1 2 4\nf 2 3 4\nf 1 4 3\n";
 const MeshCase kMeshCases[] = {
-    {"obj_nan", "nan.obj", std::string("v 0 0 0\nv 1 0 0\nv nan 1 0\nv 0 0 1\n") + kTetrahedronFaces, "vertex 3"},
-    {"obj_inf", "inf.obj", std::string("v 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 -inf\n") + kTetrahedronFaces, "vertex 4"},
-    {"obj_overflow", "big.obj", std::string("v 0 0 0\nv 1e999 0 0\nv 0 1 0\nv 0 0 1\n") + kTetrahedronFaces,
-     "vertex 2"},
+    {"obj_nan", "nan.obj",
+     std::string("v 0 0 0\nv 1 0 0\nv nan 1 0\nv 0 0 1\n") + kTetrahedronFaces, "vertex 3"},
+    {"obj_inf", "inf.obj",
+     std::string("v 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 -inf\n") + kTetrahedronFaces, "vertex 4"},
+    {"obj_overflow", "big.obj",
+     std::string("v 0 0 0\nv 1e999 0 0\nv 0 1 0\nv 0 0 1\n") + kTetrahedronFaces, "vertex 2"},
     {"ply_nan", "nan.ply",
      "ply\nformat ascii 1.0\nelement vertex 4\nproperty float x\nproperty float y\nproperty float z\n"
      "element face 4\nproperty list uchar int vertex_indices\nend_header\n0 0 0\n1 0 0\n0 nan 0\n0 0 1\n"
@@ -606,7 +678,8 @@ private:
     int m_fd = -1;
 };
 
-const char* const kForeignHolder = "host=farmnode17\npid=424242\nprogram=mc-x\nstart=2026-11-25 17:30:02 UTC\n";
+const char* const kForeignHolder =
+    "host=farmnode17\npid=424242\nprogram=mc-x\nstart=2026-11-25 17:30:02 UTC\n";
 
 class SecondWriter : public HostileInput, public ::testing::WithParamInterface<std::string> {};
 
@@ -619,7 +692,8 @@ TEST_P(SecondWriter, RefusedNamingTheHolder) {
         HeldLock held(lock, LOCK_EX, kForeignHolder);
         const Result r = run(stage, shot);
         EXPECT_EQ(r.code, 1) << r.err;
-        expect_error(r, stage, {(out() / stage).string(), "farmnode17", "pid 424242", lock.string()});
+        expect_error(r, stage,
+                     {(out() / stage).string(), "farmnode17", "pid 424242", lock.string()});
         EXPECT_EQ(read_text(lock), kForeignHolder) << "the holder's record is left alone";
         EXPECT_FALSE(fs::exists(out() / ("." + stage + ".partial")));
         EXPECT_FALSE(fs::exists(out() / stage)) << "nothing written";
@@ -631,12 +705,14 @@ TEST_P(SecondWriter, RefusedNamingTheHolder) {
     expect_no_debris(out());
 }
 
-INSTANTIATE_TEST_SUITE_P(EveryStage, SecondWriter, ::testing::Values("init", "sim", "surface", "render"));
+INSTANTIATE_TEST_SUITE_P(EveryStage, SecondWriter,
+                         ::testing::Values("init", "sim", "surface", "render"));
 
 TEST_F(HostileInput, StaleLockOfADeadWriterIsRecovered) {
     const fs::path shot = write_shot(tiny_shot());
     fs::create_directories(out());
-    std::ofstream(out() / ".init.lock") << "host=localhost\npid=999999\nprogram=mc-init\nstart=yesterday\n";
+    std::ofstream(out() / ".init.lock")
+        << "host=localhost\npid=999999\nprogram=mc-init\nstart=yesterday\n";
     const Result r = run("init", shot);
     EXPECT_EQ(r.code, 0) << r.err;
     EXPECT_TRUE(fs::exists(out() / "init" / "manifest.json"));
@@ -704,7 +780,8 @@ TEST_F(HostileInput, RenderChunksShareTheFolderAFullRunDoesNot) {
 // ---- a stage folder that is a symbolic link: refused by every writer, the link and its target
 // left as they were ---------------------------------------------------------------------------
 
-class SymlinkedStageFolder : public HostileInput, public ::testing::WithParamInterface<std::string> {};
+class SymlinkedStageFolder : public HostileInput,
+                             public ::testing::WithParamInterface<std::string> {};
 
 TEST_P(SymlinkedStageFolder, IsRefusedAndLeftAlone) {
     const std::string stage = GetParam();
@@ -722,12 +799,14 @@ TEST_P(SymlinkedStageFolder, IsRefusedAndLeftAlone) {
     expect_error(r, stage, {link.string() + ": a symbolic link", "mc-" + stage});
     EXPECT_TRUE(fs::is_symlink(link)) << "the link is not replaced";
     EXPECT_EQ(read_text(target / "keep.txt"), "not the stage's\n");
-    EXPECT_EQ(std::distance(fs::directory_iterator(target), fs::directory_iterator()), 1) << "nothing written there";
+    EXPECT_EQ(std::distance(fs::directory_iterator(target), fs::directory_iterator()), 1)
+        << "nothing written there";
     expect_no_debris(out());
     expect_no_debris(m_dir / "elsewhere");
 }
 
-INSTANTIATE_TEST_SUITE_P(EveryStage, SymlinkedStageFolder, ::testing::Values("init", "sim", "surface", "render"));
+INSTANTIATE_TEST_SUITE_P(EveryStage, SymlinkedStageFolder,
+                         ::testing::Values("init", "sim", "surface", "render"));
 
 // ---- damaged files: any flipped byte is caught by every reader, naming the file and "damaged";
 // mc-sim --resume simulates a damaged frame again -------------------------------------------------
@@ -767,9 +846,10 @@ std::vector<size_t> sweep_offsets(size_t size) {
 
 // each offset of `file` damaged in turn (the file restored after each), `read` run on it: it must
 // exit 1 naming the file and "damaged", and leave no output behind
-void expect_damage_refused(const fs::path& file, const std::string& stage, const std::function<Result()>& read,
-                           const std::function<void()>& expect_nothing_written,
-                           const std::function<std::vector<size_t>(size_t)>& offsets = damage_offsets) {
+void expect_damage_refused(
+    const fs::path& file, const std::string& stage, const std::function<Result()>& read,
+    const std::function<void()>& expect_nothing_written,
+    const std::function<std::vector<size_t>(size_t)>& offsets = damage_offsets) {
     ASSERT_TRUE(fs::is_regular_file(file)) << file;
     const std::string clean = read_text(file);
     for (const size_t offset : offsets(clean.size())) {
@@ -777,7 +857,9 @@ void expect_damage_refused(const fs::path& file, const std::string& stage, const
         flip_byte(file, offset);
         const Result r = read();
         EXPECT_EQ(r.code, 1) << r.err;
-        EXPECT_NE(r.err.find("mc-" + stage + ": error: " + file.string() + ": damaged"), std::string::npos) << r.err;
+        EXPECT_NE(r.err.find("mc-" + stage + ": error: " + file.string() + ": damaged"),
+                  std::string::npos)
+            << r.err;
         expect_nothing_written();
         std::ofstream(file, std::ios::binary | std::ios::trunc) << clean;
     }
@@ -787,11 +869,14 @@ TEST_F(HostileInput, DamagedSimCacheIsRefusedBySurfaceAndMeasure) {
     const fs::path shot = write_shot(tiny_shot());
     run_before("surface", shot);
     const fs::path cache = out() / "sim" / "particles.0002.vdb";
-    expect_damage_refused(cache, "surface", [&] { return run("surface", shot); }, [&] {
-        EXPECT_FALSE(fs::exists(out() / "surface"));
-        expect_no_debris(out());
-    });
-    expect_damage_refused(cache, "measure", [&] { return run("measure", shot); }, [] {});
+    expect_damage_refused(
+        cache, "surface", [&] { return run("surface", shot); },
+        [&] {
+            EXPECT_FALSE(fs::exists(out() / "surface"));
+            expect_no_debris(out());
+        });
+    expect_damage_refused(
+        cache, "measure", [&] { return run("measure", shot); }, [] {});
 }
 
 TEST_F(HostileInput, DamagedInitFilesAreRefused) {
@@ -813,15 +898,19 @@ TEST_F(HostileInput, DamagedMeshIsRefusedByRenderAndMeasure) {
     const fs::path shot = write_shot(tiny_shot());
     run_before("render", shot);
     const fs::path mesh = file_starting(out() / "surface", "boundary.0002.");
-    expect_damage_refused(mesh, "render", [&] { return run("render", shot); }, [&] {
-        EXPECT_FALSE(fs::exists(out() / "render"));
-        expect_no_debris(out());
-    });
-    expect_damage_refused(mesh, "measure", [&] { return run("measure", shot); }, [] {});
+    expect_damage_refused(
+        mesh, "render", [&] { return run("render", shot); },
+        [&] {
+            EXPECT_FALSE(fs::exists(out() / "render"));
+            expect_no_debris(out());
+        });
+    expect_damage_refused(
+        mesh, "measure", [&] { return run("measure", shot); }, [] {});
     // the farm's merge checks what the chunks moved in with mc-shot verify
     flip_byte(mesh, 12);
     const Result v = Process("mc-shot", {"verify", (out() / "surface" / "manifest.json").string()},
-                             m_dir / "verify.txt").wait();
+                             m_dir / "verify.txt")
+                         .wait();
     EXPECT_EQ(v.code, 1) << v.err;
     expect_error(v, "shot", {mesh.string() + ": damaged"});
 }
@@ -832,15 +921,18 @@ TEST_F(HostileInput, DamagedImageIsRefusedByTheAssembly) {
     const Result chunk = run("render", shot, {"--frames", "1-3"});
     ASSERT_EQ(chunk.code, 0) << chunk.err;
     const fs::path image = out() / "render" / "frame.0002.png";
-    expect_damage_refused(image, "render", [&] { return run("render", shot, {"--assemble"}); }, [&] {
-        EXPECT_FALSE(fs::exists(out() / "render" / "manifest.json"));
-        EXPECT_FALSE(fs::exists(out() / "render" / "contact_sheet.png"));
-        expect_no_debris(out());
-    });
+    expect_damage_refused(
+        image, "render", [&] { return run("render", shot, {"--assemble"}); },
+        [&] {
+            EXPECT_FALSE(fs::exists(out() / "render" / "manifest.json"));
+            EXPECT_FALSE(fs::exists(out() / "render" / "contact_sheet.png"));
+            expect_no_debris(out());
+        });
     const Result assembled = run("render", shot, {"--assemble"});
     ASSERT_EQ(assembled.code, 0) << assembled.err;
     // a finished render folder: every image its manifest records, checked
-    const std::vector<std::string> verify = {"verify", (out() / "render" / "manifest.json").string()};
+    const std::vector<std::string> verify = {"verify",
+                                             (out() / "render" / "manifest.json").string()};
     EXPECT_EQ(Process("mc-shot", verify, m_dir / "verify.txt").wait().code, 0);
     flip_byte(out() / "render" / "turntable.0001.png", 30);
     const Result v = Process("mc-shot", verify, m_dir / "verify.txt").wait();
@@ -852,48 +944,93 @@ TEST_F(HostileInput, DamagedImageIsRefusedByTheAssembly) {
 // header and last byte included), each read by a stage that uses it: caught before it is used
 struct FlipCase {
     std::string name;
-    std::function<void(json&)> edit;                // the shot
-    std::vector<std::vector<std::string>> before;   // stage runs that make the files
-    std::vector<std::string> files;                 // the files, under OUT
-    std::string reader;                             // its stage; "shot": mc-shot verify of its folder
+    std::function<void(json&)> edit;               // the shot
+    std::vector<std::vector<std::string>> before;  // stage runs that make the files
+    std::vector<std::string> files;                // the files, under OUT
+    std::string reader;  // its stage; "shot": mc-shot verify of its folder
     std::vector<std::string> reader_args;
 };
 void PrintTo(const FlipCase& c, std::ostream* os) { *os << c.name; }
 
 // ours with a threshold that breaks edges at rest: crack meshes in 3 frames
 std::function<void(json&)> surfaced_as(const std::string& format) {
-    return [format](json& s) { s["surfacing"] = {{"mode", "ours"}, {"zeta", 0.9}, {"format", format}}; };
+    return [format](json& s) {
+        s["surfacing"] = {{"mode", "ours"}, {"zeta", 0.9}, {"format", format}};
+    };
 }
 const std::vector<std::vector<std::string>> kUpToSurface = {{"init"}, {"sim"}, {"surface"}};
 
 const FlipCase kFlipCases[] = {
-    {"sim_cache_by_surface", [](json&) {}, {{"init"}, {"sim"}}, {"sim/particles.0002.vdb"}, "surface", {}},
+    {"sim_cache_by_surface",
+     [](json&) {},
+     {{"init"}, {"sim"}},
+     {"sim/particles.0002.vdb"},
+     "surface",
+     {}},
     {"sim_cache_by_measure", [](json&) {}, kUpToSurface, {"sim/particles.0002.vdb"}, "measure", {}},
     {"init_particles_by_sim", [](json&) {}, {{"init"}}, {"init/particles.vdb"}, "sim", {}},
     {"init_tets_by_surface", [](json&) {}, {{"init"}, {"sim"}}, {"init/tets.vtu"}, "surface", {}},
-    {"glb_by_render", surfaced_as("glb"), kUpToSurface, {"surface/boundary.0002.glb", "surface/crack.0002.glb"},
-     "render", {"--frames", "2-2"}},
-    {"obj_by_render", surfaced_as("obj"), kUpToSurface, {"surface/boundary.0002.obj", "surface/crack.0002.obj"},
-     "render", {"--frames", "2-2"}},
+    {"glb_by_render",
+     surfaced_as("glb"),
+     kUpToSurface,
+     {"surface/boundary.0002.glb", "surface/crack.0002.glb"},
+     "render",
+     {"--frames", "2-2"}},
+    {"obj_by_render",
+     surfaced_as("obj"),
+     kUpToSurface,
+     {"surface/boundary.0002.obj", "surface/crack.0002.obj"},
+     "render",
+     {"--frames", "2-2"}},
     // an obj's material file, which the mesh's readers load with it
-    {"obj_material_by_render", surfaced_as("obj"), kUpToSurface,
-     {"surface/boundary.0002.mtl", "surface/crack.0002.mtl"}, "render", {"--frames", "2-2"}},
-    {"obj_material_by_verify", surfaced_as("obj"), kUpToSurface, {"surface/crack.0002.mtl"}, "shot", {}},
-    {"glb_by_measure", surfaced_as("glb"), kUpToSurface, {"surface/boundary.0002.glb"}, "measure", {}},
+    {"obj_material_by_render",
+     surfaced_as("obj"),
+     kUpToSurface,
+     {"surface/boundary.0002.mtl", "surface/crack.0002.mtl"},
+     "render",
+     {"--frames", "2-2"}},
+    {"obj_material_by_verify",
+     surfaced_as("obj"),
+     kUpToSurface,
+     {"surface/crack.0002.mtl"},
+     "shot",
+     {}},
+    {"glb_by_measure",
+     surfaced_as("glb"),
+     kUpToSurface,
+     {"surface/boundary.0002.glb"},
+     "measure",
+     {}},
     {"obj_by_measure", surfaced_as("obj"), kUpToSurface, {"surface/crack.0002.obj"}, "measure", {}},
-    {"ply_by_measure", surfaced_as("ply"), kUpToSurface, {"surface/boundary.0002.ply", "surface/crack.0002.ply"},
-     "measure", {}},
-    {"dae_by_measure", surfaced_as("dae"), kUpToSurface, {"surface/boundary.0002.dae", "surface/crack.0002.dae"},
-     "measure", {}},
+    {"ply_by_measure",
+     surfaced_as("ply"),
+     kUpToSurface,
+     {"surface/boundary.0002.ply", "surface/crack.0002.ply"},
+     "measure",
+     {}},
+    {"dae_by_measure",
+     surfaced_as("dae"),
+     kUpToSurface,
+     {"surface/boundary.0002.dae", "surface/crack.0002.dae"},
+     "measure",
+     {}},
     // plates breaking everything at rest: every particle is debris; no stage reads the points, the
     // farm's merge and the Blender add-on verify them
     {"debris_points_by_verify",
      [](json& s) {
-         s["surfacing"] = {{"mode", "plates"}, {"zeta", 0.9}, {"min_piece_size", 1}, {"debris", "points"}};
+         s["surfacing"] = {
+             {"mode", "plates"}, {"zeta", 0.9}, {"min_piece_size", 1}, {"debris", "points"}};
      },
-     kUpToSurface, {"surface/debris.0002.ply"}, "shot", {}},
-    {"image_by_assembly", [](json&) {}, {{"init"}, {"sim"}, {"surface"}, {"render", "--frames", "1-3"}},
-     {"render/frame.0002.png"}, "render", {"--assemble"}},
+     kUpToSurface,
+     {"surface/debris.0002.ply"},
+     "shot",
+     {}},
+    {"image_by_assembly",
+     [](json&) {},
+     {{"init"}, {"sim"}, {"surface"}, {"render", "--frames", "1-3"}},
+     {"render/frame.0002.png"},
+     "render",
+     {"--assemble"}},
 };
 
 class FlippedByte : public HostileInput, public ::testing::WithParamInterface<FlipCase> {};
@@ -908,7 +1045,8 @@ TEST_P(FlippedByte, AtAnyOffsetIsCaughtBeforeUse) {
         ASSERT_EQ(r.code, 0) << step[0] << ": " << r.err;
     }
     // what the reader would have written: nothing, its stage folder (or a finished render) absent
-    const bool is_assembly = std::count(c.reader_args.begin(), c.reader_args.end(), "--assemble") > 0;
+    const bool is_assembly =
+        std::count(c.reader_args.begin(), c.reader_args.end(), "--assemble") > 0;
     const fs::path written = is_assembly ? out() / "render" / "manifest.json" : out() / c.reader;
     const auto read = [&] {
         if (c.reader != "shot") return run(c.reader, shot, c.reader_args);
@@ -917,12 +1055,15 @@ TEST_P(FlippedByte, AtAnyOffsetIsCaughtBeforeUse) {
     };
     for (const std::string& name : c.files) {
         const fs::path file = out() / name;
-        expect_damage_refused(file, c.reader, read, [&] {
-            if (c.reader != "shot" && c.reader != "measure") {
-                EXPECT_FALSE(fs::exists(written)) << written;
-            }
-            expect_no_debris(out());
-        }, sweep_offsets);
+        expect_damage_refused(
+            file, c.reader, read,
+            [&] {
+                if (c.reader != "shot" && c.reader != "measure") {
+                    EXPECT_FALSE(fs::exists(written)) << written;
+                }
+                expect_no_debris(out());
+            },
+            sweep_offsets);
     }
     // the files restored, the reader runs
     const Result clean = read();
@@ -939,7 +1080,9 @@ TEST_F(HostileInput, ResumeSimulatesADamagedFrameAgain) {
     const fs::path shot = write_shot(s);
     run_before("sim", shot);
     ASSERT_EQ(run("sim", shot).code, 0);
-    const auto cache = [&](int f) { return out() / "sim" / ("particles.000" + std::to_string(f) + ".vdb"); };
+    const auto cache = [&](int f) {
+        return out() / "sim" / ("particles.000" + std::to_string(f) + ".vdb");
+    };
     std::vector<std::string> clean;
     for (int f = 1; f <= 4; ++f) clean.push_back(read_text(cache(f)));
     const json clean_manifest = json::parse(read_text(out() / "sim" / "manifest.json"));
@@ -952,7 +1095,8 @@ TEST_F(HostileInput, ResumeSimulatesADamagedFrameAgain) {
         EXPECT_EQ(r.code, 0) << r.err;
         EXPECT_NE(r.err.find(cache(damaged).string() + ": damaged"), std::string::npos) << r.err;
         for (int f = 1; f <= 4; ++f)
-            EXPECT_EQ(read_text(cache(f)), clean[size_t(f - 1)]) << "frame " << f << " differs from the clean run's";
+            EXPECT_EQ(read_text(cache(f)), clean[size_t(f - 1)])
+                << "frame " << f << " differs from the clean run's";
         const json manifest = json::parse(read_text(out() / "sim" / "manifest.json"));
         EXPECT_EQ(manifest["caches"], clean_manifest["caches"]);
         EXPECT_EQ(run("surface", shot).code, 0);
@@ -991,10 +1135,11 @@ TEST_P(StoppedBySignal, CleansUpAndExits128PlusTheSignal) {
     Process p = start(c.stage, shot);
     // stopped while it writes: a frame written (sim), its partial folder made (init), a frame in
     // it (surface, render)
-    const std::map<std::string, fs::path> signs = {{"init", out() / ".init.partial"},
-                                                   {"sim", out() / "sim" / "particles.0002.vdb"},
-                                                   {"surface", out() / ".surface.partial" / "boundary.0001.glb"},
-                                                   {"render", out() / ".render.partial" / "frame.0001.png"}};
+    const std::map<std::string, fs::path> signs = {
+        {"init", out() / ".init.partial"},
+        {"sim", out() / "sim" / "particles.0002.vdb"},
+        {"surface", out() / ".surface.partial" / "boundary.0001.glb"},
+        {"render", out() / ".render.partial" / "frame.0001.png"}};
     const fs::path sign = signs.at(c.stage);
     ASSERT_TRUE(wait_for([&] { return fs::exists(sign); }, 60)) << sign;
     p.signal(c.signal);
@@ -1008,13 +1153,14 @@ TEST_P(StoppedBySignal, CleansUpAndExits128PlusTheSignal) {
         EXPECT_FALSE(fs::exists(out() / c.stage)) << "no stage folder from a stopped run";
 }
 
-INSTANTIATE_TEST_SUITE_P(Stages, StoppedBySignal,
-                         ::testing::Values(SignalCase{"init", SIGTERM}, SignalCase{"init", SIGINT},
-                                           SignalCase{"sim", SIGTERM}, SignalCase{"sim", SIGINT},
-                                           SignalCase{"surface", SIGTERM}, SignalCase{"surface", SIGINT},
-                                           SignalCase{"render", SIGTERM}, SignalCase{"render", SIGINT}),
-                         [](const auto& info) {
-                             return info.param.stage + (info.param.signal == SIGINT ? "_SIGINT" : "_SIGTERM");
-                         });
+INSTANTIATE_TEST_SUITE_P(
+    Stages, StoppedBySignal,
+    ::testing::Values(SignalCase{"init", SIGTERM}, SignalCase{"init", SIGINT},
+                      SignalCase{"sim", SIGTERM}, SignalCase{"sim", SIGINT},
+                      SignalCase{"surface", SIGTERM}, SignalCase{"surface", SIGINT},
+                      SignalCase{"render", SIGTERM}, SignalCase{"render", SIGINT}),
+    [](const auto& info) {
+        return info.param.stage + (info.param.signal == SIGINT ? "_SIGINT" : "_SIGTERM");
+    });
 
 }  // namespace

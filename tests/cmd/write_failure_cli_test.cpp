@@ -92,8 +92,9 @@ protected:
         fs::remove_all(m_dir);
         fs::create_directories(m_dir);
         // nobody must reach the shot and the inputs whatever the umask
-        fs::permissions(m_dir, fs::perms::owner_all | fs::perms::group_read | fs::perms::group_exec |
-                                   fs::perms::others_read | fs::perms::others_exec);
+        fs::permissions(m_dir, fs::perms::owner_all | fs::perms::group_read |
+                                   fs::perms::group_exec | fs::perms::others_read |
+                                   fs::perms::others_exec);
         m_shot = m_dir / "shot.json";
         std::ofstream(m_shot) << kShot;
         fs::permissions(m_shot, fs::perms::others_read, fs::perm_options::add);
@@ -108,12 +109,13 @@ protected:
         std::error_code ec;
         if (!fs::exists(dir, ec)) return;
         fs::permissions(dir, fs::perms::owner_write, fs::perm_options::add, ec);
-        for (auto it = fs::recursive_directory_iterator(dir, ec); !ec && it != fs::recursive_directory_iterator();
-             it.increment(ec))
+        for (auto it = fs::recursive_directory_iterator(dir, ec);
+             !ec && it != fs::recursive_directory_iterator(); it.increment(ec))
             fs::permissions(it->path(), fs::perms::owner_write, fs::perm_options::add, ec);
     }
     static void make_read_only(const fs::path& dir) {
-        const auto no_write = fs::perms::owner_write | fs::perms::group_write | fs::perms::others_write;
+        const auto no_write =
+            fs::perms::owner_write | fs::perms::group_write | fs::perms::others_write;
         for (const auto& e : fs::recursive_directory_iterator(dir))
             fs::permissions(e.path(), no_write, fs::perm_options::remove);
         fs::permissions(dir, no_write, fs::perm_options::remove);
@@ -125,7 +127,8 @@ protected:
             const std::vector<std::string>& extra = {}) {
         const std::string bin = (kBin / ("mc-" + stage)).string();
         const std::string err_file = (m_dir / "stderr.txt").string();
-        std::vector<std::string> args = {bin, "--threads", "2", "--shot", m_shot.string(), "--out", out.string()};
+        std::vector<std::string> args = {bin,     "--threads", "2", "--shot", m_shot.string(),
+                                         "--out", out.string()};
         args.insert(args.end(), extra.begin(), extra.end());
         std::vector<char*> argv;
         for (std::string& a : args) argv.push_back(a.data());
@@ -151,7 +154,8 @@ protected:
                 const rlimit limit{rlim_t(fault.file_size_limit), rlim_t(fault.file_size_limit)};
                 if (::setrlimit(RLIMIT_FSIZE, &limit) != 0) ::_exit(126);
             }
-            if (drop_root && (::setgroups(0, nullptr) != 0 || ::setgid(65534) != 0 || ::setuid(65534) != 0))
+            if (drop_root &&
+                (::setgroups(0, nullptr) != 0 || ::setgid(65534) != 0 || ::setuid(65534) != 0))
                 ::_exit(kCannotDropRoot);
             ::execve(argv[0], argv.data(), envp.data());
             ::_exit(127);
@@ -179,13 +183,15 @@ protected:
     static std::uintmax_t smallest_file(const fs::path& dir, const std::string& ext) {
         std::uintmax_t smallest = 0;
         for (const auto& e : fs::directory_iterator(dir))
-            if (e.path().extension() == ext && (smallest == 0 || e.file_size() < smallest)) smallest = e.file_size();
+            if (e.path().extension() == ext && (smallest == 0 || e.file_size() < smallest))
+                smallest = e.file_size();
         return smallest;
     }
 
     // the whole chain, fault-free, into DIR/good: the reference outputs and every stage's inputs
     void run_good_chain() {
-        for (const std::string& stage : kStages) ASSERT_EQ(run(stage, good(), {}), 0) << stage << ": " << m_stderr;
+        for (const std::string& stage : kStages)
+            ASSERT_EQ(run(stage, good(), {}), 0) << stage << ": " << m_stderr;
     }
     // a fresh output root holding what `stage` reads (the good outputs of the stages before it)
     fs::path inputs_for(const std::string& stage, const std::string& name) {
@@ -195,26 +201,31 @@ protected:
             if (before == stage) break;
             fs::copy(good() / before, out / before, fs::copy_options::recursive);
         }
-        fs::permissions(out, fs::perms::others_read | fs::perms::others_exec, fs::perm_options::add);
+        fs::permissions(out, fs::perms::others_read | fs::perms::others_exec,
+                        fs::perm_options::add);
         return out;
     }
 
     // exit 1 with one "mc-<stage>: error: <path>: ... <reason>" line naming a path under `out`
-    void expect_one_error_line(const std::string& stage, int code, const fs::path& out, const std::string& reason) {
+    void expect_one_error_line(const std::string& stage, int code, const fs::path& out,
+                               const std::string& reason) {
         EXPECT_EQ(code, 1) << m_stderr;
         const std::string head = "mc-" + stage + ": error: " + out.string();
         size_t lines = 0;
-        for (size_t at = m_stderr.find(": error: "); at != std::string::npos; at = m_stderr.find(": error: ", at + 1))
+        for (size_t at = m_stderr.find(": error: "); at != std::string::npos;
+             at = m_stderr.find(": error: ", at + 1))
             ++lines;
         EXPECT_EQ(lines, 1u) << m_stderr;
-        EXPECT_NE(m_stderr.find(head), std::string::npos) << "expected \"" << head << "...\" in:\n" << m_stderr;
+        EXPECT_NE(m_stderr.find(head), std::string::npos) << "expected \"" << head << "...\" in:\n"
+                                                          << m_stderr;
         EXPECT_NE(m_stderr.find(reason), std::string::npos) << m_stderr;
     }
     // nothing of the stage is left: no .partial folder, no output folder, no temporaries
     void expect_no_output(const std::string& stage, const fs::path& out) {
         EXPECT_FALSE(fs::exists(out / ("." + stage + ".partial"))) << stage;
         EXPECT_FALSE(fs::exists(out / stage)) << stage;
-        for (const std::string& name : listing(out)) EXPECT_EQ(name.find(".tmp"), std::string::npos) << name;
+        for (const std::string& name : listing(out))
+            EXPECT_EQ(name.find(".tmp"), std::string::npos) << name;
     }
     // mc-sim keeps its finished frames for --resume, each whole, and no manifest or temporary
     void expect_only_whole_frames(const fs::path& sim_dir) {
@@ -230,7 +241,8 @@ protected:
     }
     void expect_identical_sim_caches(const fs::path& sim_dir) {
         for (int f = 1; f <= 6; ++f) {
-            const fs::path a = frame_path(good() / "sim", "particles", f, "vdb"), b = frame_path(sim_dir, "particles", f, "vdb");
+            const fs::path a = frame_path(good() / "sim", "particles", f, "vdb"),
+                           b = frame_path(sim_dir, "particles", f, "vdb");
             ASSERT_TRUE(fs::exists(b)) << b;
             EXPECT_TRUE(read_text(a) == read_text(b)) << b << " differs from " << a;
         }
@@ -274,7 +286,8 @@ TEST_F(WriteFailureCli, FullDiskUnderFfmpegFailsTheRender) {
     ASSERT_GT(fs::file_size(good() / "render" / "preview.mp4"), 1024u);
     const fs::path wrapper_dir = m_dir / "bin";
     fs::create_directories(wrapper_dir);
-    std::ofstream(wrapper_dir / "ffmpeg") << "#!/bin/sh\ntrap '' XFSZ\nulimit -f 1\nexec " << ffmpeg << " \"$@\"\n";
+    std::ofstream(wrapper_dir / "ffmpeg")
+        << "#!/bin/sh\ntrap '' XFSZ\nulimit -f 1\nexec " << ffmpeg << " \"$@\"\n";
     fs::permissions(wrapper_dir / "ffmpeg", fs::perms::owner_exec, fs::perm_options::add);
     const fs::path out = inputs_for("render", "ffmpeg_full");
     const int code = run("render", out, first_on_path(wrapper_dir));
@@ -287,14 +300,17 @@ TEST_F(WriteFailureCli, FullDiskUnderFfmpegFailsTheRender) {
             EXPECT_EQ(line.rfind("mc-render: ", 0), 0u) << "a line not from mc-render: " << line;
         }
     }
-    EXPECT_NE(m_stderr.find("File too large"), std::string::npos) << "ffmpeg's reason is missing:\n" << m_stderr;
+    EXPECT_NE(m_stderr.find("File too large"), std::string::npos) << "ffmpeg's reason is missing:\n"
+                                                                  << m_stderr;
 }
 
 TEST_F(WriteFailureCli, FullDiskFailsARenderChunkAndLeavesNoFolder) {
     run_good_chain();
     // a farm chunk (--frames) into an output root without render/: its PNG cannot be written
     const fs::path out = inputs_for("render", "chunk_full");
-    const int code = run("render", out, file_size_limit(smallest_file(good() / "render", ".png") / 2), {"--frames", "1-2"});
+    const int code =
+        run("render", out, file_size_limit(smallest_file(good() / "render", ".png") / 2),
+            {"--frames", "1-2"});
     expect_one_error_line("render", code, out, "File too large");
     expect_no_output("render", out);
 }
@@ -352,14 +368,16 @@ TEST_F(WriteFailureCli, DiskFillsMidRunThenResumeGivesTheSameCaches) {
     m_mount = sim_dir;
 
     const int code = run("sim", out);
-    expect_one_error_line("sim", code, sim_dir / "particles.0004.vdb.tmp", "No space left on device");
+    expect_one_error_line("sim", code, sim_dir / "particles.0004.vdb.tmp",
+                          "No space left on device");
     EXPECT_NE(m_stderr.find("frames 1-3 are kept in"), std::string::npos) << m_stderr;
     expect_only_whole_frames(sim_dir);
     EXPECT_TRUE(fs::exists(sim_dir / "checkpoint.0002.bin"));
     EXPECT_FALSE(fs::exists(sim_dir / "particles.0004.vdb"));
 
     // space freed: resume from checkpoint 2, byte for byte the uninterrupted run
-    ASSERT_EQ(::mount("tmpfs", sim_dir.c_str(), "tmpfs", MS_REMOUNT, "size=64m"), 0) << std::strerror(errno);
+    ASSERT_EQ(::mount("tmpfs", sim_dir.c_str(), "tmpfs", MS_REMOUNT, "size=64m"), 0)
+        << std::strerror(errno);
     ASSERT_EQ(run("sim", out, {}, {"--resume"}), 0) << m_stderr;
     EXPECT_NE(m_stderr.find("checkpoint.0002.bin"), std::string::npos) << m_stderr;
     expect_identical_sim_caches(sim_dir);
@@ -373,7 +391,8 @@ TEST_F(WriteFailureCli, ReadOnlyFolderFailsEachStageWithThePathAndLeavesNothing)
         make_read_only(out);
         const std::vector<std::string> before = listing(out);
         const int code = run(stage, out, as_nobody());
-        if (code == kCannotDropRoot) GTEST_SKIP() << "root here cannot become uid 65534, and ignores 0555";
+        if (code == kCannotDropRoot)
+            GTEST_SKIP() << "root here cannot become uid 65534, and ignores 0555";
         expect_one_error_line(stage, code, out, "Permission denied");
         EXPECT_EQ(listing(out), before);
     }

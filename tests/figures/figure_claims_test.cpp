@@ -68,8 +68,8 @@ constexpr double kMaxLiftOff = 0.02;
 constexpr int kDemoPolygons = 6;
 constexpr double kMaxAxisAligned = 0.40;
 constexpr double kDemoPeel = 0.05;
-// The bar a close-up sets for the demo's plates: crack-wall roughness (the area-weighted mean angle between
-// neighbouring crack triangles) at most 15 degrees (as shipped 14.7; 42.3 with `ours`).
+// The bar a close-up sets for the demo's plates: crack-wall roughness (the area-weighted mean angle
+// between neighbouring crack triangles) at most 15 degrees (as shipped 14.7; 42.3 with `ours`).
 constexpr double kDemoWallRoughnessDeg = 15;
 
 // Fig. 7, the mossy ground with its strength field: at least 20 crack polygons and 3.5 effective
@@ -89,7 +89,8 @@ void expect_another_network_with_as_many_polygons(const json& one, const json& t
     EXPECT_NE(one.at("broken_edges").get<long long>(), two.at("broken_edges").get<long long>());
     const int polygons_one = one.at("surface_polygons").get<int>();
     const int polygons_two = two.at("surface_polygons").get<int>();
-    EXPECT_LE(std::max(polygons_one, polygons_two), kSameStatisticsFactor * std::min(polygons_one, polygons_two));
+    EXPECT_LE(std::max(polygons_one, polygons_two),
+              kSameStatisticsFactor * std::min(polygons_one, polygons_two));
 }
 
 std::string slurp(const fs::path& p) {
@@ -101,7 +102,8 @@ class FigureClaims : public ::testing::Test {
 protected:
     void SetUp() override {
         const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
-        m_dir = fs::temp_directory_path() / ("mudcrack_figures_" + std::to_string(::getpid()) + "_" + info->name());
+        m_dir = fs::temp_directory_path() /
+                ("mudcrack_figures_" + std::to_string(::getpid()) + "_" + info->name());
         fs::remove_all(m_dir);
         fs::create_directories(m_dir);
     }
@@ -112,7 +114,8 @@ protected:
 
     static json read_shot(const std::string& name) {
         const fs::path path = fs::path(MUDCRACK_SOURCE_DIR) / "shots" / (name + ".json");
-        return json::parse(slurp(path), nullptr, /*allow_exceptions=*/true, /*ignore_comments=*/true);
+        return json::parse(slurp(path), nullptr, /*allow_exceptions=*/true,
+                           /*ignore_comments=*/true);
     }
 
     /// Writes `shot` into the scratch folder as NAME.json.
@@ -124,13 +127,17 @@ protected:
     }
 
     /// The last frame of a shot written by write_shot: the frame every claim is on.
-    static int last_frame(const fs::path& shot) { return json::parse(slurp(shot)).at("frames").at("end").get<int>(); }
+    static int last_frame(const fs::path& shot) {
+        return json::parse(slurp(shot)).at("frames").at("end").get<int>();
+    }
 
-    /// Runs `program` (a stage binary) with `args`; false, with a test failure naming `shot` and the
-    /// program's error output, when it fails.
-    bool run_stage(const std::string& program, const std::string& args, const fs::path& shot) const {
+    /// Runs `program` (a stage binary) with `args`; false, with a test failure naming `shot` and
+    /// the program's error output, when it fails.
+    bool run_stage(const std::string& program, const std::string& args,
+                   const fs::path& shot) const {
         const std::string cmd = std::string(MUDCRACK_BIN_DIR) + "/" + program + args + " >" +
-                                (m_dir / "stdout.txt").string() + " 2>" + (m_dir / "stderr.txt").string();
+                                (m_dir / "stdout.txt").string() + " 2>" +
+                                (m_dir / "stderr.txt").string();
         const int status = std::system(cmd.c_str());
         if (WIFEXITED(status) && WEXITSTATUS(status) == 0) return true;
         ADD_FAILURE() << program << " failed on " << shot << ": " << slurp(m_dir / "stderr.txt");
@@ -142,23 +149,27 @@ protected:
     json run_and_measure(const fs::path& shot) const {
         const fs::path out = m_dir / shot.stem();
         const fs::path table = out / "measure.json";
-        const std::string flags = " --shot " + shot.string() + " --out " + out.string() + " --threads " +
-                                  std::to_string(kThreads) + " --quiet";
+        const std::string flags = " --shot " + shot.string() + " --out " + out.string() +
+                                  " --threads " + std::to_string(kThreads) + " --quiet";
         const std::string last_frame_only = " --frames " + std::to_string(last_frame(shot));
         if (!run_stage("mc-init", flags, shot) || !run_stage("mc-sim", flags, shot) ||
             !run_stage("mc-surface", flags + last_frame_only, shot) ||
             !run_stage("mc-measure", flags + last_frame_only + " --json " + table.string(), shot))
             return json();
         const json last = json::parse(slurp(table)).at("frames").back();
-        std::printf("%-14s frame %d: curl %.2f mm, median rise %.2f mm, split %.2f %% (%.2f cells up), lifted %.2f %%, "
-                    "%lld broken edges, %d surface polygons (effective %.2f), weighted mean polygon %.4f m^2, "
-                    "axis-aligned %.1f %%\n",
-                    shot.stem().c_str(), last.at("frame").get<int>(), 1e3 * last.at("curl").get<double>(),
-                    1e3 * last.at("top_rise_median").get<double>(), 100 * last.at("split_fraction").get<double>(),
-                    last.at("split_height_median_cells").get<double>(), 100 * last.at("lifted_fraction").get<double>(),
-                    last.at("broken_edges").get<long long>(), last.at("surface_polygons").get<int>(),
-                    last.at("effective_surface_polygons").get<double>(), last.at("weighted_mean_polygon_area").get<double>(),
-                    100 * last.at("axis_aligned_fraction").get<double>());
+        std::printf(
+            "%-14s frame %d: curl %.2f mm, median rise %.2f mm, split %.2f %% (%.2f cells up), lifted %.2f %%, "
+            "%lld broken edges, %d surface polygons (effective %.2f), weighted mean polygon %.4f m^2, "
+            "axis-aligned %.1f %%\n",
+            shot.stem().c_str(), last.at("frame").get<int>(), 1e3 * last.at("curl").get<double>(),
+            1e3 * last.at("top_rise_median").get<double>(),
+            100 * last.at("split_fraction").get<double>(),
+            last.at("split_height_median_cells").get<double>(),
+            100 * last.at("lifted_fraction").get<double>(),
+            last.at("broken_edges").get<long long>(), last.at("surface_polygons").get<int>(),
+            last.at("effective_surface_polygons").get<double>(),
+            last.at("weighted_mean_polygon_area").get<double>(),
+            100 * last.at("axis_aligned_fraction").get<double>());
         return last;
     }
 
@@ -214,7 +225,8 @@ TEST_F(FigureClaims, DemoCracksIntoAWanderingNetworkThatPeelsAndAnotherSeedDraws
     EXPECT_LE(one.at("crack_wall_roughness_deg").get<double>(), kDemoWallRoughnessDeg);
     // another seed: another network of the same statistics that also peels
     expect_another_network_with_as_many_polygons(one, two);
-    EXPECT_LE(std::abs(one.at("axis_aligned_fraction").get<double>() - two.at("axis_aligned_fraction").get<double>()),
+    EXPECT_LE(std::abs(one.at("axis_aligned_fraction").get<double>() -
+                       two.at("axis_aligned_fraction").get<double>()),
               kSameAxisShare);
     EXPECT_GE(two.at("split_fraction").get<double>(), kDemoPeel);
 }
@@ -249,11 +261,13 @@ TEST_F(FigureClaims, Fig6LargerHardeningRateCurlsMoreAndBreaksIntoLargerPieces) 
     for (int i = 1; i < 3; ++i) {
         SCOPED_TRACE(std::string(shots[i - 1]) + " vs " + shots[i]);
         EXPECT_GT(measured[i].at("curl").get<double>(), measured[i - 1].at("curl").get<double>());
-        EXPECT_GT(measured[i].at("lifted_fraction").get<double>(), measured[i - 1].at("lifted_fraction").get<double>());
+        EXPECT_GT(measured[i].at("lifted_fraction").get<double>(),
+                  measured[i - 1].at("lifted_fraction").get<double>());
         // pieces: never smaller, never more cracks
         EXPECT_GE(measured[i].at("weighted_mean_polygon_area").get<double>(),
                   measured[i - 1].at("weighted_mean_polygon_area").get<double>());
-        EXPECT_LE(measured[i].at("broken_edges").get<long long>(), measured[i - 1].at("broken_edges").get<long long>());
+        EXPECT_LE(measured[i].at("broken_edges").get<long long>(),
+                  measured[i - 1].at("broken_edges").get<long long>());
     }
     // eps = 0.2 breaks the top into polygons; eps = 1 leaves pieces at least twice their size
     EXPECT_GE(measured[0].at("surface_polygons").get<int>(), 5);

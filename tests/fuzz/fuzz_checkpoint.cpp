@@ -5,8 +5,8 @@
 #include <vector>
 
 #include "fuzz_input.h"
-#include "pipeline/stages/sim/sim_checkpoint.h"
 #include "pipeline/io/checksum.h"
+#include "pipeline/stages/sim/sim_checkpoint.h"
 
 extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
     using namespace mudcrack;
@@ -16,7 +16,8 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
         std::vector<uint8_t> fixed(data, data + size);
         const size_t body = size - sizeof(uint64_t);
         const uint64_t hash = fnv1a64(fixed.data(), body, kFnv1a64Offset);
-        std::memcpy(fixed.data() + body, &hash, sizeof hash);  // little-endian hosts (the writer's order)
+        // little-endian hosts (the writer's order)
+        std::memcpy(fixed.data() + body, &hash, sizeof hash);
         const auto resealed = fuzz::write_input(fixed.data(), fixed.size(), "checkpoint.0002.bin");
         fuzz::expect_clean_refusal([&] { (void)read_sim_checkpoint(resealed); });
     }

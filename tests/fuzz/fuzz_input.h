@@ -18,8 +18,8 @@ namespace mudcrack::fuzz {
 /// A folder of this process's own under the temporary directory (fuzzers may run side by side).
 inline const std::filesystem::path& scratch_dir() {
     static const std::filesystem::path dir = [] {
-        const std::filesystem::path d =
-            std::filesystem::temp_directory_path() / ("mudcrack_fuzz_" + std::to_string(::getpid()));
+        const std::filesystem::path d = std::filesystem::temp_directory_path() /
+                                        ("mudcrack_fuzz_" + std::to_string(::getpid()));
         std::filesystem::create_directories(d);
         return d;
     }();
@@ -27,7 +27,8 @@ inline const std::filesystem::path& scratch_dir() {
 }
 
 /// Writes the input to scratch_dir()/name and returns its path.
-inline std::filesystem::path write_input(const uint8_t* data, size_t size, const std::string& name) {
+inline std::filesystem::path write_input(const uint8_t* data, size_t size,
+                                         const std::string& name) {
     const std::filesystem::path path = scratch_dir() / name;
     std::ofstream os(path, std::ios::binary | std::ios::trunc);
     os.write(reinterpret_cast<const char*>(data), std::streamsize(size));

@@ -35,7 +35,8 @@ int main(int argc, char** argv) {
     }
     for (const fs::path& p : inputs) {
         std::ifstream is(p, std::ios::binary);
-        const std::vector<char> bytes((std::istreambuf_iterator<char>(is)), std::istreambuf_iterator<char>());
+        const std::vector<char> bytes((std::istreambuf_iterator<char>(is)),
+                                      std::istreambuf_iterator<char>());
         LLVMFuzzerTestOneInput(reinterpret_cast<const uint8_t*>(bytes.data()), bytes.size());
     }
     std::error_code ec;

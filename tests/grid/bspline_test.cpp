@@ -45,7 +45,8 @@ TEST(BSpline, StencilReproducesLinearFieldsAndGradients) {
         for (int a = 0; a < 3; ++a)
             for (int b = 0; b < 3; ++b)
                 for (int c = 0; c < 3; ++c) {
-                    const Vec3 xi = origin + h * Vec3(st.axis[0].base + a, st.axis[1].base + b, st.axis[2].base + c);
+                    const Vec3 xi = origin + h * Vec3(st.axis[0].base + a, st.axis[1].base + b,
+                                                      st.axis[2].base + c);
                     const Real w = st.weight(a, b, c);
                     const Vec3 g = st.gradient(a, b, c, inv_h);
                     wsum += w;

@@ -22,7 +22,8 @@ namespace mudcrack {
 namespace {
 
 // tolerances, named by what they bound
-constexpr double kManifestExact = 1e-15;   // a manifest number that is an exact lattice volume [m^3]
+// a manifest number that is an exact lattice volume [m^3]
+constexpr double kManifestExact = 1e-15;
 constexpr double kMeshedVolumeAbs = 1e-6;  // Mesh_3's volume of a cube [m^3]
 
 namespace fs = std::filesystem;
@@ -32,7 +33,8 @@ class InitCli : public ::testing::Test {
 protected:
     void SetUp() override {
         const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
-        m_dir = fs::temp_directory_path() / ("mudcrack_init_cli_" + std::to_string(::getpid()) + "_" + info->name());
+        m_dir = fs::temp_directory_path() /
+                ("mudcrack_init_cli_" + std::to_string(::getpid()) + "_" + info->name());
         fs::remove_all(m_dir);
         fs::create_directories(m_dir);
     }
@@ -52,8 +54,8 @@ protected:
     /// Same, under `env_command` (e.g. "env A=1"), which prefixes the command line.
     int run_with_env(const std::string& env_command, const std::string& args) {
         const fs::path out = m_dir / "stdout.txt", err = m_dir / "stderr.txt";
-        const std::string cmd = env_command + " " + std::string(MUDCRACK_BIN_DIR) + "/mc-init " + args + " >" +
-                                out.string() + " 2>" + err.string();
+        const std::string cmd = env_command + " " + std::string(MUDCRACK_BIN_DIR) + "/mc-init " +
+                                args + " >" + out.string() + " 2>" + err.string();
         const int status = std::system(cmd.c_str());
         m_stdout = slurp(out);
         m_stderr = slurp(err);
@@ -86,7 +88,8 @@ TEST_F(InitCli, NoArgumentsIsAUsageError) { EXPECT_EQ(run(""), 2) << m_stderr; }
 
 TEST_F(InitCli, UnknownFlagIsAUsageError) {
     const fs::path shot = write("box.json", kTinyBox);
-    EXPECT_EQ(run("--shot " + shot.string() + " --out " + (m_dir / "out").string() + " --bogus"), 2);
+    EXPECT_EQ(run("--shot " + shot.string() + " --out " + (m_dir / "out").string() + " --bogus"),
+              2);
 }
 
 TEST_F(InitCli, HelpExitsZeroAndListsTheCommonFlags) {
@@ -127,7 +130,8 @@ TEST_F(InitCli, TinyBoxShotProducesParticlesTetsAndManifest) {
     EXPECT_EQ(mesh.boundary.size(), 2u * 2 * (4 * 2 + 4 * 4 + 2 * 4));
     EXPECT_EQ(mesh.boundary_uv.size(), mesh.boundary.size());
 
-    EXPECT_NE(m_stdout.find("particles"), std::string::npos) << "summary table on stdout:\n" << m_stdout;
+    EXPECT_NE(m_stdout.find("particles"), std::string::npos) << "summary table on stdout:\n"
+                                                             << m_stdout;
 }
 
 TEST_F(InitCli, BadShotExitsOneNamingTheKeyAndLeavesNoOutput) {
@@ -146,7 +150,10 @@ TEST_F(InitCli, BadShotExitsOneNamingTheKeyAndLeavesNoOutput) {
 // barriers unless the user chose otherwise; libgomp prints what it runs with (OMP_DISPLAY_ENV)
 TEST_F(InitCli, OpenMpThreadsSleepAtBarriersUnlessTheUserChoosesOtherwise) {
     auto openmp_settings = [&](const std::string& env) {
-        EXPECT_EQ(run_with_env("env -u OMP_WAIT_POLICY -u GOMP_SPINCOUNT OMP_DISPLAY_ENV=verbose " + env, "--version"), 0)
+        EXPECT_EQ(
+            run_with_env("env -u OMP_WAIT_POLICY -u GOMP_SPINCOUNT OMP_DISPLAY_ENV=verbose " + env,
+                         "--version"),
+            0)
             << m_stderr;
         return m_stderr;
     };
@@ -179,8 +186,9 @@ TEST_F(InitCli, TooManyParticlesNamesFileKeyAndAWholeCount) {
     })");
     const fs::path out = m_dir / "out";
     EXPECT_EQ(run("--shot " + shot.string() + " --out " + out.string()), 1);
-    const std::string expected = "mc-init: error: " + shot.string() +
-                                 ": /source/box/spacing = 0.001: gives 1003003001 particles; expected at most 50000000";
+    const std::string expected =
+        "mc-init: error: " + shot.string() +
+        ": /source/box/spacing = 0.001: gives 1003003001 particles; expected at most 50000000";
     EXPECT_NE(m_stderr.find(expected), std::string::npos) << m_stderr;
     EXPECT_EQ(m_stderr.find(".000000"), std::string::npos) << m_stderr;
     expect_no_output(out);
@@ -190,10 +198,12 @@ TEST_F(InitCli, TooManyParticlesNamesFileKeyAndAWholeCount) {
 TEST_F(InitCli, NonPositiveGridSpacingNamesFileKeyAndValue) {
     for (const char* h : {"0", "-0.05"}) {
         const fs::path shot = write("flat.json", std::string(R"({
-          "mudcrack": 1, "source": { "type": "box" }, "material": {}, "sim": { "h": )") + h + " } }");
+          "mudcrack": 1, "source": { "type": "box" }, "material": {}, "sim": { "h": )") +
+                                                     h + " } }");
         const fs::path out = m_dir / "out";
         EXPECT_EQ(run("--shot " + shot.string() + " --out " + out.string()), 1) << h;
-        const std::string expected = "mc-init: error: " + shot.string() + ": /sim/h = " + h + ": must be > 0 [m]";
+        const std::string expected =
+            "mc-init: error: " + shot.string() + ": /sim/h = " + h + ": must be > 0 [m]";
         EXPECT_NE(m_stderr.find(expected), std::string::npos) << m_stderr;
         expect_no_output(out);
     }
@@ -236,8 +246,9 @@ TEST_F(InitCli, OpenMeshExitsOneNamingTheBorderEdgesAndLeavesNoOutput) {
 }
 
 TEST_F(InitCli, ClosedMeshShotIsTetrahedralized) {
-    write("cube.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 1 1 0\nv 0 0 1\nv 1 0 1\nv 0 1 1\nv 1 1 1\n"
-                      "f 1 3 4 2\nf 5 6 8 7\nf 1 2 6 5\nf 3 7 8 4\nf 1 5 7 3\nf 2 4 8 6\n");
+    write("cube.obj",
+          "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 1 1 0\nv 0 0 1\nv 1 0 1\nv 0 1 1\nv 1 1 1\n"
+          "f 1 3 4 2\nf 5 6 8 7\nf 1 2 6 5\nf 3 7 8 4\nf 1 5 7 3\nf 2 4 8 6\n");
     const fs::path shot = write("mesh.json", R"({
       "mudcrack": 1,
       "source": { "type": "mesh", "mesh": { "path": "cube.obj", "scale": 0.5 } },

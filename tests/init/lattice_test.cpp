@@ -21,9 +21,9 @@ namespace mudcrack {
 namespace {
 
 // tolerances, named by what they bound
-constexpr double kAngleDeg = 1e-9;          // dihedral angles of exact lattice tets [deg]
+constexpr double kAngleDeg = 1e-9;              // dihedral angles of exact lattice tets [deg]
 constexpr double kHeightfieldVolumeRel = 5e-3;  // column tets' volume vs the heightfield's integral
-constexpr double kLatticeExact = 1e-12;     // volumes and bounds a regular lattice gives exactly
+constexpr double kLatticeExact = 1e-12;  // volumes and bounds a regular lattice gives exactly
 
 InitParams box_params(Vec3 min, Vec3 max, Real spacing, Lattice lattice) {
     InitParams p;
@@ -43,12 +43,14 @@ TEST(InitKuhnTets, OneCellIsSixPositiveTetsFillingTheCube) {
     m.tets = kuhn_tets(1, 1, 1);
     ASSERT_EQ(m.tets.size(), 6u);
     for (const Tet& t : m.tets)
-        EXPECT_NEAR(signed_tet_volume(m.X[t[0]], m.X[t[1]], m.X[t[2]], m.X[t[3]]), 1.0 / 6, tol::kRoundoff);
+        EXPECT_NEAR(signed_tet_volume(m.X[t[0]], m.X[t[1]], m.X[t[2]], m.X[t[3]]), 1.0 / 6,
+                    tol::kRoundoff);
 }
 
 TEST(InitBoxSource, RegularLatticeHasExactCountsAndVolume) {
     // 0.4 x 0.1 x 0.3 at 0.05: 8 x 2 x 6 cells
-    const InitParams p = box_params(Vec3(-0.2, 0, -0.15), Vec3(0.2, 0.1, 0.15), 0.05, Lattice::Regular);
+    const InitParams p =
+        box_params(Vec3(-0.2, 0, -0.15), Vec3(0.2, 0.1, 0.15), 0.05, Lattice::Regular);
     const InitResult r = build_init(p, 0.05);
     EXPECT_EQ(r.quality.particles, 9 * 3 * 7);
     EXPECT_EQ(r.quality.tets, 6 * 8 * 2 * 6);
@@ -80,7 +82,8 @@ TEST(InitBoxSource, JitteredLatticeKeepsCountsVolumeAndPositiveTets) {
     InitParams p = box_params(Vec3(0, 0, 0), Vec3(0.5, 0.25, 0.5), 0.05, Lattice::Jittered);
     p.box.jitter = 0.45;  // near the spec's limit (< 0.5), where unchecked moves would invert tets
     const InitResult r = build_init(p, 0.05);
-    const InitResult regular = build_init(box_params(p.box.min, p.box.max, 0.05, Lattice::Regular), 0.05);
+    const InitResult regular =
+        build_init(box_params(p.box.min, p.box.max, 0.05, Lattice::Regular), 0.05);
     EXPECT_EQ(r.quality.particles, 11 * 6 * 11);
     EXPECT_EQ(r.quality.tets, regular.quality.tets);
     EXPECT_NEAR(r.quality.tet_volume / (0.5 * 0.25 * 0.5), 1.0, tol::kRoundoffLoose);
@@ -94,7 +97,8 @@ TEST(InitBoxSource, JitteredLatticeKeepsCountsVolumeAndPositiveTets) {
         const Real d = (r.mesh.X[v] - regular.mesh.X[v]).norm();
         EXPECT_LE(d, 0.45 * 0.05 + 1e-12);
         const Vec3& x = regular.mesh.X[v];
-        const bool is_surface = x.x() == 0 || x.x() == 0.5 || x.y() == 0 || x.y() == 0.25 || x.z() == 0 || x.z() == 0.5;
+        const bool is_surface =
+            x.x() == 0 || x.x() == 0.5 || x.y() == 0 || x.y() == 0.25 || x.z() == 0 || x.z() == 0.5;
         if (is_surface) {
             EXPECT_EQ(d, 0) << "surface point " << v << " moved";
         }
@@ -106,7 +110,8 @@ TEST(InitBoxSource, JitteredLatticeKeepsCountsVolumeAndPositiveTets) {
 
 TEST(InitBoxSource, JitterIsSeeded) {
     InitParams p = box_params(Vec3(0, 0, 0), Vec3(0.3, 0.3, 0.3), 0.05, Lattice::Jittered);
-    const TetMesh a = make_box_tets(p.box, 7), b = make_box_tets(p.box, 7), c = make_box_tets(p.box, 8);
+    const TetMesh a = make_box_tets(p.box, 7), b = make_box_tets(p.box, 7),
+                  c = make_box_tets(p.box, 8);
     EXPECT_EQ(a.X, b.X);
     EXPECT_NE(a.X, c.X);
 }
@@ -155,7 +160,9 @@ TEST(InitHeightfield, RiverbedHasAFlatBottomACarvedChannelAndConservesVolume) {
     const int n = 400;
     for (int k = 0; k < n; ++k)
         for (int i = 0; i < n; ++i)
-            integral += riverbed_height(p.heightfield, -1 + 2 * (i + 0.5) / n, -1 + 2 * (k + 0.5) / n) * (4.0 / (n * n));
+            integral +=
+                riverbed_height(p.heightfield, -1 + 2 * (i + 0.5) / n, -1 + 2 * (k + 0.5) / n) *
+                (4.0 / (n * n));
     EXPECT_NEAR(r.quality.tet_volume / integral, 1.0, kHeightfieldVolumeRel);
 }
 
@@ -173,9 +180,11 @@ TEST(InitHeightfield, ChannelThroughTheFloorIsAnInputError) {
 }
 
 /// A grayscale PNG in the temp folder; the caller removes it.
-std::string write_gray_png(const std::string& stem, int width, int height, const std::vector<uint8_t>& gray) {
+std::string write_gray_png(const std::string& stem, int width, int height,
+                           const std::vector<uint8_t>& gray) {
     const std::string path = (std::filesystem::temp_directory_path() /
-                              ("mudcrack_init_" + stem + "_" + std::to_string(::getpid()) + ".png")).string();
+                              ("mudcrack_init_" + stem + "_" + std::to_string(::getpid()) + ".png"))
+                                 .string();
     Image image;
     image.width = width;
     image.height = height;
@@ -225,7 +234,8 @@ TEST(InitColumnLattice, SteepColumnsStayPositive) {
     std::vector<Real> top(5 * 5);
     for (size_t c = 0; c < top.size(); ++c) top[c] = (c % 3 == 0) ? 1.0 : 0.02;
     const TetMesh m = make_column_lattice_tets(0, 0, 1, 1, 4, 3, 4, top);
-    ASSERT_EQ(m.tets.size(), size_t(6 * 4 * 3 * 4)) << "6 Kuhn tets per cell of the 4 x 3 x 4 lattice";
+    ASSERT_EQ(m.tets.size(), size_t(6 * 4 * 3 * 4))
+        << "6 Kuhn tets per cell of the 4 x 3 x 4 lattice";
     test::expect_all_tets_positive(m);
 }
 
@@ -243,7 +253,8 @@ TEST(InitBoundaryUV, ProjectionUsesTheDominantAxisPlaneScaledByTheLargestExtent)
             if (std::abs(n.y()) > 0) expected = Vec2(x.x() / 2, x.z() / 2);
             if (std::abs(n.x()) > 0) expected = Vec2(x.z() / 2, x.y() / 2);
             if (std::abs(n.z()) > 0) expected = Vec2(x.x() / 2, x.y() / 2);
-            EXPECT_EQ(uv, expected) << "face " << f << " corner " << c << " normal " << n.transpose();
+            EXPECT_EQ(uv, expected)
+                << "face " << f << " corner " << c << " normal " << n.transpose();
             EXPECT_GE(uv.minCoeff(), 0);
             EXPECT_LE(uv.maxCoeff(), 1);
         }
@@ -252,7 +263,8 @@ TEST(InitBoundaryUV, ProjectionUsesTheDominantAxisPlaneScaledByTheLargestExtent)
 
 TEST(InitTetMeshOps, DropUnusedVerticesRenumbersContiguously) {
     TetMesh m;
-    m.X = {Vec3(9, 9, 9), Vec3(0, 0, 0), Vec3(1, 0, 0), Vec3(7, 7, 7), Vec3(0, 1, 0), Vec3(0, 0, 1)};
+    m.X = {Vec3(9, 9, 9), Vec3(0, 0, 0), Vec3(1, 0, 0),
+           Vec3(7, 7, 7), Vec3(0, 1, 0), Vec3(0, 0, 1)};
     m.tets = {{1, 2, 4, 5}};
     drop_unused_vertices(m);
     ASSERT_EQ(m.X.size(), 4u);
@@ -267,9 +279,11 @@ TEST(InitTetMeshOps, DihedralAnglesOfTheRegularTetAreArccosOneThird) {
     for (Real angle : dihedral_angles_deg(a, b, c, d)) EXPECT_NEAR(angle, expected, kAngleDeg);
     // the corner tet of a cube: 90 degrees at the three edges through the corner, and
     // acos(1/sqrt(3)) = 54.74 degrees where the slanted face x+y+z=1 meets the others
-    const auto corner = dihedral_angles_deg(Vec3(0, 0, 0), Vec3(1, 0, 0), Vec3(0, 1, 0), Vec3(0, 0, 1));
+    const auto corner =
+        dihedral_angles_deg(Vec3(0, 0, 0), Vec3(1, 0, 0), Vec3(0, 1, 0), Vec3(0, 0, 1));
     const Real slanted = std::acos(1 / std::sqrt(3.0)) * 180 / M_PI;
-    for (int e : {0, 1, 2}) EXPECT_NEAR(corner[e], 90, kAngleDeg) << "edge " << e;  // edges (0,1), (0,2), (0,3)
+    // edges (0,1), (0,2), (0,3)
+    for (int e : {0, 1, 2}) EXPECT_NEAR(corner[e], 90, kAngleDeg) << "edge " << e;
     for (int e : {3, 4, 5}) EXPECT_NEAR(corner[e], slanted, kAngleDeg) << "edge " << e;
 }
 

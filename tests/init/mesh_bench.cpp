@@ -42,20 +42,30 @@ BenchConfig parse_flags(int& argc, char** argv) {
             if (i + 1 >= argc) throw InputError(a + ": missing value");
             return argv[++i];
         };
-        if (a == "--mesh") c.mesh = value();
-        else if (a == "--scale") c.scale = std::stod(value());
+        if (a == "--mesh")
+            c.mesh = value();
+        else if (a == "--scale")
+            c.scale = std::stod(value());
         else if (a == "--edges") {
             c.edges.clear();
             std::stringstream s(value());
             for (std::string e; std::getline(s, e, ',');) c.edges.push_back(std::stod(e));
-        } else if (a == "--parallel") c.mesher.parallel = true;
-        else if (a == "--perturb") c.mesher.perturb = true;
-        else if (a == "--exude") c.mesher.exude = true;
-        else if (a == "--facet-size-ratio") c.mesher.facet_size_ratio = std::stod(value());
-        else if (a == "--cell-size-ratio") c.mesher.cell_size_ratio = std::stod(value());
-        else if (a == "--facet-distance-ratio") c.mesher.facet_distance_ratio = std::stod(value());
-        else if (a == "--feature-angle") c.mesher.feature_angle = std::stod(value());
-        else rest.push_back(argv[i]);
+        } else if (a == "--parallel")
+            c.mesher.parallel = true;
+        else if (a == "--perturb")
+            c.mesher.perturb = true;
+        else if (a == "--exude")
+            c.mesher.exude = true;
+        else if (a == "--facet-size-ratio")
+            c.mesher.facet_size_ratio = std::stod(value());
+        else if (a == "--cell-size-ratio")
+            c.mesher.cell_size_ratio = std::stod(value());
+        else if (a == "--facet-distance-ratio")
+            c.mesher.facet_distance_ratio = std::stod(value());
+        else if (a == "--feature-angle")
+            c.mesher.feature_angle = std::stod(value());
+        else
+            rest.push_back(argv[i]);
     }
     argc = static_cast<int>(rest.size());
     for (int i = 0; i < argc; ++i) argv[i] = rest[i];
@@ -112,8 +122,10 @@ int main(int argc, char** argv) {
     }
     for (Real edge : config.edges) {
         char name[128];
-        std::snprintf(name, sizeof name, "mesh/%s/edge:%.4g", config.mesher.parallel ? "parallel" : "sequential", edge);
-        benchmark::RegisterBenchmark(name, [config, edge](benchmark::State& s) { bench_mesh(s, config, edge); })
+        std::snprintf(name, sizeof name, "mesh/%s/edge:%.4g",
+                      config.mesher.parallel ? "parallel" : "sequential", edge);
+        benchmark::RegisterBenchmark(
+            name, [config, edge](benchmark::State& s) { bench_mesh(s, config, edge); })
             ->Unit(benchmark::kSecond)
             ->Iterations(1)
             ->UseRealTime();

@@ -18,13 +18,15 @@ namespace mudcrack {
 namespace {
 
 // tolerances, named by what they bound
-constexpr double kMeshedVolumeRel = 0.03;    // Mesh_3's volume of a curved surface vs the enclosed volume
-constexpr double kOnSphereAbs = 0.01;        // a surface vertex's distance from the sphere [m]
-constexpr double kEdgeLengthRel = 0.25;      // mean edge length vs the asked edge length
-constexpr double kCubeVolumeAbs = 1e-6;      // a meshed unit cube's volume [m^3]
-constexpr double kBoxExactAbs = 1e-9;        // bounds and volumes a box gives exactly, summed round-off
-constexpr double kFittedVolumeRel = 0.02;    // the tets' volume vs the input surface's
-constexpr double kGroundFitAbs = 0.01;       // fit_to_ground's lowest point vs y = 0 [m]
+// Mesh_3's volume of a curved surface vs the enclosed volume
+constexpr double kMeshedVolumeRel = 0.03;
+constexpr double kOnSphereAbs = 0.01;    // a surface vertex's distance from the sphere [m]
+constexpr double kEdgeLengthRel = 0.25;  // mean edge length vs the asked edge length
+constexpr double kCubeVolumeAbs = 1e-6;  // a meshed unit cube's volume [m^3]
+// bounds and volumes a box gives exactly, summed round-off
+constexpr double kBoxExactAbs = 1e-9;
+constexpr double kFittedVolumeRel = 0.02;  // the tets' volume vs the input surface's
+constexpr double kGroundFitAbs = 0.01;     // fit_to_ground's lowest point vs y = 0 [m]
 
 namespace fs = std::filesystem;
 
@@ -84,7 +86,8 @@ TEST(InitSurfaceCheck, InsideOutMeshHasNegativeVolume) {
 }
 
 TEST(InitSurfaceCheck, OverlappingShellsSelfIntersect) {
-    const InputSurface s = merged(test::unit_cube(), shifted(test::unit_cube(), Vec3(0.5, 0.3, 0.2)));
+    const InputSurface s =
+        merged(test::unit_cube(), shifted(test::unit_cube(), Vec3(0.5, 0.3, 0.2)));
     expect_refused(s, {"bad.off", "pairs of self-intersecting faces", "near ("});
 }
 
@@ -139,7 +142,8 @@ TEST(InitMesher, UVsAreTransferredFromTheInputSurface) {
     InputSurface sphere = test::icosphere(0.5, 3);
     auto uv_of = [](const Vec3& p) { return Vec2(p.x() + 0.5, 0.25 * p.z() + 0.5); };
     for (const Tri& f : sphere.faces)
-        sphere.face_uv.push_back({uv_of(sphere.positions[f[0]]), uv_of(sphere.positions[f[1]]), uv_of(sphere.positions[f[2]])});
+        sphere.face_uv.push_back({uv_of(sphere.positions[f[0]]), uv_of(sphere.positions[f[1]]),
+                                  uv_of(sphere.positions[f[2]])});
     MesherOptions o;
     o.edge_length = 0.1;
     const InitResult r = finish_tet_mesh(tetrahedralize_surface(sphere, o), &sphere);
@@ -147,13 +151,15 @@ TEST(InitMesher, UVsAreTransferredFromTheInputSurface) {
     test::expect_finite_boundary_uvs(r.mesh);
     for (size_t f = 0; f < r.mesh.boundary.size(); ++f)
         for (int c = 0; c < 3; ++c)
-            EXPECT_LT((r.mesh.boundary_uv[f][c] - uv_of(r.mesh.X[r.mesh.boundary[f][c]])).norm(), 0.01)
+            EXPECT_LT((r.mesh.boundary_uv[f][c] - uv_of(r.mesh.X[r.mesh.boundary[f][c]])).norm(),
+                      0.01)
                 << "face " << f << " corner " << c;
 }
 
 /// The unit cube as an OFF file in the temp folder (removed by the caller).
 fs::path write_cube_off(const std::string& stem) {
-    const fs::path file = fs::temp_directory_path() / ("mudcrack_init_" + stem + "_" + std::to_string(::getpid()) + ".off");
+    const fs::path file = fs::temp_directory_path() /
+                          ("mudcrack_init_" + stem + "_" + std::to_string(::getpid()) + ".off");
     const InputSurface cube = test::unit_cube();
     std::ofstream os(file);
     os << "OFF\n" << cube.positions.size() << " " << cube.faces.size() << " 0\n";
@@ -173,7 +179,8 @@ TEST(InitMeshSource, EdgeLengthFarTooSmallOrTooLargeIsAnInputError) {
             build_init(p, 0.05);
             ADD_FAILURE() << "expected InputError for edge_length " << edge;
         } catch (const InputError& e) {
-            EXPECT_NE(std::string(e.what()).find("/init/edge_length"), std::string::npos) << e.what();
+            EXPECT_NE(std::string(e.what()).find("/init/edge_length"), std::string::npos)
+                << e.what();
         }
     }
     fs::remove(file);
@@ -197,13 +204,14 @@ TEST(InitMeshSource, LoadedSurfaceIsScaledTranslatedAndSetOnTheGround) {
 
 TEST(InitMeshSource, BunnyAtDefaultSizingKeepsItsVolumeWithinTwoPercent) {
     const fs::path bunny = fs::path(MUDCRACK_SOURCE_DIR) / "shots/assets/bunny00.off";
-    ASSERT_TRUE(fs::exists(bunny)) << bunny << " is missing: run `make assets` in " << MUDCRACK_SOURCE_DIR
-                                   << " (extracts it from Debian's libcgal-demo)";
+    ASSERT_TRUE(fs::exists(bunny))
+        << bunny << " is missing: run `make assets` in " << MUDCRACK_SOURCE_DIR
+        << " (extracts it from Debian's libcgal-demo)";
     InitParams p;
     p.type = SourceType::Mesh;
     p.mesh.path = bunny.string();
-    p.mesh.scale = 1;      // ~1 m tall
-    p.edge_length = 0;     // default: 0.6 h
+    p.mesh.scale = 1;   // ~1 m tall
+    p.edge_length = 0;  // default: 0.6 h
     const Real h = SimModel{}.h;
     const InitResult r = build_init(p, h);
     EXPECT_DOUBLE_EQ(r.edge_length, default_edge_length(h));

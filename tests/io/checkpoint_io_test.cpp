@@ -53,7 +53,7 @@ TEST(CheckpointIo, RoundTripIsBitExact) {
     // header, then 8 entries, then the checksum
     const std::string bytes = test::read_file(dir / "s.ckpt");
     EXPECT_EQ(bytes.substr(0, 8), std::string("MCCKPT1\0", 8));
-    EXPECT_EQ(uint8_t(bytes[8]), 1);  // version 1, little-endian
+    EXPECT_EQ(uint8_t(bytes[8]), 1);   // version 1, little-endian
     EXPECT_EQ(uint8_t(bytes[12]), 8);  // entry count
 }
 
@@ -69,8 +69,10 @@ TEST(CheckpointIo, RequireNamesTheFileAndEntry) {
     ScratchDir dir;
     write_checkpoint(dir / "s.ckpt", sample_checkpoint());
     const Checkpoint c = read_checkpoint(dir / "s.ckpt");
-    test::expect_input_error_naming([&] { c.require_f64("v"); }, "s.ckpt: checkpoint has no float64 array 'v'");
-    test::expect_input_error_naming([&] { c.require_f64("x", 9); }, "'x' has 3000 elements, expected 9");
+    test::expect_input_error_naming([&] { c.require_f64("v"); },
+                                    "s.ckpt: checkpoint has no float64 array 'v'");
+    test::expect_input_error_naming([&] { c.require_f64("x", 9); },
+                                    "'x' has 3000 elements, expected 9");
     test::expect_input_error_naming([&] { c.require_i32("x"); }, "s.ckpt");
     test::expect_input_error_naming([&] { c.require_int("time"); }, "'time'");
     test::expect_input_error_naming([&] { c.require_double("frame"); }, "'frame'");
@@ -83,7 +85,8 @@ TEST(CheckpointIo, DamagedFilesNameTheFile) {
     write_checkpoint(dir / "good.ckpt", sample_checkpoint());
     const std::string good = test::read_file(dir / "good.ckpt");
     // every truncation is caught: a sweep over all lengths of the header and the last entries
-    for (size_t keep = 0; keep < good.size(); keep += (keep < 200 || keep > good.size() - 200) ? 1 : 997) {
+    for (size_t keep = 0; keep < good.size();
+         keep += (keep < 200 || keep > good.size() - 200) ? 1 : 997) {
         const std::string name = "cut" + std::to_string(keep) + ".ckpt";
         test::write_file(dir / name, good.substr(0, keep));
         test::expect_input_error_naming([&] { read_checkpoint(dir / name); }, name);
@@ -97,7 +100,8 @@ TEST(CheckpointIo, DamagedFilesNameTheFile) {
     std::string v2 = good;
     v2[8] = 2;
     test::write_file(dir / "v2.ckpt", v2);
-    test::expect_input_error_naming([&] { read_checkpoint(dir / "v2.ckpt"); }, "v2.ckpt: checkpoint format version 2");
+    test::expect_input_error_naming([&] { read_checkpoint(dir / "v2.ckpt"); },
+                                    "v2.ckpt: checkpoint format version 2");
     // garbage and trailing bytes
     test::write_file(dir / "garbage.ckpt", std::string(100, '\x7f'));
     test::expect_input_error_naming([&] { read_checkpoint(dir / "garbage.ckpt"); }, "garbage.ckpt");

@@ -1,4 +1,5 @@
-// Debris point files (pipeline/io/debris_io.h): round trip, layout, and refusals that name the file.
+// Debris point files (pipeline/io/debris_io.h): round trip, layout, and refusals that name the
+// file.
 #include <gtest/gtest.h>
 #include <unistd.h>
 
@@ -70,9 +71,11 @@ TEST_F(DebrisIo, TruncatedForeignAndMissingFilesAreRefusedByName) {
         EXPECT_NE(std::string(e.what()).find(path.string()), std::string::npos) << e.what();
         EXPECT_NE(std::string(e.what()).find("truncated"), std::string::npos) << e.what();
     }
-    std::ofstream(dir / "foreign.ply") << "ply\nformat ascii 1.0\nelement vertex 1\nproperty float x\nend_header\n1\n";
+    std::ofstream(dir / "foreign.ply")
+        << "ply\nformat ascii 1.0\nelement vertex 1\nproperty float x\nend_header\n1\n";
     EXPECT_THROW(read_debris_ply(dir / "foreign.ply"), InputError);
-    std::ofstream(dir / "count.ply") << "ply\nformat binary_little_endian 1.0\nelement vertex x\nend_header\n";
+    std::ofstream(dir / "count.ply")
+        << "ply\nformat binary_little_endian 1.0\nelement vertex x\nend_header\n";
     EXPECT_THROW(read_debris_ply(dir / "count.ply"), InputError);
     EXPECT_THROW(read_debris_ply(dir / "missing.ply"), InputError);
 }

@@ -41,7 +41,8 @@ TEST(PngIo, BadFilesNameTheFile) {
     ScratchDir dir;
     test::expect_input_error_naming([&] { read_png(dir / "missing.png"); }, "missing.png");
     test::write_file(dir / "garbage.png", "this is not a png at all");
-    test::expect_input_error_naming([&] { read_png(dir / "garbage.png"); }, "garbage.png: not a PNG");
+    test::expect_input_error_naming([&] { read_png(dir / "garbage.png"); },
+                                    "garbage.png: not a PNG");
     write_png(dir / "good.png", gradient(64, 64, 4));
     const std::string good = test::read_file(dir / "good.png");
     for (size_t keep : {size_t(8), size_t(40), good.size() / 2, good.size() - 13}) {

@@ -26,7 +26,9 @@ TEST(Manifest, CommonFields) {
     EXPECT_EQ(m.at("shot"), "shots/demo.json");
     EXPECT_EQ(m.at("shot_slice_hash"), "abc123");
     const std::string time = m.at("created_utc");
-    EXPECT_TRUE(std::regex_match(time, std::regex(R"(20\d\d-[01]\d-[0-3]\dT[0-2]\d:[0-5]\d:[0-6]\dZ)"))) << time;
+    EXPECT_TRUE(
+        std::regex_match(time, std::regex(R"(20\d\d-[01]\d-[0-3]\dT[0-2]\d:[0-5]\d:[0-6]\dZ)")))
+        << time;
     EXPECT_FALSE(m.at("host").get<std::string>().empty());
     EXPECT_GE(m.at("threads").get<int>(), 1);
     EXPECT_GE(m.at("host_threads").get<int>(), 1);
@@ -41,16 +43,19 @@ TEST(Manifest, WriteReadRoundTrip) {
     EXPECT_EQ(read_manifest(dir.path()), m);
     EXPECT_FALSE(std::filesystem::exists(dir / "manifest.json.tmp"));
     const std::string text = test::read_file(dir / "manifest.json");
-    EXPECT_NE(text.find("\n  \"frames\": {\n"), std::string::npos) << "pretty-printed with 2 spaces";
+    EXPECT_NE(text.find("\n  \"frames\": {\n"), std::string::npos)
+        << "pretty-printed with 2 spaces";
 }
 
 TEST(Manifest, MissingOrMalformed) {
     ScratchDir dir;
     std::filesystem::create_directories(dir / "init");
-    test::expect_input_error_naming([&] { read_manifest(dir / "init"); }, "init/manifest.json: missing: run mc-init first");
+    test::expect_input_error_naming([&] { read_manifest(dir / "init"); },
+                                    "init/manifest.json: missing: run mc-init first");
     test::expect_input_error_naming([&] { read_manifest(dir / "sim"); }, "run mc-sim first");
     test::write_file(dir / "init" / "manifest.json", "{ \"stage\": ");
-    test::expect_input_error_naming([&] { read_manifest(dir / "init"); }, "init/manifest.json: malformed");
+    test::expect_input_error_naming([&] { read_manifest(dir / "init"); },
+                                    "init/manifest.json: malformed");
     test::write_file(dir / "init" / "manifest.json", "[1, 2]");
     test::expect_input_error_naming([&] { read_manifest(dir / "init"); }, "expected a JSON object");
 }
@@ -64,7 +69,8 @@ TEST(Manifest, CurrentManifestIsChecked) {
     test::expect_input_error_naming([&] { read_current_manifest(sim, "abc"); },
                                     "sim/manifest.json: missing: run mc-sim first");
     test::write_file(sim / "manifest.json", "{ \"stage\": ");
-    test::expect_input_error_naming([&] { read_current_manifest(sim, "abc"); }, "sim/manifest.json: malformed");
+    test::expect_input_error_naming([&] { read_current_manifest(sim, "abc"); },
+                                    "sim/manifest.json: malformed");
 
     nlohmann::json m = make_manifest("sim", "s.json", "abc");
     m.erase("shot_slice_hash");
@@ -78,9 +84,10 @@ TEST(Manifest, CurrentManifestIsChecked) {
                                     "sim/manifest.json: /shot_slice_hash = 42: not a slice hash");
     m["shot_slice_hash"] = "old";
     write_manifest(sim, m);
-    test::expect_input_error_naming([&] { read_current_manifest(sim, "abc"); },
-                                    "sim/manifest.json: /shot_slice_hash = \"old\": stale for this shot "
-                                    "(expected \"abc\"): re-run mc-sim");
+    test::expect_input_error_naming(
+        [&] { read_current_manifest(sim, "abc"); },
+        "sim/manifest.json: /shot_slice_hash = \"old\": stale for this shot "
+        "(expected \"abc\"): re-run mc-sim");
 
     m["shot_slice_hash"] = "abc";
     write_manifest(sim, m);
@@ -106,7 +113,8 @@ TEST(FileChecksum, FoldingMatchesZlibAtEveryLength) {
         const uint32_t expected = uint32_t(crc32(0, bytes.data(), uInt(n)));
         EXPECT_EQ(crc32_update(0, bytes.data(), n), expected) << n << " bytes";
         const size_t half = n / 3;
-        EXPECT_EQ(crc32_update(crc32_update(0, bytes.data(), half), bytes.data() + half, n - half), expected)
+        EXPECT_EQ(crc32_update(crc32_update(0, bytes.data(), half), bytes.data() + half, n - half),
+                  expected)
             << n << " bytes in two pieces";
     }
 }
@@ -130,7 +138,8 @@ TEST(RecordedChecksums, FindsRecordsAnywhereAndCatchesEveryFlippedByte) {
             RecordedChecksums(m, dir / "manifest.json").verify(dir / "boundary.0001.glb");
             ADD_FAILURE() << "byte " << offset << " flipped, not caught";
         } catch (const InputError& e) {
-            EXPECT_NE(std::string(e.what()).find("boundary.0001.glb: damaged"), std::string::npos) << e.what();
+            EXPECT_NE(std::string(e.what()).find("boundary.0001.glb: damaged"), std::string::npos)
+                << e.what();
             EXPECT_NE(std::string(e.what()).find("re-run mc-"), std::string::npos) << e.what();
         }
     }
@@ -138,7 +147,8 @@ TEST(RecordedChecksums, FindsRecordsAnywhereAndCatchesEveryFlippedByte) {
         records.verify(dir / "other.bin");
         ADD_FAILURE() << "a file without a record passed";
     } catch (const InputError& e) {
-        EXPECT_NE(std::string(e.what()).find("other.bin: no checksum recorded"), std::string::npos) << e.what();
+        EXPECT_NE(std::string(e.what()).find("other.bin: no checksum recorded"), std::string::npos)
+            << e.what();
     }
     EXPECT_THROW(records.verify(dir / "boundary.0002.glb"), InputError);
     // a file is read once per reader: verified before it was damaged, it is not read again

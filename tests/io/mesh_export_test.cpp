@@ -14,8 +14,9 @@ namespace mudcrack {
 namespace {
 
 // tolerances, named by what they bound
-constexpr double kStoredFloat = 1e-6;   // a float value written and read back by a mesh format
-constexpr double kColourMapped = 1e-5;  // a value through the vertex colour's mapping (logistic alpha, normals)
+constexpr double kStoredFloat = 1e-6;  // a float value written and read back by a mesh format
+// a value through the vertex colour's mapping (logistic alpha, normals)
+constexpr double kColourMapped = 1e-5;
 
 using test::ScratchDir;
 
@@ -58,7 +59,8 @@ std::vector<Corner> corners(const TriMesh& m) {
     for (const Tri& f : m.faces) {
         for (int32_t v : f) {
             const Vec2f uv = m.uvs.empty() ? Vec2f::Zero() : m.uvs[v];
-            out.emplace_back(m.positions[v].x(), m.positions[v].y(), m.positions[v].z(), uv.x(), uv.y());
+            out.emplace_back(m.positions[v].x(), m.positions[v].y(), m.positions[v].z(), uv.x(),
+                             uv.y());
         }
     }
     std::sort(out.begin(), out.end());
@@ -102,7 +104,8 @@ TEST(MeshExport, EveryFormatRoundTripsCountsAndUVs) {
     EXPECT_EQ(ply[0].faces.size(), 10u);
     TriMesh merged = kMeshes[0];
     for (const Tri& f : kMeshes[1].faces) merged.faces.push_back({f[0] + 8, f[1] + 8, f[2] + 8});
-    merged.positions.insert(merged.positions.end(), kMeshes[1].positions.begin(), kMeshes[1].positions.end());
+    merged.positions.insert(merged.positions.end(), kMeshes[1].positions.begin(),
+                            kMeshes[1].positions.end());
     merged.uvs.insert(merged.uvs.end(), kMeshes[1].uvs.begin(), kMeshes[1].uvs.end());
     expect_same_corners(merged, ply[0], "ply");
 }
@@ -124,7 +127,8 @@ TEST(MeshExport, GlbAndDaeCarryNormalsColorsAndFragments) {
             while (j < b.positions.size() && (b.positions[j] - a.positions[i]).norm() > 1e-6f) ++j;
             ASSERT_LT(j, b.positions.size());
             EXPECT_NEAR(b.saturation[j], a.saturation[i], kStoredFloat) << format;
-            EXPECT_NEAR(b.alpha[j], a.alpha[i], kColourMapped) << format << " (logistic colour mapping)";
+            EXPECT_NEAR(b.alpha[j], a.alpha[i], kColourMapped)
+                << format << " (logistic colour mapping)";
             EXPECT_NEAR((b.normals[j] - a.normals[i]).norm(), 0.f, kColourMapped) << format;
         }
         std::vector<int32_t> fragments = b.face_fragment;
@@ -175,7 +179,9 @@ TEST(MeshExport, GlbKeepsVerticesThatDifferOnlyInColour) {
     m.saturation.back() = m.saturation[0];
     for (const std::string format : {"glb", "dae"}) {
         export_meshes(dir / ("twin." + format), {m}, format);
-        EXPECT_EQ(import_meshes(dir / ("twin." + format))[0].positions.size(), format == "glb" ? 5u : 4u) << format;
+        EXPECT_EQ(import_meshes(dir / ("twin." + format))[0].positions.size(),
+                  format == "glb" ? 5u : 4u)
+            << format;
     }
 }
 
@@ -203,7 +209,8 @@ TEST(MeshExport, GlbLayoutIsValidBinaryGltf) {
     EXPECT_EQ(bytes.substr(bin + 4, 4), std::string("BIN\0", 4));
     EXPECT_EQ(bin + 8 + u32(bin), bytes.size());
     const std::string text = bytes.substr(20, json_length);
-    EXPECT_NE(text.find("\"name\":\"crack\""), std::string::npos) << "the empty mesh's node is kept";
+    EXPECT_NE(text.find("\"name\":\"crack\""), std::string::npos)
+        << "the empty mesh's node is kept";
     EXPECT_EQ(text.find("crack_material"), std::string::npos) << "no glTF mesh for an empty mesh";
     const std::vector<TriMesh> back = import_meshes(dir / "layout.glb");
     ASSERT_EQ(back.size(), 1u);
@@ -220,8 +227,10 @@ TEST(MeshExport, InconsistentMeshesAreRefusedNamingTheFile) {
                 try {
                     export_meshes(dir / ("bad." + format), {bad_face}, format);
                 } catch (const RuntimeError& e) {
-                    EXPECT_NE(std::string(e.what()).find("bad." + format + ": mesh 'crack' face 2 references vertex 7 of 4"),
-                              std::string::npos)
+                    EXPECT_NE(
+                        std::string(e.what()).find(
+                            "bad." + format + ": mesh 'crack' face 2 references vertex 7 of 4"),
+                        std::string::npos)
                         << e.what();
                     throw;
                 }
@@ -229,7 +238,8 @@ TEST(MeshExport, InconsistentMeshesAreRefusedNamingTheFile) {
             RuntimeError);
         TriMesh bad_uvs = crack_mesh();
         bad_uvs.uvs.pop_back();
-        EXPECT_THROW(export_meshes(dir / ("uvs." + format), {bad_uvs}, format), RuntimeError) << format;
+        EXPECT_THROW(export_meshes(dir / ("uvs." + format), {bad_uvs}, format), RuntimeError)
+            << format;
         EXPECT_FALSE(std::filesystem::exists(dir / ("bad." + format))) << "no partial file";
     }
 }
@@ -252,7 +262,8 @@ TEST(MeshExport, DeterministicBytesAndDccFriendlyText) {
         EXPECT_FALSE(std::filesystem::exists(dir / ("a." + format + ".tmp")));
     }
     const std::string obj = test::read_file(dir / "a.obj");
-    EXPECT_NE(obj.find("o boundary\ng boundary"), std::string::npos) << "Blender 3.4 needs `o` lines";
+    EXPECT_NE(obj.find("o boundary\ng boundary"), std::string::npos)
+        << "Blender 3.4 needs `o` lines";
     EXPECT_NE(obj.find("o crack\ng crack"), std::string::npos);
     const std::string dae = test::read_file(dir / "a.dae");
     EXPECT_NE(dae.find("<created>1970-01-01T00:00:00</created>"), std::string::npos);
@@ -274,7 +285,8 @@ TEST(MeshExport, FormatsAndRefusals) {
     EXPECT_NE(mesh_format_refusal("fbx").find("4686"), std::string::npos);
     EXPECT_NE(mesh_format_refusal("usd").find("expected glb, obj, ply or dae"), std::string::npos);
     ScratchDir dir;
-    test::expect_input_error_naming([&] { export_meshes(dir / "x.fbx", kMeshes, "fbx"); }, "x.fbx: fbx is not supported");
+    test::expect_input_error_naming([&] { export_meshes(dir / "x.fbx", kMeshes, "fbx"); },
+                                    "x.fbx: fbx is not supported");
     EXPECT_FALSE(std::filesystem::exists(dir / "x.fbx"));
     test::expect_input_error_naming([&] { import_meshes(dir / "missing.glb"); }, "missing.glb");
     test::write_file(dir / "garbage.glb", "glTF\x02garbage-garbage-garbage");

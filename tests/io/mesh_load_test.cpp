@@ -25,28 +25,38 @@ const int kQuads[6][4] = {{0, 3, 2, 1}, {4, 5, 6, 7}, {0, 1, 5, 4},
 
 std::string cube_off() {
     std::string s = "OFF\n8 6 0\n";
-    for (auto& p : kCube) s += std::to_string(p[0]) + " " + std::to_string(p[1]) + " " + std::to_string(p[2]) + "\n";
-    for (auto& q : kQuads) s += "4 " + std::to_string(q[0]) + " " + std::to_string(q[1]) + " " + std::to_string(q[2]) + " " + std::to_string(q[3]) + "\n";
+    for (auto& p : kCube)
+        s += std::to_string(p[0]) + " " + std::to_string(p[1]) + " " + std::to_string(p[2]) + "\n";
+    for (auto& q : kQuads)
+        s += "4 " + std::to_string(q[0]) + " " + std::to_string(q[1]) + " " + std::to_string(q[2]) +
+             " " + std::to_string(q[3]) + "\n";
     return s;
 }
 
 std::string cube_obj_with_uv() {
     std::string s = "o cube\n";
-    for (auto& p : kCube) s += "v " + std::to_string(p[0]) + " " + std::to_string(p[1]) + " " + std::to_string(p[2]) + "\n";
+    for (auto& p : kCube)
+        s += "v " + std::to_string(p[0]) + " " + std::to_string(p[1]) + " " + std::to_string(p[2]) +
+             "\n";
     s += "vt 0 0\nvt 1 0\nvt 1 1\nvt 0 1\n";
     for (auto& q : kQuads) {
         s += "f";
-        for (int c = 0; c < 4; ++c) s += " " + std::to_string(q[c] + 1) + "/" + std::to_string(c + 1);
+        for (int c = 0; c < 4; ++c)
+            s += " " + std::to_string(q[c] + 1) + "/" + std::to_string(c + 1);
         s += "\n";
     }
     return s;
 }
 
 std::string cube_ply() {
-    std::string s = "ply\nformat ascii 1.0\nelement vertex 8\nproperty float x\nproperty float y\n"
-                    "property float z\nelement face 6\nproperty list uchar int vertex_indices\nend_header\n";
-    for (auto& p : kCube) s += std::to_string(p[0]) + " " + std::to_string(p[1]) + " " + std::to_string(p[2]) + "\n";
-    for (auto& q : kQuads) s += "4 " + std::to_string(q[0]) + " " + std::to_string(q[1]) + " " + std::to_string(q[2]) + " " + std::to_string(q[3]) + "\n";
+    std::string s =
+        "ply\nformat ascii 1.0\nelement vertex 8\nproperty float x\nproperty float y\n"
+        "property float z\nelement face 6\nproperty list uchar int vertex_indices\nend_header\n";
+    for (auto& p : kCube)
+        s += std::to_string(p[0]) + " " + std::to_string(p[1]) + " " + std::to_string(p[2]) + "\n";
+    for (auto& q : kQuads)
+        s += "4 " + std::to_string(q[0]) + " " + std::to_string(q[1]) + " " + std::to_string(q[2]) +
+             " " + std::to_string(q[3]) + "\n";
     return s;
 }
 
@@ -54,7 +64,8 @@ std::string cube_ply() {
 std::string cube_stl() {
     std::string s = "solid cube\n";
     auto vtx = [](int i) {
-        return "    vertex " + std::to_string(kCube[i][0]) + " " + std::to_string(kCube[i][1]) + " " + std::to_string(kCube[i][2]) + "\n";
+        return "    vertex " + std::to_string(kCube[i][0]) + " " + std::to_string(kCube[i][1]) +
+               " " + std::to_string(kCube[i][2]) + "\n";
     };
     for (auto& q : kQuads) {
         for (int t = 0; t < 2; ++t) {
@@ -67,7 +78,8 @@ std::string cube_stl() {
 }
 
 std::string base64(const std::vector<unsigned char>& bytes) {
-    static const char* kAlphabet = "ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
+    static const char* kAlphabet =
+        "ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
     std::string out;
     for (size_t i = 0; i < bytes.size(); i += 3) {
         uint32_t n = uint32_t(bytes[i]) << 16;
@@ -91,8 +103,9 @@ std::string quad_gltf() {
     return R"({"asset":{"version":"2.0"},"scene":0,"scenes":[{"nodes":[0]}],
  "nodes":[{"scale":[2,2,2],"children":[1]},{"translation":[1,0,0],"mesh":0}],
  "meshes":[{"primitives":[{"attributes":{"POSITION":0},"indices":1}]}],
- "buffers":[{"byteLength":)" + std::to_string(buf.size()) +
-           R"(,"uri":"data:application/octet-stream;base64,)" + base64(buf) + R"("}],
+ "buffers":[{"byteLength":)" +
+           std::to_string(buf.size()) + R"(,"uri":"data:application/octet-stream;base64,)" +
+           base64(buf) + R"("}],
  "bufferViews":[{"buffer":0,"byteOffset":0,"byteLength":48},{"buffer":0,"byteOffset":48,"byteLength":12}],
  "accessors":[{"bufferView":0,"componentType":5126,"count":4,"type":"VEC3","min":[0,0,0],"max":[1,1,0]},
               {"bufferView":1,"componentType":5123,"count":6,"type":"SCALAR"}]})";
@@ -116,9 +129,10 @@ void expect_cube(const InputSurface& s, const std::string& what) {
 
 TEST(LoadInputSurface, CubeInEveryTextFormat) {
     ScratchDir dir;
-    const std::pair<std::string, std::string> files[] = {
-        {"cube.off", cube_off()}, {"cube.obj", cube_obj_with_uv()},
-        {"cube.ply", cube_ply()}, {"cube.stl", cube_stl()}};
+    const std::pair<std::string, std::string> files[] = {{"cube.off", cube_off()},
+                                                         {"cube.obj", cube_obj_with_uv()},
+                                                         {"cube.ply", cube_ply()},
+                                                         {"cube.stl", cube_stl()}};
     for (const auto& [name, text] : files) {
         write_file(dir / name, text);
         expect_cube(load_input_surface(dir / name), name);
@@ -179,35 +193,45 @@ TEST(LoadInputSurface, DegenerateTrianglesAreDropped) {
 
 TEST(LoadInputSurface, BadFilesNameTheFile) {
     ScratchDir dir;
-    test::expect_input_error_naming([&] { load_input_surface(dir / "missing.obj"); }, "missing.obj");
+    test::expect_input_error_naming([&] { load_input_surface(dir / "missing.obj"); },
+                                    "missing.obj");
     write_file(dir / "garbage.ply", std::string("\x01\x02garbage\xff\xfe not a mesh", 22));
-    test::expect_input_error_naming([&] { load_input_surface(dir / "garbage.ply"); }, "garbage.ply");
+    test::expect_input_error_naming([&] { load_input_surface(dir / "garbage.ply"); },
+                                    "garbage.ply");
     write_file(dir / "lines.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nl 1 2\nl 2 3\n");
     test::expect_input_error_naming([&] { load_input_surface(dir / "lines.obj"); }, "lines.obj");
     write_file(dir / "empty.off", "");
     test::expect_input_error_naming([&] { load_input_surface(dir / "empty.off"); }, "empty.off");
     // a PLY face of no corner leaves a mesh flagged as polygons without one, on which assimp's
     // triangulation would abort the process
-    write_file(dir / "empty_face.ply",
-               "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\n"
-               "property float z\nelement face 1\nproperty list uchar int vertex_indices\nend_header\n"
-               "0 0 0\n1 0 0\n0 1 0\n0\n");
-    test::expect_input_error_naming([&] { load_input_surface(dir / "empty_face.ply"); },
-                                    "empty_face.ply: cannot read the mesh: mesh 0 is declared to hold polygons");
-    // list counts assimp would size a list by: beyond the count's type (ASCII), beyond the file (binary)
-    const std::string header = "element vertex 3\nproperty float x\nproperty float y\nproperty float z\n"
-                               "element face 1\nproperty list uchar int vertex_indices\nend_header\n";
-    write_file(dir / "big_count.ply", "ply\nformat ascii 1.0\n" + header + "0 0 0\n1 0 0\n0 1 0\n666666667 0 1 2\n");
-    test::expect_input_error_naming([&] { load_input_surface(dir / "big_count.ply"); },
-                                    "big_count.ply: malformed PLY body: element 'face' 0: list count 666666667");
+    write_file(
+        dir / "empty_face.ply",
+        "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\n"
+        "property float z\nelement face 1\nproperty list uchar int vertex_indices\nend_header\n"
+        "0 0 0\n1 0 0\n0 1 0\n0\n");
+    test::expect_input_error_naming(
+        [&] { load_input_surface(dir / "empty_face.ply"); },
+        "empty_face.ply: cannot read the mesh: mesh 0 is declared to hold polygons");
+    // list counts assimp would size a list by: beyond the count's type (ASCII), beyond the file
+    // (binary)
+    const std::string header =
+        "element vertex 3\nproperty float x\nproperty float y\nproperty float z\n"
+        "element face 1\nproperty list uchar int vertex_indices\nend_header\n";
+    write_file(dir / "big_count.ply",
+               "ply\nformat ascii 1.0\n" + header + "0 0 0\n1 0 0\n0 1 0\n666666667 0 1 2\n");
+    test::expect_input_error_naming(
+        [&] { load_input_surface(dir / "big_count.ply"); },
+        "big_count.ply: malformed PLY body: element 'face' 0: list count 666666667");
     std::string binary = "ply\nformat binary_little_endian 1.0\n" + header + std::string(36, '\0');
     binary += '\xff';  // 255 corners, 3 bytes of them in the file
     binary += std::string(3, '\0');
     write_file(dir / "short_list.ply", binary);
-    test::expect_input_error_naming([&] { load_input_surface(dir / "short_list.ply"); },
-                                    "short_list.ply: malformed PLY body: element 'face' 0: list count 255");
+    test::expect_input_error_naming(
+        [&] { load_input_surface(dir / "short_list.ply"); },
+        "short_list.ply: malformed PLY body: element 'face' 0: list count 255");
     // assimp reads "pLy" as PLY too (and hung on this one without end_header)
-    write_file(dir / "mixed_case.ply", "pLy\nformat ascii 1.0\nelement vertex 3\nproperty float x\n");
+    write_file(dir / "mixed_case.ply",
+               "pLy\nformat ascii 1.0\nelement vertex 3\nproperty float x\n");
     test::expect_input_error_naming([&] { load_input_surface(dir / "mixed_case.ply"); },
                                     "mixed_case.ply: malformed PLY header: no end_header");
 }

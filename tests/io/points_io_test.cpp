@@ -2,8 +2,8 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
-#include <numeric>
 #include <cstring>
+#include <numeric>
 #include <random>
 
 #include "pipeline/io/points_io.h"
@@ -39,7 +39,8 @@ PointCloud random_cloud(size_t n, unsigned seed) {
     c.vec3s = {{"v", v}};
     std::vector<Mat3f> F(n);
     for (auto& m : F)
-        for (int k = 0; k < 9; ++k) m.data()[k] = (k % 4 == 0 ? 1.f : 0.f) + 0.1f * (unit(rng) - .5f);
+        for (int k = 0; k < 9; ++k)
+            m.data()[k] = (k % 4 == 0 ? 1.f : 0.f) + 0.1f * (unit(rng) - .5f);
     c.mat3s = {{"Fe", F}};
     c.meta_string["mudcrack:stage"] = "init";
     c.meta_double["mudcrack:time"] = 0.125;
@@ -160,7 +161,8 @@ TEST(PointsIo, FrameRoundTrip) {
     EXPECT_EQ(g.Jw, f.Jw);
     EXPECT_EQ(g.v, f.v);
     EXPECT_EQ(g.Fe, f.Fe);
-    for (int i = 0; i < 50; ++i) EXPECT_NEAR((g.P[i] - f.P[i]).norm(), 0.0, tol::kFloat * 0.1);  // float positions of order 1, written and read back
+    // float positions of order 1, written and read back
+    for (int i = 0; i < 50; ++i) EXPECT_NEAR((g.P[i] - f.P[i]).norm(), 0.0, tol::kFloat * 0.1);
 }
 
 TEST(PointsIo, PointsToFrameRejectsBadIds) {
@@ -181,7 +183,8 @@ TEST(PointsIo, PointsToFrameRejectsBadIds) {
 }
 
 TEST(PointsIo, FramePath) {
-    EXPECT_EQ(frame_path("out/sim", "particles", 7, "vdb"), std::filesystem::path("out/sim/particles.0007.vdb"));
+    EXPECT_EQ(frame_path("out/sim", "particles", 7, "vdb"),
+              std::filesystem::path("out/sim/particles.0007.vdb"));
     EXPECT_EQ(frame_path("d", "crack", 12345, ".glb"), std::filesystem::path("d/crack.12345.glb"));
 }
 
@@ -197,14 +200,16 @@ void patch_int64_meta(std::string& bytes, const std::string& key, int64_t value)
 TEST(PointsIo, BadFilesNameTheFile) {
     ScratchDir dir;
     test::expect_input_error_naming([&] { read_points(dir / "missing.vdb"); }, "missing.vdb");
-    test::expect_input_error_naming([&] { read_points_metadata(dir / "missing.vdb"); }, "missing.vdb");
+    test::expect_input_error_naming([&] { read_points_metadata(dir / "missing.vdb"); },
+                                    "missing.vdb");
 
     test::write_file(dir / "garbage.vdb", std::string(4096, '\x5a'));
     test::expect_input_error_naming([&] { read_points(dir / "garbage.vdb"); }, "garbage.vdb");
 
     write_points(dir / "good.vdb", random_cloud(2000, 4), kVoxel);
     const std::string good = test::read_file(dir / "good.vdb");
-    for (size_t keep : {size_t(0), size_t(10), size_t(200), good.size() / 2, good.size() - 100, good.size() - 1}) {
+    for (size_t keep : {size_t(0), size_t(10), size_t(200), good.size() / 2, good.size() - 100,
+                        good.size() - 1}) {
         const std::string name = "truncated_" + std::to_string(keep) + ".vdb";
         test::write_file(dir / name, good.substr(0, keep));
         test::expect_input_error_naming([&] { read_points(dir / name); }, name);
@@ -214,11 +219,13 @@ TEST(PointsIo, BadFilesNameTheFile) {
     patch_int64_meta(v2, "mudcrack:format_version", 2);
     test::write_file(dir / "v2.vdb", v2);
     test::expect_input_error_naming([&] { read_points(dir / "v2.vdb"); }, "v2.vdb");
-    test::expect_input_error_naming([&] { read_points_metadata(dir / "v2.vdb"); }, "format_version = 2");
+    test::expect_input_error_naming([&] { read_points_metadata(dir / "v2.vdb"); },
+                                    "format_version = 2");
 
     // a VDB whose grid is not ours
     std::string foreign = good;
-    for (size_t at = foreign.find("particles"); at != std::string::npos; at = foreign.find("particles", at + 1))
+    for (size_t at = foreign.find("particles"); at != std::string::npos;
+         at = foreign.find("particles", at + 1))
         foreign[at] = 'q';
     test::write_file(dir / "foreign.vdb", foreign);
     test::expect_input_error_naming([&] { read_points(dir / "foreign.vdb"); }, "foreign.vdb");
@@ -234,11 +241,13 @@ TEST(PointsIo, RootTileActiveFlagMustBeABool) {
     const std::string tree_type = "Tree_ptdataidx32_5_4_3";
     const size_t descriptor = bytes.find(tree_type);
     ASSERT_NE(descriptor, std::string::npos);
-    const size_t offsets_at = descriptor + tree_type.size() + 4;  // the empty instance parent's length
+    // the empty instance parent's length
+    const size_t offsets_at = descriptor + tree_type.size() + 4;
     const std::string map_type = "UniformScaleMap";
     const size_t map = bytes.find(map_type);
     ASSERT_NE(map, std::string::npos);
-    const size_t tile_count_at = map + map_type.size() + 120 + 4 + 4;  // map, buffer count, background
+    // map, buffer count, background
+    const size_t tile_count_at = map + map_type.size() + 120 + 4 + 4;
     uint32_t tiles = 99;
     std::memcpy(&tiles, &bytes[tile_count_at], 4);
     ASSERT_EQ(tiles, 0u);
@@ -255,7 +264,8 @@ TEST(PointsIo, RootTileActiveFlagMustBeABool) {
         std::memcpy(&bytes[offsets_at + 8 * size_t(k)], &offset, 8);
     }
     test::write_file(dir / "tile.vdb", bytes);
-    test::expect_input_error_naming([&] { read_points(dir / "tile.vdb"); }, "root tile 0 active flag is byte 90");
+    test::expect_input_error_naming([&] { read_points(dir / "tile.vdb"); },
+                                    "root tile 0 active flag is byte 90");
     test::expect_input_error_naming([&] { read_points_metadata(dir / "tile.vdb"); }, "tile.vdb");
 }
 

@@ -32,12 +32,14 @@ TEST(TetMeshVtu, RoundTrip) {
     write_tet_mesh_vtu(dir / "tets.vtu", in);
     const TetMesh out = read_tet_mesh_vtu(dir / "tets.vtu");
     ASSERT_EQ(out.X.size(), in.X.size());
-    for (size_t i = 0; i < in.X.size(); ++i) EXPECT_EQ(out.X[i], in.X[i]) << "point " << i;  // Float64: exact
+    // Float64: exact
+    for (size_t i = 0; i < in.X.size(); ++i) EXPECT_EQ(out.X[i], in.X[i]) << "point " << i;
     EXPECT_EQ(out.tets, in.tets);
     EXPECT_EQ(out.boundary, in.boundary);
     ASSERT_EQ(out.boundary_uv.size(), in.boundary_uv.size());
     for (size_t f = 0; f < in.boundary_uv.size(); ++f)
-        for (int c = 0; c < 3; ++c) EXPECT_EQ(out.boundary_uv[f][c], in.boundary_uv[f][c]);  // exact in float
+        // exact in float
+        for (int c = 0; c < 3; ++c) EXPECT_EQ(out.boundary_uv[f][c], in.boundary_uv[f][c]);
     // identical content, identical bytes
     write_tet_mesh_vtu(dir / "again.vtu", in);
     EXPECT_TRUE(test::read_file(dir / "tets.vtu") == test::read_file(dir / "again.vtu"));
@@ -52,8 +54,9 @@ TEST(TetMeshVtu, HeaderIsWhatParaViewReads) {
          {"type=\"UnstructuredGrid\"", "byte_order=\"LittleEndian\"", "header_type=\"UInt64\"",
           "NumberOfPoints=\"8\" NumberOfCells=\"17\"", "type=\"Int32\" Name=\"id\"",
           "type=\"Float32\" Name=\"uv\" NumberOfComponents=\"6\"", "type=\"UInt8\" Name=\"kind\"",
-          "type=\"Float64\" Name=\"Points\" NumberOfComponents=\"3\"", "type=\"Int64\" Name=\"connectivity\"",
-          "type=\"Int64\" Name=\"offsets\"", "type=\"UInt8\" Name=\"types\""}) {
+          "type=\"Float64\" Name=\"Points\" NumberOfComponents=\"3\"",
+          "type=\"Int64\" Name=\"connectivity\"", "type=\"Int64\" Name=\"offsets\"",
+          "type=\"UInt8\" Name=\"types\""}) {
         EXPECT_NE(header.find(expected), std::string::npos) << expected;
     }
     // the first appended block is "id": UInt64 byte count 8*4, then ids 0..7
@@ -81,8 +84,9 @@ TEST(TetMeshVtu, DamagedFilesNameTheFile) {
     test::expect_input_error_naming([&] { read_tet_mesh_vtu(dir / "garbage.vtu"); }, "garbage.vtu");
     write_tet_mesh_vtu(dir / "good.vtu", cube_mesh());
     const std::string good = test::read_file(dir / "good.vtu");
-    for (size_t keep : {size_t(0), size_t(100), good.find('_', good.find("<AppendedData")) + 5, good.size() / 2,
-                        good.size() - 20, good.size() - 2}) {  // -1 drops only the final newline
+    for (size_t keep :
+         {size_t(0), size_t(100), good.find('_', good.find("<AppendedData")) + 5, good.size() / 2,
+          good.size() - 20, good.size() - 2}) {  // -1 drops only the final newline
         const std::string name = "cut" + std::to_string(keep) + ".vtu";
         test::write_file(dir / name, good.substr(0, keep));
         test::expect_input_error_naming([&] { read_tet_mesh_vtu(dir / name); }, name);
@@ -91,12 +95,14 @@ TEST(TetMeshVtu, DamagedFilesNameTheFile) {
     std::string base64 = good;
     base64.replace(base64.find("encoding=\"raw\""), 14, "encoding=\"b64\"");
     test::write_file(dir / "b64.vtu", base64);
-    test::expect_input_error_naming([&] { read_tet_mesh_vtu(dir / "b64.vtu"); }, "raw appended data");
+    test::expect_input_error_naming([&] { read_tet_mesh_vtu(dir / "b64.vtu"); },
+                                    "raw appended data");
     // a point reference out of range
     TetMesh bad = cube_mesh();
     bad.tets[0][3] = 99;
     write_tet_mesh_vtu(dir / "range.vtu", bad);
-    test::expect_input_error_naming([&] { read_tet_mesh_vtu(dir / "range.vtu"); }, "references point 99");
+    test::expect_input_error_naming([&] { read_tet_mesh_vtu(dir / "range.vtu"); },
+                                    "references point 99");
 }
 
 }  // namespace

@@ -32,7 +32,8 @@ TEST(Damage, NeverDecreasesAndSaturatesAtOne) {
 }
 
 TEST(Damage, GrowsBySofteningOverTheDamageStrain) {
-    EXPECT_NEAR(damage_after_return(0.1, -0.3, -0.28, 0.05), 0.1 + 0.02 / 0.05, tol::kRoundoffKernel);
+    EXPECT_NEAR(damage_after_return(0.1, -0.3, -0.28, 0.05), 0.1 + 0.02 / 0.05,
+                tol::kRoundoffKernel);
     EXPECT_EQ(damage_after_return(0.2, -0.3, -0.35, 0.05), 0.2);
     EXPECT_EQ(damage_after_return(0.9, 0.0, 1.0, 0.05), 1.0);
     EXPECT_DOUBLE_EQ(damaged_cohesion(0.8, 0.25), 0.6);
@@ -48,7 +49,8 @@ TEST(Damage, FullyDamagedSoilCarriesNoTensionWhateverItsHardening) {
         const Real beta = damaged_cohesion(1.0, 1.0);
         const NaccPrincipalReturn r = nacc_return_principal(stretched, alpha, beta, nacc, kLame);
         EXPECT_EQ(r.yield_case, kNaccTensionTip) << alpha;
-        EXPECT_NEAR(r.sigma.prod(), 1.0, tol::kRoundoffKernel) << "the tension tip of beta = 0 is p = 0, J = 1";
+        EXPECT_NEAR(r.sigma.prod(), 1.0, tol::kRoundoffKernel)
+            << "the tension tip of beta = 0 is p = 0, J = 1";
     }
 }
 
@@ -61,7 +63,8 @@ TEST(Damage, TensionReturnsDamageAndWeakenTheNext) {
     Real alpha = -0.02, d = 0, last_J = 2;
     for (int i = 0; i < 20; ++i) {
         const Vec3 trial = Vec3::Constant(std::cbrt(1.05));
-        const NaccPrincipalReturn r = nacc_return_principal(trial, alpha, damaged_cohesion(beta0, d), nacc, kLame);
+        const NaccPrincipalReturn r =
+            nacc_return_principal(trial, alpha, damaged_cohesion(beta0, d), nacc, kLame);
         const Real next_d = damage_after_return(d, alpha, r.alpha, damage_strain);
         EXPECT_GE(next_d, d);
         const Real J = r.sigma.prod();

@@ -62,7 +62,8 @@ void BM_EigenJacobiSvd(benchmark::State& state) {
     const std::vector<Mat3> F = deformations(0.3, 1);
     size_t i = 0;
     for (auto _ : state) {
-        Eigen::JacobiSVD<Mat3> svd(F[i++ & (kInputs - 1)], Eigen::ComputeFullU | Eigen::ComputeFullV);
+        Eigen::JacobiSVD<Mat3> svd(F[i++ & (kInputs - 1)],
+                                   Eigen::ComputeFullU | Eigen::ComputeFullV);
         benchmark::DoNotOptimize(svd.singularValues());
     }
     state.SetItemsProcessed(state.iterations());
@@ -74,7 +75,8 @@ void BM_KirchhoffFromSvd(benchmark::State& state) {
     std::vector<Svd3> svd(kInputs);
     for (int k = 0; k < kInputs; ++k) svd[k] = svd3(F[k]);
     size_t i = 0;
-    for (auto _ : state) benchmark::DoNotOptimize(neo_hookean_kirchhoff(svd[i++ & (kInputs - 1)], kLame));
+    for (auto _ : state)
+        benchmark::DoNotOptimize(neo_hookean_kirchhoff(svd[i++ & (kInputs - 1)], kLame));
     state.SetItemsProcessed(state.iterations());
 }
 BENCHMARK(BM_KirchhoffFromSvd);
@@ -82,7 +84,8 @@ BENCHMARK(BM_KirchhoffFromSvd);
 void BM_KirchhoffDirect(benchmark::State& state) {
     const std::vector<Mat3> F = deformations(0.05, 3);
     size_t i = 0;
-    for (auto _ : state) benchmark::DoNotOptimize(neo_hookean_kirchhoff(F[i++ & (kInputs - 1)], kLame));
+    for (auto _ : state)
+        benchmark::DoNotOptimize(neo_hookean_kirchhoff(F[i++ & (kInputs - 1)], kLame));
     state.SetItemsProcessed(state.iterations());
 }
 BENCHMARK(BM_KirchhoffDirect);
@@ -113,7 +116,8 @@ void BM_NaccProject(benchmark::State& state) {
     const NaccParams n = bench_nacc();
     const Real alpha = outside ? -0.05 : -0.3;
     size_t i = 0;
-    for (auto _ : state) benchmark::DoNotOptimize(nacc_project(F[i++ & (kInputs - 1)], alpha, 2, n, kLame));
+    for (auto _ : state)
+        benchmark::DoNotOptimize(nacc_project(F[i++ & (kInputs - 1)], alpha, 2, n, kLame));
     state.SetItemsProcessed(state.iterations());
 }
 BENCHMARK(BM_NaccProject)->Arg(0)->Arg(1);
@@ -126,7 +130,8 @@ void BM_ReturnMapAndStress(benchmark::State& state) {
     const NaccParams n = bench_nacc();
     size_t i = 0;
     for (auto _ : state) {
-        const NaccReturn r = nacc_return_map(F[i++ & (kInputs - 1)], outside ? -0.05 : -0.3, 2, n, kLame);
+        const NaccReturn r =
+            nacc_return_map(F[i++ & (kInputs - 1)], outside ? -0.05 : -0.3, 2, n, kLame);
         benchmark::DoNotOptimize(neo_hookean_kirchhoff(r.svd, kLame));
         benchmark::DoNotOptimize(r.alpha);
     }

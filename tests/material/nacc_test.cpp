@@ -57,10 +57,17 @@ Reference reference_return_map(const Mat3& Fe_trial, Real alpha, Real beta, cons
     Eigen::JacobiSVD<Mat3> svd(Fe_trial, Eigen::ComputeFullU | Eigen::ComputeFullV);
     Mat3 U = svd.matrixU(), V = svd.matrixV();
     Vec3 sigma = svd.singularValues();
-    if (U.determinant() < 0) { U.col(2) *= -1; sigma(2) *= -1; }
-    if (V.determinant() < 0) { V.col(2) *= -1; sigma(2) *= -1; }
+    if (U.determinant() < 0) {
+        U.col(2) *= -1;
+        sigma(2) *= -1;
+    }
+    if (V.determinant() < 0) {
+        V.col(2) *= -1;
+        sigma(2) *= -1;
+    }
 
-    const Real p0 = kappa * (1e-5 + std::sinh(std::min(n.xi * std::max(-alpha, 0.0), kNaccMaxSinhArgument)));
+    const Real p0 =
+        kappa * (1e-5 + std::sinh(std::min(n.xi * std::max(-alpha, 0.0), kNaccMaxSinhArgument)));
     const Real J = sigma.prod();
     const Vec3 b_hat = sigma.cwiseProduct(sigma);
     const Vec3 s_hat = mu * std::pow(J, -2.0 / d) * (b_hat.array() - b_hat.sum() / d).matrix();
@@ -70,7 +77,8 @@ Reference reference_return_map(const Mat3& Fe_trial, Real alpha, Real beta, cons
 
     Reference r{Fe_trial, alpha, 0};
     if (p > p0 || p < -beta * p0) {
-        const Real J_new = p > p0 ? std::sqrt(1 - 2 * p0 / kappa) : std::sqrt(1 + 2 * beta * p0 / kappa);
+        const Real J_new =
+            p > p0 ? std::sqrt(1 - 2 * p0 / kappa) : std::sqrt(1 + 2 * beta * p0 / kappa);
         r.Fe = U * Vec3::Constant(std::pow(J_new, 1.0 / d)).asDiagonal() * V.transpose();
         if (n.hardening) r.alpha += std::log(J / J_new);
         r.yield_case = p > p0 ? 1 : 2;
@@ -81,7 +89,8 @@ Reference reference_return_map(const Mat3& Fe_trial, Real alpha, Real beta, cons
 
     const Real q_target_sq = -M * M * (p + beta * p0) * (p - p0) / (1 + 2 * beta);
     const Real s_new_norm = std::sqrt(q_target_sq / ((6.0 - d) / 2));
-    const Vec3 b_hat_new = (std::pow(J, 2.0 / d) / mu * s_new_norm * s_hat / s_hat.norm()).array() + b_hat.sum() / d;
+    const Vec3 b_hat_new =
+        (std::pow(J, 2.0 / d) / mu * s_new_norm * s_hat / s_hat.norm()).array() + b_hat.sum() / d;
     r.Fe = U * b_hat_new.cwiseSqrt().asDiagonal() * V.transpose();
     r.yield_case = 3;
 
@@ -89,7 +98,8 @@ Reference reference_return_map(const Mat3& Fe_trial, Real alpha, Real beta, cons
     if (n.hardening && p0 > tol && p < p0 - tol && p > -beta * p0 + tol) {
         const Real p_c = (1 - beta) * p0 / 2;
         const Real aa = M * M * (p - p_c) * (p - p_c) / (a * s_hat.squaredNorm());
-        const Real qa = 1 + aa, qb = aa * beta * p0 - aa * p0 - 2 * p_c, qc = p_c * p_c - aa * beta * p0 * p0;
+        const Real qa = 1 + aa, qb = aa * beta * p0 - aa * p0 - 2 * p_c,
+                   qc = p_c * p_c - aa * beta * p0 * p0;
         const Real root = std::sqrt(std::abs(qb * qb - 4 * qa * qc));
         const Real p1 = (-qb + root) / (2 * qa), p2 = (-qb - root) / (2 * qa);
         const Real p_fake = (p - p_c) * (p1 - p_c) > 0 ? p1 : p2;
@@ -105,26 +115,33 @@ TEST(NaccReference, SweepOfRandomStatesMatchesIndependentEvaluation) {
     std::array<int, 4> case_count{};
     const int n_states = 4000;
     for (int i = 0; i < n_states; ++i) {
-        const NaccParams n = params(1 + 1.5 * u(rng), std::array<Real, 3>{0.5, 1, 3}[i % 3], i % 5 != 0);
+        const NaccParams n =
+            params(1 + 1.5 * u(rng), std::array<Real, 3>{0.5, 1, 3}[i % 3], i % 5 != 0);
         const Real beta = 2.5 * u(rng);
         const Real alpha = -0.6 + 0.7 * u(rng);
         const Real log_J = 0.5 * (u(rng) - 0.5);
         const Real dev = 0.3 * u(rng);
         std::normal_distribution<Real> g(0, 1);
-        const Vec3 sigma = std::exp(log_J / 3) * Vec3(std::exp(dev * g(rng)), std::exp(dev * g(rng)), std::exp(dev * g(rng)));
+        const Vec3 sigma =
+            std::exp(log_J / 3) *
+            Vec3(std::exp(dev * g(rng)), std::exp(dev * g(rng)), std::exp(dev * g(rng)));
         const Mat3 Fe = test::with_singular_values(rng, sigma);
 
         const NaccReturn got = nacc_return_map(Fe, alpha, beta, n, kLame);
         const Reference want = reference_return_map(Fe, alpha, beta, n, kLame);
-        ASSERT_EQ(got.yield_case, want.yield_case) << "state #" << i << " Fe =\n" << Fe << "\nalpha " << alpha;
+        ASSERT_EQ(got.yield_case, want.yield_case) << "state #" << i << " Fe =\n"
+                                                   << Fe << "\nalpha " << alpha;
         ++case_count[got.yield_case];
-        EXPECT_LE((got.Fe - want.Fe).norm(), tol::kRoundoffLoose * Fe.norm()) << "state #" << i << " case " << got.yield_case;
-        EXPECT_NEAR(got.alpha, want.alpha, tol::kRoundoffLoose * (1 + std::abs(alpha))) << "state #" << i << " case " << got.yield_case;
+        EXPECT_LE((got.Fe - want.Fe).norm(), tol::kRoundoffLoose * Fe.norm())
+            << "state #" << i << " case " << got.yield_case;
+        EXPECT_NEAR(got.alpha, want.alpha, tol::kRoundoffLoose * (1 + std::abs(alpha)))
+            << "state #" << i << " case " << got.yield_case;
         // the returned SVD is the SVD of the returned Fe
         EXPECT_LE((got.svd.U * got.svd.sigma.asDiagonal() * got.svd.V.transpose() - got.Fe).norm(),
                   tol::kRoundoff * got.Fe.norm());
     }
-    for (int c = 0; c < 4; ++c) EXPECT_GE(case_count[c], n_states / 20) << "too few states in case " << c;
+    for (int c = 0; c < 4; ++c)
+        EXPECT_GE(case_count[c], n_states / 20) << "too few states in case " << c;
 }
 
 TEST(NaccProject, MatchesReturnMapWithoutItsSvd) {
@@ -132,7 +149,8 @@ TEST(NaccProject, MatchesReturnMapWithoutItsSvd) {
     std::uniform_real_distribution<Real> u(0, 1);
     std::array<int, 4> case_count{};
     for (int i = 0; i < 4000; ++i) {
-        const NaccParams n = params(1 + 1.5 * u(rng), std::array<Real, 3>{0.5, 1, 3}[i % 3], i % 5 != 0);
+        const NaccParams n =
+            params(1 + 1.5 * u(rng), std::array<Real, 3>{0.5, 1, 3}[i % 3], i % 5 != 0);
         const Real beta = 2.5 * u(rng), alpha = -0.6 + 0.7 * u(rng);
         const Real J = std::exp(0.5 * (u(rng) - 0.5));
         const Mat3 Fe = test::with_singular_values(rng, sigma_with(J, 0.3 * u(rng)));
@@ -153,7 +171,8 @@ TEST(NaccReturnMap, InsideStateIsReturnedUnchanged) {
     std::mt19937_64 rng(1);
     const NaccParams n = params(1.87, 1);
     for (int i = 0; i < 200; ++i) {
-        const Mat3 Fe = test::with_singular_values(rng, sigma_with(0.98 + 0.04 * (i % 10) / 10, 0.001 * (i % 7)));
+        const Mat3 Fe = test::with_singular_values(
+            rng, sigma_with(0.98 + 0.04 * (i % 10) / 10, 0.001 * (i % 7)));
         const NaccReturn r = nacc_return_map(Fe, -0.3, 0.5, n, kLame);
         ASSERT_EQ(r.yield_case, kNaccInside) << "Fe =\n" << Fe;
         EXPECT_TRUE(r.Fe == Fe) << "Fe must come back bitwise unchanged";
@@ -182,17 +201,23 @@ TEST(NaccReturnMap, ProjectedStatesLandOnTheYieldSurface) {
             const Real J_trial = svd3(Fe).sigma.prod();
             if (preserve_volume) {
                 // exact J: the returned state itself satisfies y = 0
-                const auto [p_new, s_new] = pressure_and_shear(r.svd.sigma, r.svd.sigma.prod(), kLame);
+                const auto [p_new, s_new] =
+                    pressure_and_shear(r.svd.sigma, r.svd.sigma.prod(), kLame);
                 EXPECT_NEAR(r.svd.sigma.prod(), J_trial, tol::kRoundoff);
-                EXPECT_NEAR(nacc_yield(p_new, s_new, p0, beta, n.M), 0, tol::kRoundoffLoose * scale) << "Fe =\n" << Fe;
+                EXPECT_NEAR(nacc_yield(p_new, s_new, p0, beta, n.M), 0, tol::kRoundoffLoose * scale)
+                    << "Fe =\n"
+                    << Fe;
             } else {
                 // reference semantics: tr(b_hat) is kept and s is scaled radially at the trial
                 // J and p, so y(p_trial, s_new(J_trial)) = 0
                 const auto [p_unused, s_new] = pressure_and_shear(r.svd.sigma, J_trial, kLame);
                 (void)p_unused;
                 const Vec3 sigma_trial = svd3(Fe).sigma;
-                EXPECT_NEAR(r.svd.sigma.squaredNorm(), sigma_trial.squaredNorm(), tol::kRoundoff * sigma_trial.squaredNorm());
-                EXPECT_NEAR(nacc_yield(p, s_new, p0, beta, n.M), 0, tol::kRoundoffLoose * scale) << "Fe =\n" << Fe;
+                EXPECT_NEAR(r.svd.sigma.squaredNorm(), sigma_trial.squaredNorm(),
+                            tol::kRoundoff * sigma_trial.squaredNorm());
+                EXPECT_NEAR(nacc_yield(p, s_new, p0, beta, n.M), 0, tol::kRoundoffLoose * scale)
+                    << "Fe =\n"
+                    << Fe;
                 // shrinking the deviator at fixed trace can only raise det: the reference code's
                 // J drift is always an expansion
                 EXPECT_GE(r.svd.sigma.prod(), J_trial * (1 - tol::kRoundoff));
@@ -208,13 +233,15 @@ TEST(NaccReturnMap, CompressionTip) {
     for (bool hardening : {true, false}) {
         const NaccParams n = params(1.87, 1, hardening);
         const Real p0 = nacc_p0(alpha, n.xi, kLame.kappa);
-        const Mat3 Fe = test::with_singular_values(rng, sigma_with(0.7, 0.2));  // p = 0.255 kappa > p0
+        // p = 0.255 kappa > p0
+        const Mat3 Fe = test::with_singular_values(rng, sigma_with(0.7, 0.2));
         const NaccReturn r = nacc_return_map(Fe, alpha, beta, n, kLame);
         ASSERT_EQ(r.yield_case, kNaccCompressionTip);
         const Real J_new = std::sqrt(1 - 2 * p0 / kLame.kappa);
         EXPECT_NEAR(r.Fe.determinant(), J_new, tol::kRoundoff);
         // deviatoric part removed: Fe = J_new^(1/3) R
-        EXPECT_LE((r.Fe * r.Fe.transpose() - std::pow(J_new, 2.0 / 3) * Mat3::Identity()).norm(), tol::kRoundoff);
+        EXPECT_LE((r.Fe * r.Fe.transpose() - std::pow(J_new, 2.0 / 3) * Mat3::Identity()).norm(),
+                  tol::kRoundoff);
         if (hardening) {
             EXPECT_NEAR(r.alpha, alpha + std::log(0.7 / J_new), tol::kRoundoff);
             EXPECT_LT(r.alpha, alpha);  // compaction hardens
@@ -235,7 +262,8 @@ TEST(NaccReturnMap, TensionTip) {
         ASSERT_EQ(r.yield_case, kNaccTensionTip);
         const Real J_new = std::sqrt(1 + 2 * beta * p0 / kLame.kappa);
         EXPECT_NEAR(r.Fe.determinant(), J_new, tol::kRoundoff);
-        EXPECT_LE((r.Fe * r.Fe.transpose() - std::pow(J_new, 2.0 / 3) * Mat3::Identity()).norm(), tol::kRoundoff);
+        EXPECT_LE((r.Fe * r.Fe.transpose() - std::pow(J_new, 2.0 / 3) * Mat3::Identity()).norm(),
+                  tol::kRoundoff);
         if (hardening) {
             EXPECT_NEAR(r.alpha, alpha + std::log(1.3 / J_new), tol::kRoundoff);
             EXPECT_GT(r.alpha, alpha);  // tension softens
@@ -255,13 +283,17 @@ TEST(NaccReturnMap, StrengthScalesTheYieldPressure) {
         const Mat3 Fe = test::with_singular_values(rng, sigma_with(1.6, 0.05));  // far in tension
         const NaccReturn r = nacc_return_map(Fe, alpha, beta, n, kLame, false, strength);
         ASSERT_EQ(r.yield_case, kNaccTensionTip) << strength;
-        EXPECT_NEAR(r.Fe.determinant(), std::sqrt(1 + 2 * beta * strength * p0 / kLame.kappa), tol::kRoundoff)
+        EXPECT_NEAR(r.Fe.determinant(), std::sqrt(1 + 2 * beta * strength * p0 / kLame.kappa),
+                    tol::kRoundoff)
             << strength;
         // and a state inside the stronger ellipse is outside the weaker one
         const Real J_between = std::sqrt(1 + 2 * beta * 0.75 * strength * p0 / kLame.kappa) * 1.0;
         const Mat3 F_mid = test::with_singular_values(rng, sigma_with(J_between, 0));
-        EXPECT_EQ(nacc_return_map(F_mid, alpha, beta, n, kLame, false, strength).yield_case, kNaccInside) << strength;
-        EXPECT_EQ(nacc_return_map(F_mid, alpha, beta, n, kLame, false, strength / 2).yield_case, kNaccTensionTip)
+        EXPECT_EQ(nacc_return_map(F_mid, alpha, beta, n, kLame, false, strength).yield_case,
+                  kNaccInside)
+            << strength;
+        EXPECT_EQ(nacc_return_map(F_mid, alpha, beta, n, kLame, false, strength / 2).yield_case,
+                  kNaccTensionTip)
             << strength;
     }
 }
@@ -330,13 +362,15 @@ TEST(NaccReturnMap, ExtremeStatesStayFinite) {
             for (const auto& [name, Fe] : states) {
                 const NaccParams n = params(1.87, 3, true);
                 const NaccReturn r = nacc_return_map(Fe, alpha, beta, n, kLame);
-                SCOPED_TRACE(name + " alpha " + std::to_string(alpha) + " beta " + std::to_string(beta));
+                SCOPED_TRACE(name + " alpha " + std::to_string(alpha) + " beta " +
+                             std::to_string(beta));
                 EXPECT_TRUE(r.Fe.allFinite()) << r.Fe;
                 EXPECT_TRUE(std::isfinite(r.alpha)) << r.alpha;
                 EXPECT_TRUE(r.svd.sigma.allFinite() && r.svd.U.allFinite() && r.svd.V.allFinite());
                 const NaccProjection projected = nacc_project(Fe, alpha, beta, n, kLame);
                 EXPECT_TRUE(projected.Fe.allFinite() && std::isfinite(projected.alpha));
-                EXPECT_TRUE(neo_hookean_kirchhoff(r.svd, kLame).allFinite() || r.svd.sigma.prod() == 0)
+                EXPECT_TRUE(neo_hookean_kirchhoff(r.svd, kLame).allFinite() ||
+                            r.svd.sigma.prod() == 0)
                     << "stress of the returned state, sigma = " << r.svd.sigma.transpose();
                 // p0 >= kappa/2 (alpha <= -1 at xi = 3): the compression tip is unreachable
                 if (nacc_p0(alpha, n.xi, kLame.kappa) >= kLame.kappa / 2) {
@@ -351,9 +385,10 @@ TEST(NaccYield, MatchesEquation8) {
     // y = (1 + 2 beta) q^2 + M^2 (p + beta p0)(p - p0) with q = sqrt(3/2) ||s||
     const Real p = 10, s = 4, p0 = 30, beta = 0.5, M = 1.5;
     const Real q = std::sqrt(1.5) * s;
-    EXPECT_NEAR(nacc_yield(p, s, p0, beta, M), (1 + 2 * beta) * q * q + M * M * (p + beta * p0) * (p - p0), tol::kRoundoff);
-    EXPECT_LT(nacc_yield(p, 0, p0, beta, M), 0);          // on the p axis between the tips: inside
-    EXPECT_NEAR(nacc_yield(p0, 0, p0, beta, M), 0, tol::kRoundoff);  // compression tip
+    EXPECT_NEAR(nacc_yield(p, s, p0, beta, M),
+                (1 + 2 * beta) * q * q + M * M * (p + beta * p0) * (p - p0), tol::kRoundoff);
+    EXPECT_LT(nacc_yield(p, 0, p0, beta, M), 0);  // on the p axis between the tips: inside
+    EXPECT_NEAR(nacc_yield(p0, 0, p0, beta, M), 0, tol::kRoundoff);          // compression tip
     EXPECT_NEAR(nacc_yield(-beta * p0, 0, p0, beta, M), 0, tol::kRoundoff);  // tension tip
 }
 

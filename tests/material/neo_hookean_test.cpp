@@ -27,7 +27,9 @@ Mat3 finite_difference_piola(const Mat3& F, Real h) {
     return P;
 }
 
-Real smallest_singular_value(const Mat3& F) { return Eigen::JacobiSVD<Mat3>(F).singularValues()(2); }
+Real smallest_singular_value(const Mat3& F) {
+    return Eigen::JacobiSVD<Mat3>(F).singularValues()(2);
+}
 
 struct NamedCase {
     std::string name;
@@ -38,7 +40,8 @@ struct NamedCase {
 std::vector<NamedCase> derivative_cases() {
     std::mt19937_64 rng(11);
     std::vector<NamedCase> cases;
-    for (int i = 0; i < 40; ++i) cases.push_back({"random #" + std::to_string(i), test::random_deformation(rng, 0.3)});
+    for (int i = 0; i < 40; ++i)
+        cases.push_back({"random #" + std::to_string(i), test::random_deformation(rng, 0.3)});
     cases.push_back({"J=1e-3 isotropic", test::with_singular_values(rng, Vec3(0.1, 0.1, 0.1))});
     cases.push_back({"J=1e-3 anisotropic", test::with_singular_values(rng, Vec3(1, 0.1, 0.01))});
     cases.push_back({"J=1e-6", test::with_singular_values(rng, Vec3(0.02, 0.01, 0.005))});
@@ -54,7 +57,8 @@ TEST(NeoHookean, RotationGivesZeroStressAndEnergy) {
         const Mat3 R = test::random_rotation(rng);
         const Real scale = kLame.mu + kLame.kappa;
         EXPECT_LE(neo_hookean_kirchhoff(R, kLame).norm(), tol::kRoundoff * scale) << "R =\n" << R;
-        EXPECT_LE(neo_hookean_kirchhoff(svd3(R), kLame).norm(), tol::kRoundoff * scale) << "R =\n" << R;
+        EXPECT_LE(neo_hookean_kirchhoff(svd3(R), kLame).norm(), tol::kRoundoff * scale) << "R =\n"
+                                                                                        << R;
         EXPECT_LE(neo_hookean_first_piola(R, kLame).norm(), tol::kRoundoff * scale) << "R =\n" << R;
         EXPECT_NEAR(neo_hookean_energy(R, kLame), 0, tol::kRoundoff * scale);
     }
@@ -67,7 +71,8 @@ TEST(NeoHookean, SvdPathMatchesDirectPath) {
         if (i % 10 == 0) F.col(0) = -F.col(0);  // inverted: tau is still defined
         const Mat3 direct = neo_hookean_kirchhoff(F, kLame);
         const Mat3 from_svd = neo_hookean_kirchhoff(svd3(F), kLame);
-        const Real scale = (kLame.mu + kLame.kappa) * (1 + F.squaredNorm() + std::pow(F.determinant(), 2));
+        const Real scale =
+            (kLame.mu + kLame.kappa) * (1 + F.squaredNorm() + std::pow(F.determinant(), 2));
         EXPECT_LE((direct - from_svd).norm(), tol::kRoundoff * scale) << "F =\n" << F;
         EXPECT_LE((direct - direct.transpose()).norm(), tol::kRoundoff * scale);
     }
@@ -77,7 +82,8 @@ TEST(NeoHookean, KirchhoffEqualsPiolaTimesFTransposed) {
     for (const NamedCase& c : derivative_cases()) {
         const Mat3 tau = neo_hookean_kirchhoff(c.F, kLame);
         const Mat3 from_piola = neo_hookean_first_piola(c.F, kLame) * c.F.transpose();
-        EXPECT_LE((tau - from_piola).norm(), tol::kRoundoffLoose * (tau.norm() + kLame.kappa)) << c.name;
+        EXPECT_LE((tau - from_piola).norm(), tol::kRoundoffLoose * (tau.norm() + kLame.kappa))
+            << c.name;
     }
 }
 
@@ -91,7 +97,8 @@ TEST(NeoHookean, StressMatchesFiniteDifferenceOfEnergy) {
         // tau = P F^T: the Kirchhoff stress the MPM step uses, against the differenced energy
         const Mat3 tau = neo_hookean_kirchhoff(c.F, kLame);
         const Mat3 tau_fd = P_fd * c.F.transpose();
-        EXPECT_LE((tau_fd - tau).norm(), tol::kFiniteDiff * std::max(tau.norm(), kLame.mu)) << c.name;
+        EXPECT_LE((tau_fd - tau).norm(), tol::kFiniteDiff * std::max(tau.norm(), kLame.mu))
+            << c.name;
     }
 }
 

@@ -73,8 +73,10 @@ TEST(StrengthField, GaussianFieldHasUnitVarianceAndTheRequestedCorrelationLength
         corr_2l += correlation(4) / seeds;
     }
     EXPECT_NEAR(variance, 1.0, kSampleVariance);
-    EXPECT_NEAR(corr_l, std::exp(-0.5), kSampleCorrelation) << "correlation at one correlation length";
-    EXPECT_NEAR(corr_2l, std::exp(-2.0), kSampleCorrelation) << "correlation at two correlation lengths";
+    EXPECT_NEAR(corr_l, std::exp(-0.5), kSampleCorrelation)
+        << "correlation at one correlation length";
+    EXPECT_NEAR(corr_2l, std::exp(-2.0), kSampleCorrelation)
+        << "correlation at two correlation lengths";
     // the correlation length a fit of exp(-r^2 / (2 l^2)) to the lag-l value gives
     EXPECT_NEAR(l / std::sqrt(-2 * std::log(corr_l)), l, 0.15 * l);
 }
@@ -85,9 +87,11 @@ TEST(StrengthField, MultipliersHaveMeanOneAndTheWeibullSpread) {
         params.correlation_length = 0.02;
         params.weibull_modulus = modulus;
         // many correlation lengths, so the sample is close to the distribution
-        const std::vector<Real> m = strength_multipliers(make_strength_field(params, 7), lattice(40, 0.02));
+        const std::vector<Real> m =
+            strength_multipliers(make_strength_field(params, 7), lattice(40, 0.02));
         EXPECT_NEAR(mean_of(m), 1.0, kSampleMean) << "modulus " << modulus;
-        EXPECT_NEAR(std::sqrt(variance_of(m)), weibull_cv(modulus), 0.2 * weibull_cv(modulus)) << "modulus " << modulus;
+        EXPECT_NEAR(std::sqrt(variance_of(m)), weibull_cv(modulus), 0.2 * weibull_cv(modulus))
+            << "modulus " << modulus;
         for (Real v : m) ASSERT_GT(v, 0);
     }
     EXPECT_NEAR(weibull_cv(4), 0.2805, kTabulated);  // the tabulated value

@@ -26,7 +26,8 @@ struct Slab {
 
     explicit Slab(int break_frame) {
         for (int32_t e = 0; e < topo.n_edges(); ++e) {
-            const int a = column_of(topo.X[topo.edges[e][0]]), b = column_of(topo.X[topo.edges[e][1]]);
+            const int a = column_of(topo.X[topo.edges[e][0]]),
+                      b = column_of(topo.X[topo.edges[e][1]]);
             if (a == 5 || a == 6 || b == 5 || b == 6) first_break[e] = break_frame;
         }
     }
@@ -53,7 +54,8 @@ SurfaceParams plates() {
 
 TEST(MeshMeasures, ASlabTornInTwoIsTwoClosedPiecesAndNoChips) {
     const Slab slab(1);
-    const SurfacedFrame s = surface_frame(slab.topo, slab.frame(1, 0.05), slab.first_break, plates());
+    const SurfacedFrame s =
+        surface_frame(slab.topo, slab.frame(1, 0.05), slab.first_break, plates());
     const MeshPieces m = measure_mesh_pieces(s.boundary, s.crack, 2 * kH);
     EXPECT_EQ(m.pieces, 2);
     EXPECT_EQ(m.chips, 0);

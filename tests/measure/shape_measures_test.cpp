@@ -13,10 +13,11 @@ namespace mudcrack {
 namespace {
 
 constexpr double kSpacing = 0.02;
-constexpr int kN = 10;   // columns per side
+constexpr int kN = 10;  // columns per side
 constexpr int kLayers = 6;
 
-/// A kN x kLayers x kN lattice with particles at cell centres; index (i, j, k) -> (k kLayers + j) kN + i.
+/// A kN x kLayers x kN lattice with particles at cell centres; index (i, j, k) -> (k kLayers + j)
+/// kN + i.
 std::vector<Vec3> lattice() {
     std::vector<Vec3> x;
     for (int k = 0; k < kN; ++k)
@@ -56,7 +57,8 @@ TEST(ParticleSpacing, IsTheCubeRootOfTheMeanVolume) {
 
 TEST(LayerShape, UnmovedLayerHasNoCurlSplitOrLift) {
     const std::vector<Vec3> rest = lattice();
-    const LayerShape s = measure_layer_shape(build_rest_columns(rest, kSpacing), rest, rest, kSpacing);
+    const LayerShape s =
+        measure_layer_shape(build_rest_columns(rest, kSpacing), rest, rest, kSpacing);
     EXPECT_EQ(s.columns, kN * kN);
     EXPECT_EQ(s.curl, 0);
     EXPECT_EQ(s.top_rise_median, 0);
@@ -150,14 +152,16 @@ TEST(LayerShape, AGapInTheGroundBandIsLiftOffAGapAboveIsASplitAtItsHeight) {
     ground.ground_y = 0;
     ground.band = 1.5 * kSpacing;
     ground.cell = 2 * kSpacing;  // heights reported in cells of twice the spacing
-    const LayerShape s = measure_layer_shape(build_rest_columns(rest, kSpacing), rest, x, kSpacing, ground);
+    const LayerShape s =
+        measure_layer_shape(build_rest_columns(rest, kSpacing), rest, x, kSpacing, ground);
     EXPECT_NEAR(s.lifted_fraction, 0.5, tol::kRoundoff);
     EXPECT_NEAR(s.split_fraction, 0.5, tol::kRoundoff);
     // the split's lower particle sits at 3.5 spacings = 1.75 cells
     EXPECT_NEAR(s.split_height_median, 1.75, tol::kRoundoff);
     EXPECT_NEAR(s.split_height_p10, 1.75, tol::kRoundoff);
     // without a ground band every gap is a split
-    const LayerShape no_band = measure_layer_shape(build_rest_columns(rest, kSpacing), rest, x, kSpacing);
+    const LayerShape no_band =
+        measure_layer_shape(build_rest_columns(rest, kSpacing), rest, x, kSpacing);
     EXPECT_NEAR(no_band.split_fraction, 1.0, tol::kRoundoff);
     EXPECT_EQ(no_band.lifted_fraction, 0);
 }
@@ -174,7 +178,8 @@ TEST(HardeningHalves, CountsSurfaceParticlesOnEachSideOfAlpha0) {
 TEST(LayerShape, RejectsMismatchedSizes) {
     const std::vector<Vec3> rest = lattice();
     std::vector<Vec3> x(rest.begin(), rest.end() - 1);
-    EXPECT_THROW(measure_layer_shape(build_rest_columns(rest, kSpacing), rest, x, kSpacing), InputError);
+    EXPECT_THROW(measure_layer_shape(build_rest_columns(rest, kSpacing), rest, x, kSpacing),
+                 InputError);
 }
 
 TEST(FragmentSizes, WeightsFragmentsByVolumeAndSkipsCulledParticles) {
@@ -197,7 +202,8 @@ class SurfacePolygonsTest : public ::testing::Test {
 protected:
     static constexpr double kH = 0.1;
     SurfacePolygonsTest()
-        : m_mesh(test::box_lattice(8, 4, 6, kH, test::LatticeUv::None, Vec3(0.5 * kH, 0, 0.5 * kH))),
+        : m_mesh(
+              test::box_lattice(8, 4, 6, kH, test::LatticeUv::None, Vec3(0.5 * kH, 0, 0.5 * kH))),
           m_topo(build_core_topology(m_mesh)),
           m_columns(build_rest_columns(m_mesh.X, kH)) {}
 
@@ -221,7 +227,8 @@ protected:
 
 TEST_F(SurfacePolygonsTest, AnIntactTopIsOnePolygonOfTheWholeFootprint) {
     ASSERT_EQ(m_columns.n_columns(), 9 * 7);
-    const SurfacePolygons s = measure_surface_polygons(m_topo, std::vector<uint8_t>(m_topo.n_edges(), 0), m_columns, 1);
+    const SurfacePolygons s =
+        measure_surface_polygons(m_topo, std::vector<uint8_t>(m_topo.n_edges(), 0), m_columns, 1);
     EXPECT_EQ(s.count, 1);
     EXPECT_NEAR(s.largest_fraction, 1, tol::kRoundoff);
     EXPECT_NEAR(s.weighted_mean_area, footprint(), tol::kRoundoff);
@@ -241,10 +248,12 @@ TEST_F(SurfacePolygonsTest, AThroughCrackCutsTheTopIntoTwoPolygonsOfTheirColumnS
 // effective count is (61 + 2)^2 / (61^2 + 2^2) of the 63 columns
 TEST_F(SurfacePolygonsTest, AChipCountsAsAPolygonButHardlyAsAPlate) {
     std::vector<uint8_t> broken(m_topo.n_edges(), 0);
-    const double x = 0.5 * kH + 0.5 * kH, z = 0.5 * kH + 1.5 * kH;  // around columns (0, 0) and (0, 1)
+    // around columns (0, 0) and (0, 1)
+    const double x = 0.5 * kH + 0.5 * kH, z = 0.5 * kH + 1.5 * kH;
     const auto in_chip = [&](const Vec3& p) { return p.x() < x && p.z() < z; };
     for (int32_t e = 0; e < m_topo.n_edges(); ++e)
-        if (in_chip(m_topo.X[m_topo.edges[e][0]]) != in_chip(m_topo.X[m_topo.edges[e][1]])) broken[e] = 1;
+        if (in_chip(m_topo.X[m_topo.edges[e][0]]) != in_chip(m_topo.X[m_topo.edges[e][1]]))
+            broken[e] = 1;
     const SurfacePolygons s = measure_surface_polygons(m_topo, broken, m_columns, 1);
     EXPECT_EQ(s.count, 2);
     EXPECT_NEAR(s.largest_fraction, 61.0 / 63.0, tol::kRoundoff);
@@ -258,12 +267,14 @@ TEST_F(SurfacePolygonsTest, ACrackThatStopsBelowTheTopLayerDoesNotCutTheSurface)
 }
 
 TEST_F(SurfacePolygonsTest, RejectsMismatchedSizes) {
-    EXPECT_THROW(measure_surface_polygons(m_topo, std::vector<uint8_t>(3, 0), m_columns, 1), InputError);
+    EXPECT_THROW(measure_surface_polygons(m_topo, std::vector<uint8_t>(3, 0), m_columns, 1),
+                 InputError);
     EXPECT_THROW(measure_crack_depth(m_topo, std::vector<uint8_t>(3, 0), m_columns), InputError);
 }
 
 TEST_F(SurfacePolygonsTest, CrackDepthIsHowFarTheCutReachesBelowTheTop) {
-    const CrackDepth none = measure_crack_depth(m_topo, std::vector<uint8_t>(m_topo.n_edges(), 0), m_columns);
+    const CrackDepth none =
+        measure_crack_depth(m_topo, std::vector<uint8_t>(m_topo.n_edges(), 0), m_columns);
     EXPECT_EQ(none.cracked_columns, 0);
     EXPECT_EQ(none.depth_max, 0);
     // a cut through the whole layer (0.4 m thick): the columns beside it are cracked top to bottom
@@ -296,18 +307,23 @@ class CrackNetworkTest : public ::testing::Test {
 protected:
     static constexpr double kH = 0.1;
     CrackNetworkTest()
-        : m_mesh(test::box_lattice(30, 2, 30, kH, test::LatticeUv::None, Vec3(0.5 * kH, 0, 0.5 * kH))),
+        : m_mesh(
+              test::box_lattice(30, 2, 30, kH, test::LatticeUv::None, Vec3(0.5 * kH, 0, 0.5 * kH))),
           m_topo(build_core_topology(m_mesh)),
           m_columns(build_rest_columns(m_mesh.X, kH)) {}
 
     /// Breaks the edges that cross the segment a-b (x-z) into `broken`.
     void cut(Vec2 a, Vec2 b, std::vector<uint8_t>& broken) const {
-        auto side = [](const Vec2& o, const Vec2& d, const Vec2& p) { return d.x() * (p.y() - o.y()) - d.y() * (p.x() - o.x()); };
+        auto side = [](const Vec2& o, const Vec2& d, const Vec2& p) {
+            return d.x() * (p.y() - o.y()) - d.y() * (p.x() - o.x());
+        };
         for (int32_t e = 0; e < m_topo.n_edges(); ++e) {
             const Vec3& p3 = m_topo.X[m_topo.edges[e][0]];
             const Vec3& q3 = m_topo.X[m_topo.edges[e][1]];
             const Vec2 p(p3.x(), p3.z()), q(q3.x(), q3.z());
-            if (side(a, b - a, p) * side(a, b - a, q) < 0 && side(p, q - p, a) * side(p, q - p, b) < 0) broken[e] = 1;
+            if (side(a, b - a, p) * side(a, b - a, q) < 0 &&
+                side(p, q - p, a) * side(p, q - p, b) < 0)
+                broken[e] = 1;
         }
     }
     std::vector<uint8_t> none() const { return std::vector<uint8_t>(m_topo.n_edges(), 0); }
@@ -319,8 +335,9 @@ protected:
 
 TEST_F(CrackNetworkTest, CracksAlongTheGridAreAxisAlignedOnesAcrossItAreNot) {
     std::vector<uint8_t> along = none(), across = none();
-    cut(Vec2(1.53, -1), Vec2(1.53, 4), along);                // x = const
-    cut(Vec2(0.2, 0.1), Vec2(2.8, 0.1 + 2.6 * std::tan(0.52)), across);  // 30 degrees, ending inside
+    cut(Vec2(1.53, -1), Vec2(1.53, 4), along);  // x = const
+    // 30 degrees, ending inside
+    cut(Vec2(0.2, 0.1), Vec2(2.8, 0.1 + 2.6 * std::tan(0.52)), across);
     const CrackNetwork a = measure_crack_network(m_topo, along, m_columns, 1);
     const CrackNetwork b = measure_crack_network(m_topo, across, m_columns, 1);
     ASSERT_GT(a.crack_points, 20);
@@ -332,8 +349,8 @@ TEST_F(CrackNetworkTest, CracksAlongTheGridAreAxisAlignedOnesAcrossItAreNot) {
 
 TEST_F(CrackNetworkTest, ACrackEndingOnAnotherIsATJunctionThreeFromAPointAreAY) {
     std::vector<uint8_t> t = none(), y = none();
-    cut(Vec2(1.53, -1), Vec2(1.53, 4), t);      // a through crack
-    cut(Vec2(1.53, 1.47), Vec2(4, 1.47), t);    // one that ends on it
+    cut(Vec2(1.53, -1), Vec2(1.53, 4), t);    // a through crack
+    cut(Vec2(1.53, 1.47), Vec2(4, 1.47), t);  // one that ends on it
     const Vec2 c(1.53, 1.47);
     for (int k = 0; k < 3; ++k) {
         const double angle = 0.3 + k * 2 * 3.14159265358979 / 3;

@@ -5,8 +5,8 @@
 #include <cmath>
 
 #include "mpm/mpm_test_util.h"
-#include "sim/moisture/flux_history.h"
 #include "sim/grid/sparse_grid.h"
+#include "sim/moisture/flux_history.h"
 #include "tolerance.h"
 
 namespace mudcrack {
@@ -26,12 +26,15 @@ mpm::SparseGrid grid_over(const Vec3& lo, const Vec3i& n) {
 }
 
 // a flux that depends on the node's block key, its index in the block and the time
-Real flux_at(uint32_t key, int k, Real t) { return std::sin(0.1 * key + 0.3 * k) + (1 + 0.01 * k) * t; }
+Real flux_at(uint32_t key, int k, Real t) {
+    return std::sin(0.1 * key + 0.3 * k) + (1 + 0.01 * k) * t;
+}
 
 std::vector<Real> flux_field(const mpm::SparseGrid& g, Real t) {
     std::vector<Real> f(g.n_blocks() * kBlockNodes);
     for (size_t b = 0; b < g.n_blocks(); ++b)
-        for (int k = 0; k < kBlockNodes; ++k) f[b * kBlockNodes + k] = flux_at(g.block_keys[b], k, t);
+        for (int k = 0; k < kBlockNodes; ++k)
+            f[b * kBlockNodes + k] = flux_at(g.block_keys[b], k, t);
     return f;
 }
 
@@ -95,7 +98,8 @@ TEST(MoistureFluxHistory, FollowsBlocksByKeyAsTheMaterialMoves) {
     for (size_t b = 0; b < g2.n_blocks(); ++b) {
         if (g1.find_block(g2.block_keys[b]) >= 0) continue;
         ++unseen;
-        for (int k = 0; k < kBlockNodes; ++k) ASSERT_EQ(far[b * kBlockNodes + k], 0.0) << "block " << b;
+        for (int k = 0; k < kBlockNodes; ++k)
+            ASSERT_EQ(far[b * kBlockNodes + k], 0.0) << "block " << b;
     }
     EXPECT_GT(unseen, 0);
 }

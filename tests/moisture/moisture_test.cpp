@@ -11,9 +11,9 @@
 
 #include "mpm/mpm_test_util.h"
 #include "sim/core/parallel.h"
+#include "sim/grid/bspline.h"
 #include "sim/moisture/moisture_solver.h"
 #include "sim/moisture/pore.h"
-#include "sim/grid/bspline.h"
 #include "sim/mpm/simulation.h"
 #include "sim/mpm/workspace.h"
 #include "tolerance.h"
@@ -22,8 +22,8 @@ namespace mudcrack {
 namespace {
 
 // tolerances, named by what they bound
-constexpr double kCubeRoot = 1e-15;     // a cube root against its closed form, a few ulps
-constexpr double kEvaporatedTop = 1e-9; // the top layer's theta after exact exponential decay
+constexpr double kCubeRoot = 1e-15;      // a cube root against its closed form, a few ulps
+constexpr double kEvaporatedTop = 1e-9;  // the top layer's theta after exact exponential decay
 
 using test::make_lattice;
 using test::plain_model;
@@ -53,7 +53,9 @@ TEST(Moisture, WaterIsConservedWithoutEvaporation) {
     std::mt19937 rng(11);
     std::uniform_real_distribution<Real> u(-0.02, 0.02);
     // a smooth wave the grid resolves plus particle noise
-    set_moisture_field(model, s, [&](const Vec3& x) { return 0.25 + 0.1 * std::sin(2 * M_PI * x.x() / 0.5) + u(rng); });
+    set_moisture_field(model, s, [&](const Vec3& x) {
+        return 0.25 + 0.1 * std::sin(2 * M_PI * x.x() / 0.5) + u(rng);
+    });
     auto spread = [&] {  // standard deviation of theta
         Real mean = 0, var = 0;
         for (Real t : s.theta) mean += t / s.size();
@@ -103,7 +105,8 @@ Real diffusion_error(Real h) {
 TEST(Moisture, DiffusionMatchesErfAndConvergesAtSecondOrder) {
     const Real e1 = diffusion_error(0.04), e2 = diffusion_error(0.02), e3 = diffusion_error(0.01);
     const Real order12 = std::log2(e1 / e2), order23 = std::log2(e2 / e3);
-    std::printf("erf diffusion: L2 error %.3e %.3e %.3e, orders %.2f %.2f\n", e1, e2, e3, order12, order23);
+    std::printf("erf diffusion: L2 error %.3e %.3e %.3e, orders %.2f %.2f\n", e1, e2, e3, order12,
+                order23);
     EXPECT_LT(e3, 1e-3);  // eta/2 = 0.25: 0.4 % of the jump
     // quadratic B-splines with lumped mass and dt ~ h^2: second order
     EXPECT_GT(order12, 1.7);
@@ -135,7 +138,8 @@ TEST(Moisture, ConjugateGradientsMatchAnEigenDirectSolve) {
             for (int b = 0; b < 3; ++b)
                 for (int c = 0; c < 3; ++c)
                     if (st.weight(a, b, c) > 0)  // the active nodes: W_i > 0
-                        index.emplace(std::array<int, 3>{st.axis[0].base + a, st.axis[1].base + b, st.axis[2].base + c},
+                        index.emplace(std::array<int, 3>{st.axis[0].base + a, st.axis[1].base + b,
+                                                         st.axis[2].base + c},
                                       static_cast<int>(index.size()));
     }
     const int n = static_cast<int>(index.size());
@@ -148,7 +152,8 @@ TEST(Moisture, ConjugateGradientsMatchAnEigenDirectSolve) {
             for (int b = 0; b < 3; ++b)
                 for (int c = 0; c < 3; ++c) {
                     if (!(st.weight(a, b, c) > 0)) continue;
-                    const int i = index.at({st.axis[0].base + a, st.axis[1].base + b, st.axis[2].base + c});
+                    const int i =
+                        index.at({st.axis[0].base + a, st.axis[1].base + b, st.axis[2].base + c});
                     nodes.push_back({i, {st.weight(a, b, c), st.gradient(a, b, c, inv_h)}});
                 }
         for (const auto& [i, wi] : nodes) {
@@ -179,7 +184,8 @@ TEST(Moisture, ConjugateGradientsMatchAnEigenDirectSolve) {
                 for (int c = 0; c < 3; ++c)
                     if (st.weight(a, b, c) > 0)
                         expect += st.weight(a, b, c) *
-                                  dtheta[index.at({st.axis[0].base + a, st.axis[1].base + b, st.axis[2].base + c})];
+                                  dtheta[index.at({st.axis[0].base + a, st.axis[1].base + b,
+                                                   st.axis[2].base + c})];
         const Real err = std::abs(expect - s.theta[slot1[id]]);
         if (!(err <= max_err)) max_err = err;  // a NaN sticks
     }
@@ -196,7 +202,8 @@ TEST(Moisture, WarmStartFromTheFluxHistoryConvergesToTheColdStartSolution) {
     model.moisture->cg_tolerance = 1e-12;
     const test::Lattice l = make_lattice(Vec3::Zero(), Vec3i(10, 6, 8), 0.05);
     SimState warm = make_initial_state(model, l.X, l.V0);
-    set_moisture_field(model, warm, [&](const Vec3& x) { return 0.3 + 0.1 * std::sin(2 * M_PI * x.x() / 0.5); });
+    set_moisture_field(model, warm,
+                       [&](const Vec3& x) { return 0.3 + 0.1 * std::sin(2 * M_PI * x.x() / 0.5); });
     SimState cold = warm;
     cold.workspace.reset();
     const Real dt = 1e-3;
@@ -209,9 +216,11 @@ TEST(Moisture, WarmStartFromTheFluxHistoryConvergesToTheColdStartSolution) {
         if (i > 0) warm_iterations += w.cg_iterations, cold_iterations += c.cg_iterations;
     }
     Real max_diff = 0;
-    for (size_t p = 0; p < warm.size(); ++p) max_diff = std::max(max_diff, std::abs(warm.theta[p] - cold.theta[p]));
+    for (size_t p = 0; p < warm.size(); ++p)
+        max_diff = std::max(max_diff, std::abs(warm.theta[p] - cold.theta[p]));
     EXPECT_LT(max_diff, 1e-10) << "warm and cold starts converged to different solutions";
-    std::printf("CG iterations over steps 2-4: warm %d, cold %d\n", warm_iterations, cold_iterations);
+    std::printf("CG iterations over steps 2-4: warm %d, cold %d\n", warm_iterations,
+                cold_iterations);
     EXPECT_LT(warm_iterations, cold_iterations);
 }
 
@@ -246,7 +255,8 @@ TEST(Moisture, ImplicitRobinAgreesAndDampsOvershoot) {
         lowest = std::min(lowest, stiff[i]);
         lowest_explicit = std::min(lowest_explicit, stiff_explicit[i]);
     }
-    std::printf("lambda = 1e5: lowest theta implicit %.4f, explicit %.4f (theta_0 = 0.1)\n", lowest, lowest_explicit);
+    std::printf("lambda = 1e5: lowest theta implicit %.4f, explicit %.4f (theta_0 = 0.1)\n", lowest,
+                lowest_explicit);
     // B-spline quadrature has no discrete maximum principle, so the implicit term may dip below
     // theta_0, by how much depends on where the block's faces sit on the grid (lowest theta 0.014
     // to 0.088 over offsets of the domain in steps of h / 8; the domain derived from these
@@ -285,7 +295,8 @@ TEST(Moisture, FreeBlockThatDriesFullyEndsAtDryVolume) {
         theta_max = std::max(theta_max, s.theta[p]);
     }
     EXPECT_LT(theta_max, 1e-3);
-    EXPECT_NEAR(V_total / V0_total, 1 - model.moisture->eta, kDriedVolumeTolerance * (1 - model.moisture->eta));
+    EXPECT_NEAR(V_total / V0_total, 1 - model.moisture->eta,
+                kDriedVolumeTolerance * (1 - model.moisture->eta));
 }
 
 // gravity off and no colliders: the block dries on every face, to (1 - eta) V0, and stays where
@@ -308,10 +319,12 @@ TEST(Moisture, FreeBlockStaysWhereItIsWhileItDries) {
     while (s.time < 2.0) step(model, s, stable_dt(model, s));
     Real V_total = 0;
     for (size_t p = 0; p < s.size(); ++p) V_total += s.V0[p] * s.J[p];
-    EXPECT_NEAR(V_total / V0_total, 1 - model.moisture->eta, kDriedVolumeTolerance * (1 - model.moisture->eta));
+    EXPECT_NEAR(V_total / V0_total, 1 - model.moisture->eta,
+                kDriedVolumeTolerance * (1 - model.moisture->eta));
     const Vec3 drift = centre_of_mass() - start;
-    EXPECT_LT(drift.norm(), kFreeBodyDrift) << "drift " << drift.transpose() << " m; domain [" << s.domain_min.transpose()
-                                            << "] - [" << s.domain_max.transpose() << "]";
+    EXPECT_LT(drift.norm(), kFreeBodyDrift)
+        << "drift " << drift.transpose() << " m; domain [" << s.domain_min.transpose() << "] - ["
+        << s.domain_max.transpose() << "]";
 }
 
 TEST(Moisture, EtaZeroIsBitwiseIdenticalToNoMoisture) {
@@ -358,7 +371,8 @@ TEST(Moisture, EvaporatesOnlyAtAirExposedFaces) {
         int nb = 0, nt = 0;
         for (size_t p = 0; p < s.size(); ++p) {
             const Vec3& x = s.x[p];
-            if (std::abs(x.x() - 0.4) > 0.1 || std::abs(x.z() - 0.4) > 0.1) continue;  // centre column
+            // centre column
+            if (std::abs(x.x() - 0.4) > 0.1 || std::abs(x.z() - 0.4) > 0.1) continue;
             if (x.y() < 0.05) bottom += s.theta[p], ++nb;
             if (x.y() > 0.35) top += s.theta[p], ++nt;
         }
@@ -394,7 +408,8 @@ TEST(Pore, StepMatchesTheClosedFormAndCapsTheJump) {
         const Real s = (target - (1 - eta)) / eta;  // pore_jw(s) = target
         const PoreStep ps = pore_step(Jw_old, s, eta, 0);
         const Real exact_rel = (pore_jw(s, eta) - Jw_old) / Jw_old;
-        EXPECT_NEAR(ps.log_ratio, std::log1p(exact_rel), 1e-15 * std::abs(exact_rel)) << "rel " << rel;
+        EXPECT_NEAR(ps.log_ratio, std::log1p(exact_rel), 1e-15 * std::abs(exact_rel))
+            << "rel " << rel;
         EXPECT_NEAR(ps.Fe_scale, std::cbrt(Jw_old / pore_jw(s, eta)), kCubeRoot) << "rel " << rel;
     }
     // a large drop is capped at max_log_step and the remainder carried
@@ -412,7 +427,8 @@ TEST(Pore, StepMatchesTheClosedFormAndCapsTheJump) {
     MoistureParams mp;
     mp.eta = 0.4;
     mp.k_r = 2;
-    EXPECT_NEAR(moist_mass(2.0, 1000, 1.0, mp), 2.0 * (1000 * 0.6 + 500 * 0.4), tol::kRoundoff * 1e3);
+    EXPECT_NEAR(moist_mass(2.0, 1000, 1.0, mp), 2.0 * (1000 * 0.6 + 500 * 0.4),
+                tol::kRoundoff * 1e3);
     NaccParams np;
     np.beta0 = 3;
     np.beta1 = 1;
@@ -425,8 +441,10 @@ TEST(Pore, StepMatchesTheClosedFormAndCapsTheJump) {
 TEST(Pore, JwAndSaturationFollowEquation6) {
     for (Real eta : {0.1, 0.4, 0.7})
         for (Real s : {0.0, 0.25, 0.6, 1.0}) {
-            EXPECT_NEAR(pore_jw(s, eta), (1 - eta) * (1 - s) + s, tol::kRoundoff) << "eta " << eta << " s " << s;
-            EXPECT_NEAR(saturation_of(s * eta, eta), s, tol::kRoundoff) << "eta " << eta << " s " << s;
+            EXPECT_NEAR(pore_jw(s, eta), (1 - eta) * (1 - s) + s, tol::kRoundoff)
+                << "eta " << eta << " s " << s;
+            EXPECT_NEAR(saturation_of(s * eta, eta), s, tol::kRoundoff)
+                << "eta " << eta << " s " << s;
         }
     // a dry particle shrinks to its solid volume, a saturated one keeps its rest volume
     EXPECT_NEAR(pore_jw(0, 0.3), 0.7, tol::kRoundoff);
@@ -477,11 +495,13 @@ TEST(Moisture, WaterLostInAStepIsTheEvaporationTermR) {
         water_change += V_old[id] * (s.theta[p] - theta_old[id]);
         if (!is_boundary[p]) continue;
         ++n_boundary;
-        const Real R = std::cbrt(3 * V_old[id] / (4 * M_PI));  // S = pi R^2 of the equivalent sphere
+        // S = pi R^2 of the equivalent sphere
+        const Real R = std::cbrt(3 * V_old[id] / (4 * M_PI));
         r_sum -= mp.lambda * M_PI * R * R * (theta_old[id] - mp.theta0);
     }
     ASSERT_GT(n_boundary, 0);
-    ASSERT_LT(n_boundary, static_cast<int>(s.size())) << "the block needs an inside that does not evaporate";
+    ASSERT_LT(n_boundary, static_cast<int>(s.size()))
+        << "the block needs an inside that does not evaporate";
     EXPECT_LT(water_change, 0) << "evaporation towards theta0 < theta dries";
     EXPECT_NEAR(water_change, dt * r_sum, 1e-8 * std::abs(dt * r_sum));
 }
@@ -532,18 +552,22 @@ TEST(SurfaceEvaporation, AtZeroDiffusivityOnlyTheExposedLayerDriesExactly) {
     for (int i = 0; i < steps; ++i) step(model, s, dt);
     const Real eta = model.moisture->eta, theta0 = model.moisture->theta0;
     const Real V = spacing * spacing * spacing;  // the still model keeps J = 1 to round-off
-    const Real expected_top = theta0 + (eta - theta0) * std::exp(-model.moisture->lambda * particle_area(V) / V * dt * steps);
+    const Real expected_top = theta0 + (eta - theta0) * std::exp(-model.moisture->lambda *
+                                                                 particle_area(V) / V * dt * steps);
     const Real top_y = spacing * 9.5, second_y = spacing * 8.5;
     int top = 0, second = 0;
     for (size_t p = 0; p < s.size(); ++p) {
         const Vec3& x = s.x[p];
-        const bool inner = x.x() > 2 * spacing && x.x() < 9 * spacing && x.z() > 2 * spacing && x.z() < 9 * spacing;
+        const bool inner = x.x() > 2 * spacing && x.x() < 9 * spacing && x.z() > 2 * spacing &&
+                           x.z() < 9 * spacing;
         if (!inner) continue;  // the side faces are exposed too
         if (std::abs(x.y() - top_y) < spacing / 4) {
-            EXPECT_NEAR(s.theta[p], expected_top, kEvaporatedTop) << "top-layer particle " << s.id[p];
+            EXPECT_NEAR(s.theta[p], expected_top, kEvaporatedTop)
+                << "top-layer particle " << s.id[p];
             ++top;
         } else if (x.y() < second_y + spacing / 4) {
-            EXPECT_EQ(s.theta[p], eta) << "particle " << s.id[p] << " at y = " << x.y() << " under the exposed layer";
+            EXPECT_EQ(s.theta[p], eta)
+                << "particle " << s.id[p] << " at y = " << x.y() << " under the exposed layer";
             ++second;
         }
     }
@@ -568,8 +592,8 @@ TEST(SurfaceEvaporation, DiffusionCarriesTheFrontInward) {
     Real second_layer = 0;
     int n = 0;
     for (size_t p = 0; p < s.size(); ++p)
-        if (std::abs(s.x[p].y() - spacing * 10.5) < spacing / 4 && s.x[p].x() > 2 * spacing && s.x[p].x() < 6 * spacing &&
-            s.x[p].z() > 2 * spacing && s.x[p].z() < 6 * spacing)
+        if (std::abs(s.x[p].y() - spacing * 10.5) < spacing / 4 && s.x[p].x() > 2 * spacing &&
+            s.x[p].x() < 6 * spacing && s.x[p].z() > 2 * spacing && s.x[p].z() < 6 * spacing)
             second_layer += s.theta[p], ++n;
     ASSERT_GT(n, 0);
     EXPECT_LT(second_layer / n, eta - 1e-3) << "diffusion must draw water from the second layer";

@@ -77,8 +77,10 @@ TEST(G2pPoreUpdate, OneStepFollowsEquations6To12) {
 
     for (size_t p = 0; p < s.size(); ++p) {
         const int id = s.id[p];
-        SCOPED_TRACE(testing::Message() << "particle " << id << ": s = " << sat[id] << ", log(Jw / target) = " << offset[id]);
-        ASSERT_NEAR(s.theta[p], sat[id] * mp.eta, tol::kRoundoff) << "theta must not move (D = lambda = 0)";
+        SCOPED_TRACE(testing::Message() << "particle " << id << ": s = " << sat[id]
+                                        << ", log(Jw / target) = " << offset[id]);
+        ASSERT_NEAR(s.theta[p], sat[id] * mp.eta, tol::kRoundoff)
+            << "theta must not move (D = lambda = 0)";
         // Eq. 6: Jw = (1 - eta)(1 - s) + s
         const Real Jw_new = eq6_jw(sat[id], mp.eta);
         EXPECT_NEAR(s.Jw[p], Jw_new, tol::kRoundoff);
@@ -91,9 +93,11 @@ TEST(G2pPoreUpdate, OneStepFollowsEquations6To12) {
         Mat3 dF = dt * s.C[p];
         dF.diagonal().array() += 1;
         const Mat3 Fe_expected = std::pow(Jw_old[id] / Jw_new, 1.0 / 3) * dF * Fe_old[id];
-        EXPECT_LT((s.Fe[p] - Fe_expected).norm(), tol::kRoundoff) << "Fe =\n" << s.Fe[p] << "\nexpected\n" << Fe_expected;
-        EXPECT_NEAR(s.Fe[p].determinant() * s.Jw[p], dF.determinant() * Fe_old[id].determinant() * Jw_old[id],
-                    tol::kRoundoff);
+        EXPECT_LT((s.Fe[p] - Fe_expected).norm(), tol::kRoundoff) << "Fe =\n"
+                                                                  << s.Fe[p] << "\nexpected\n"
+                                                                  << Fe_expected;
+        EXPECT_NEAR(s.Fe[p].determinant() * s.Jw[p],
+                    dF.determinant() * Fe_old[id].determinant() * Jw_old[id], tol::kRoundoff);
         // Eq. 11: m = V0 (rho_s (1 - eta) + rho_w eta s), rho_w = rho_s / k_r
         const Real rho_s = model.elastic.density, rho_w = rho_s / mp.k_r;
         const Real mass = s.V0[p] * (rho_s * (1 - mp.eta) + rho_w * mp.eta * sat[id]);
@@ -118,7 +122,8 @@ TEST(G2pPoreUpdate, CappedStepHardensByEpsTimesTheCap) {
     for (size_t p = 0; p < s.size(); ++p) {
         const Real sign = s.id[p] == 0 ? -1 : 1;
         EXPECT_NEAR(std::log(s.Jw[p] / Jw0), sign * 2e-3, tol::kRoundoff) << "particle " << s.id[p];
-        EXPECT_NEAR(s.alpha[p] - alpha0, sign * mp.eps * 2e-3, tol::kRoundoff) << "particle " << s.id[p];
+        EXPECT_NEAR(s.alpha[p] - alpha0, sign * mp.eps * 2e-3, tol::kRoundoff)
+            << "particle " << s.id[p];
     }
 }
 
@@ -141,7 +146,9 @@ TEST(G2pYield, FastInsideTestAgreesWithTheReturnMap) {
     for (size_t p = 0; p < s.size(); ++p) {
         // volume and shear spread so that about half the states leave the surface
         const Real log_J = 0.12 * (u(rng) - 0.5), dev = 0.08 * u(rng);
-        const Vec3 sigma = std::exp(log_J / 3) * Vec3(std::exp(dev * g(rng)), std::exp(dev * g(rng)), std::exp(dev * g(rng)));
+        const Vec3 sigma =
+            std::exp(log_J / 3) *
+            Vec3(std::exp(dev * g(rng)), std::exp(dev * g(rng)), std::exp(dev * g(rng)));
         s.Fe[p] = test::with_singular_values(rng, sigma);
         s.alpha[p] = -0.3 * u(rng);
         Fe_old[s.id[p]] = s.Fe[p];
@@ -154,10 +161,13 @@ TEST(G2pYield, FastInsideTestAgreesWithTheReturnMap) {
         Mat3 dF = dt * s.C[p];
         dF.diagonal().array() += 1;
         const Mat3 Fe_trial = dF * Fe_old[id];
-        const NaccReturn want = nacc_return_map(Fe_trial, alpha_old[id], model.nacc->beta1, *model.nacc, lame);
+        const NaccReturn want =
+            nacc_return_map(Fe_trial, alpha_old[id], model.nacc->beta1, *model.nacc, lame);
         (want.yield_case == kNaccInside ? inside : outside) += 1;
-        EXPECT_LT((s.Fe[p] - want.Fe).norm(), 1e-10) << "particle " << id << " case " << want.yield_case;
-        EXPECT_NEAR(s.alpha[p], want.alpha, kReturnMapAlpha) << "particle " << id << " case " << want.yield_case;
+        EXPECT_LT((s.Fe[p] - want.Fe).norm(), 1e-10)
+            << "particle " << id << " case " << want.yield_case;
+        EXPECT_NEAR(s.alpha[p], want.alpha, kReturnMapAlpha)
+            << "particle " << id << " case " << want.yield_case;
     }
     EXPECT_GT(inside, 8);
     EXPECT_GT(outside, 8);
@@ -173,7 +183,9 @@ SimState mixed_yield_state(const SimModel& model, uint64_t seed) {
     SimState s = make_initial_state(model, l.X, l.V0);
     for (size_t p = 0; p < s.size(); ++p) {
         const Real log_J = 0.12 * (u(rng) - 0.5), dev = 0.08 * u(rng);
-        const Vec3 sigma = std::exp(log_J / 3) * Vec3(std::exp(dev * g(rng)), std::exp(dev * g(rng)), std::exp(dev * g(rng)));
+        const Vec3 sigma =
+            std::exp(log_J / 3) *
+            Vec3(std::exp(dev * g(rng)), std::exp(dev * g(rng)), std::exp(dev * g(rng)));
         s.Fe[p] = test::with_singular_values(rng, sigma);
         s.alpha[p] = -0.3 * u(rng);
     }
@@ -203,7 +215,8 @@ TEST(G2pStressCache, IsTheKirchhoffStressOfTheNewFe) {
         for (size_t p = 0; p < s.size(); ++p) {
             const Mat3 want = neo_hookean_kirchhoff(s.Fe[p], lame);
             const Mat3 got = ws.tau[p].matrix();
-            EXPECT_EQ(0, std::memcmp(want.data(), got.data(), sizeof(Mat3))) << "step " << k << " slot " << p;
+            EXPECT_EQ(0, std::memcmp(want.data(), got.data(), sizeof(Mat3)))
+                << "step " << k << " slot " << p;
             EXPECT_LT((want - neo_hookean_first_piola(s.Fe[p], lame) * s.Fe[p].transpose()).norm(),
                       1e-9 * (1 + want.norm()));
         }
@@ -227,7 +240,8 @@ TEST(G2pStressCache, RecomputingFromFeChangesNoBit) {
                     ASSERT_EQ(a.size(), b.size()) << name;
                     // bit for bit; an empty array (physics the model lacks) has no data to compare
                     if (!a.empty()) {
-                        EXPECT_EQ(0, std::memcmp(a.data(), b.data(), a.size() * sizeof(a[0]))) << name;
+                        EXPECT_EQ(0, std::memcmp(a.data(), b.data(), a.size() * sizeof(a[0])))
+                            << name;
                     }
                 }
             }

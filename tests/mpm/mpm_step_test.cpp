@@ -1,17 +1,17 @@
 // MPM step: conservation, determinism, free fall, sticky ground, rotation, time step, checks.
 #include <gtest/gtest.h>
 
+#include <Eigen/Geometry>
 #include <algorithm>
 #include <cmath>
 #include <cstring>
-#include <Eigen/Geometry>
 #include <random>
 
 #include "mpm_test_util.h"
 #include "sim/core/error.h"
 #include "sim/core/parallel.h"
-#include "sim/mpm/simulation.h"
 #include "sim/grid/sparse_grid.h"
+#include "sim/mpm/simulation.h"
 #include "sim/mpm/workspace.h"
 #include "tolerance.h"
 
@@ -54,7 +54,8 @@ TEST(MpmStep, TransfersConserveMassAndMomentum) {
     // grid mass equals particle mass
     const auto& grid = s.workspace->grid;
     Real grid_mass = 0;
-    for (size_t i = 0; i < grid.n_blocks() * mpm::kBlockNodes; ++i) grid_mass += grid.nodes[i * mpm::kNodeFields];
+    for (size_t i = 0; i < grid.n_blocks() * mpm::kBlockNodes; ++i)
+        grid_mass += grid.nodes[i * mpm::kNodeFields];
     EXPECT_NEAR(grid_mass, m_before, tol::kRoundoff * m_before);
     EXPECT_NEAR(test::total_mass(s), m_before, tol::kRoundoff * m_before);
     const Real scale = m_before;  // |v| ~ 1
@@ -83,7 +84,8 @@ TEST(MpmStep, SameThreadCountIsBitwiseIdenticalAndThreadCountsAgree) {
     set_thread_count(saved);
     ASSERT_EQ(a.size(), b.size());
     auto bytes_equal = [](const auto& u, const auto& v) {
-        return u.size() == v.size() && std::memcmp(u.data(), v.data(), u.size() * sizeof(u[0])) == 0;
+        return u.size() == v.size() &&
+               std::memcmp(u.data(), v.data(), u.size() * sizeof(u[0])) == 0;
     };
     EXPECT_TRUE(bytes_equal(a.x, b.x));
     EXPECT_TRUE(bytes_equal(a.Fe, b.Fe));
@@ -111,7 +113,8 @@ TEST(MpmStep, ResultDoesNotDependOnSlotOrder) {
     SimState a = block_state(model);
     randomize(a, 9);
     for (int i = 0; i < 5; ++i) step(model, a, stable_dt(model, a));
-    // b: the same state (moisture flux history included) with its slots reversed and a fresh workspace
+    // b: the same state (moisture flux history included) with its slots reversed and a fresh
+    // workspace
     SimState b = a;
     b.workspace.reset();
     auto reverse_all = [](SimState& s) {
@@ -134,8 +137,10 @@ TEST(MpmStep, ResultDoesNotDependOnSlotOrder) {
     }
     const std::vector<size_t> sa = test::slot_of_id(a), sb = test::slot_of_id(b);
     for (size_t id = 0; id < a.size(); ++id) {
-        ASSERT_EQ(std::memcmp(a.x[sa[id]].data(), b.x[sb[id]].data(), sizeof(Vec3)), 0) << "id " << id;
-        ASSERT_EQ(std::memcmp(a.Fe[sa[id]].data(), b.Fe[sb[id]].data(), sizeof(Mat3)), 0) << "id " << id;
+        ASSERT_EQ(std::memcmp(a.x[sa[id]].data(), b.x[sb[id]].data(), sizeof(Vec3)), 0)
+            << "id " << id;
+        ASSERT_EQ(std::memcmp(a.Fe[sa[id]].data(), b.Fe[sb[id]].data(), sizeof(Mat3)), 0)
+            << "id " << id;
         ASSERT_EQ(a.theta[sa[id]], b.theta[sb[id]]) << "id " << id;
     }
 }
@@ -215,7 +220,8 @@ TEST(MpmStep, StableDtHonoursEveryBound) {
     SimModel model = plain_model(0.1);
     SimState s = block_state(model);
     const Real c_p = model.elastic.wave_speed();
-    EXPECT_NEAR(stable_dt(model, s), std::min(model.time.dt_max, model.time.cfl_elastic * model.h / c_p), kStableDtAbs);
+    EXPECT_NEAR(stable_dt(model, s),
+                std::min(model.time.dt_max, model.time.cfl_elastic * model.h / c_p), kStableDtAbs);
     s.v[5] = Vec3(0, 0, 300);
     EXPECT_NEAR(stable_dt(model, s), model.time.cfl_velocity * model.h / 300, kStableDtAbs);
     model.time.dt_fixed = 2.5e-5;
@@ -279,7 +285,8 @@ TEST(MpmStep, FrameIsInIdOrderWithRequestedAttributesOnly) {
     ASSERT_EQ(f.saturation.size(), s.size());
     for (size_t p = 0; p < s.size(); ++p) {
         EXPECT_EQ(f.P[s.id[p]], s.x[p].cast<float>());
-        EXPECT_FLOAT_EQ(f.saturation[s.id[p]], static_cast<float>(s.theta[p] / model.moisture->eta));
+        EXPECT_FLOAT_EQ(f.saturation[s.id[p]],
+                        static_cast<float>(s.theta[p] / model.moisture->eta));
     }
     EXPECT_GT(state_memory_bytes(s), static_cast<int64_t>(s.size() * 200));
 }
@@ -341,7 +348,8 @@ TEST(Heterogeneity, WeakSoilYieldsWhereStrongSoilHolds) {
         std::vector<Real> by_id(weak.size());
         for (size_t p = 0; p < weak.size(); ++p) by_id[weak.id[p]] = weak.damage[p];
         if (i > 0)
-            for (size_t q = 0; q < by_id.size(); ++q) ASSERT_GE(by_id[q], last_damage[q]) << "particle " << q << " step " << i;
+            for (size_t q = 0; q < by_id.size(); ++q)
+                ASSERT_GE(by_id[q], last_damage[q]) << "particle " << q << " step " << i;
         last_damage = by_id;
     }
     Real weak_max = 0, strong_max = 0;

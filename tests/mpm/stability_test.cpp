@@ -21,7 +21,9 @@ using test::soil_model;
 
 bool state_is_finite(const SimState& s) {
     for (size_t p = 0; p < s.size(); ++p) {
-        if (!s.x[p].allFinite() || !s.v[p].allFinite() || !s.Fe[p].allFinite() || !std::isfinite(s.J[p])) return false;
+        if (!s.x[p].allFinite() || !s.v[p].allFinite() || !s.Fe[p].allFinite() ||
+            !std::isfinite(s.J[p]))
+            return false;
         if (!s.alpha.empty() && !std::isfinite(s.alpha[p])) return false;
         if (!s.theta.empty() && !std::isfinite(s.theta[p])) return false;
     }

@@ -22,17 +22,19 @@ using test::plain_model;
 
 template <class T>
 bool same_bits(const std::vector<T>& a, const std::vector<T>& b) {
-    return a.size() == b.size() && (a.empty() || std::memcmp(a.data(), b.data(), a.size() * sizeof(T)) == 0);
+    return a.size() == b.size() &&
+           (a.empty() || std::memcmp(a.data(), b.data(), a.size() * sizeof(T)) == 0);
 }
 
 // every array of the state and its clock, bit for bit
 ::testing::AssertionResult same_state(const SimState& a, const SimState& b) {
     if (std::memcmp(&a.time, &b.time, sizeof(double)) != 0 || a.step_count != b.step_count)
-        return ::testing::AssertionFailure() << "clock " << a.time << " / " << a.step_count << " vs " << b.time
-                                             << " / " << b.step_count;
-    if (!same_bits(a.id, b.id) || !same_bits(a.x, b.x) || !same_bits(a.v, b.v) || !same_bits(a.C, b.C) ||
-        !same_bits(a.Fe, b.Fe) || !same_bits(a.J, b.J) || !same_bits(a.alpha, b.alpha) || !same_bits(a.V0, b.V0) ||
-        !same_bits(a.mass, b.mass) || !same_bits(a.theta, b.theta) || !same_bits(a.Jw, b.Jw))
+        return ::testing::AssertionFailure() << "clock " << a.time << " / " << a.step_count
+                                             << " vs " << b.time << " / " << b.step_count;
+    if (!same_bits(a.id, b.id) || !same_bits(a.x, b.x) || !same_bits(a.v, b.v) ||
+        !same_bits(a.C, b.C) || !same_bits(a.Fe, b.Fe) || !same_bits(a.J, b.J) ||
+        !same_bits(a.alpha, b.alpha) || !same_bits(a.V0, b.V0) || !same_bits(a.mass, b.mass) ||
+        !same_bits(a.theta, b.theta) || !same_bits(a.Jw, b.Jw))
         return ::testing::AssertionFailure() << "particle arrays differ";
     return ::testing::AssertionSuccess();
 }
@@ -74,7 +76,8 @@ TEST(StepRetry, AFailedStepRestoresTheRollbackPointBitForBit) {
     RetryingStepper stepper;
     stepper.restart(s);
     const SimState rollback_point = s;
-    for (int i = 0; i < 10; ++i) ASSERT_TRUE(stepper.attempt(model, s, stable_dt(model, s)).is_accepted);
+    for (int i = 0; i < 10; ++i)
+        ASSERT_TRUE(stepper.attempt(model, s, stable_dt(model, s)).is_accepted);
     // one particle thrown so fast that the next step fails its checks
     const Real dt = stable_dt(model, s);
     s.v[7] = Vec3(0, 0, 1000 * model.h / dt);
@@ -97,15 +100,16 @@ SimModel unstable_model() {
 TEST(StepRetry, AnUnstableFixedDtRecoversAtASmallerOne) {
     const SimModel model = unstable_model();
     SimState plain = block(model);
-    EXPECT_THROW(
-        for (int i = 0; i < 200; ++i) step(model, plain, stable_dt(model, plain)), RuntimeError);
+    EXPECT_THROW(for (int i = 0; i < 200; ++i) step(model, plain, stable_dt(model, plain)),
+                 RuntimeError);
 
     SimState s = block(model);
     RetryingStepper stepper;
     run(model, s, stepper, 200);
     EXPECT_GT(stepper.retries(), 0);
     for (size_t p = 0; p < s.size(); ++p) {
-        ASSERT_TRUE(s.x[p].allFinite() && s.v[p].allFinite() && s.J[p] > 0) << "particle " << s.id[p];
+        ASSERT_TRUE(s.x[p].allFinite() && s.v[p].allFinite() && s.J[p] > 0)
+            << "particle " << s.id[p];
     }
     // the same run again takes the same retries, bit for bit
     SimState again = block(model);

@@ -11,13 +11,15 @@ namespace mudcrack {
 namespace {
 
 // tolerances, named by what they bound (the camera works in float)
-constexpr double kOrbitAbs = 1e-4;    // positions and distances after trigonometry in float [m]
-constexpr double kFloatAbs = 1e-5;    // one float operation on values of order 1-10 [m]
-constexpr float kFrameFillAbs = 0.02f;  // auto_frame: the box's widest extent in NDC vs the asked fill
+constexpr double kOrbitAbs = 1e-4;  // positions and distances after trigonometry in float [m]
+constexpr double kFloatAbs = 1e-5;  // one float operation on values of order 1-10 [m]
+// auto_frame: the box's widest extent in NDC vs the asked fill
+constexpr float kFrameFillAbs = 0.02f;
 
 /// Normalized device coordinates of p seen through cam.
 Eigen::Vector3f ndc(const Camera& cam, float aspect, const Vec3f& p) {
-    const Eigen::Matrix4f m = perspective_matrix(cam.fov_deg, aspect, 0.01f, 100.0f) * view_matrix(cam);
+    const Eigen::Matrix4f m =
+        perspective_matrix(cam.fov_deg, aspect, 0.01f, 100.0f) * view_matrix(cam);
     const Eigen::Vector4f q = m * Eigen::Vector4f(p.x(), p.y(), p.z(), 1.0f);
     return q.head<3>() / q.w();
 }
@@ -54,8 +56,10 @@ TEST(Camera, OrbitFrameKeepsTheBoxInEveryViewOfTheTurntable) {
             for (int i = 0; i < 8; ++i) {
                 const Vec3f p = b.corner(i);
                 const Eigen::Vector3f q = ndc(cam, aspect, p);
-                EXPECT_LE(std::abs(q.x()), 0.88f + 1e-4f) << "aspect " << aspect << " view " << v << " corner " << i;
-                EXPECT_LE(std::abs(q.y()), 0.88f + 1e-4f) << "aspect " << aspect << " view " << v << " corner " << i;
+                EXPECT_LE(std::abs(q.x()), 0.88f + 1e-4f)
+                    << "aspect " << aspect << " view " << v << " corner " << i;
+                EXPECT_LE(std::abs(q.y()), 0.88f + 1e-4f)
+                    << "aspect " << aspect << " view " << v << " corner " << i;
                 widest = std::max({widest, std::abs(q.x()), std::abs(q.y())});
             }
         }
@@ -68,7 +72,8 @@ TEST(Camera, OrbitFrameKeepsTheBoxInEveryViewOfTheTurntable) {
         square.extend(Vec3f(c.x() - r, b.min.y(), c.z() - r));
         square.extend(Vec3f(c.x() + r, b.max.y(), c.z() + r));
         const Camera loose = auto_frame(square, 35, aspect, 0.88f);
-        EXPECT_LT((base.position - base.target).norm(), 0.8f * (loose.position - loose.target).norm());
+        EXPECT_LT((base.position - base.target).norm(),
+                  0.8f * (loose.position - loose.target).norm());
         EXPECT_NEAR((base.target - c).norm(), 0, kOrbitAbs);
     }
 }
@@ -83,7 +88,8 @@ TEST(Camera, ExplicitCameraIsKept) {
     b.extend(Vec3f(-1, -1, -1));
     b.extend(Vec3f(1, 1, 1));
     const Camera cam = resolve_camera(p, b, 1.5f);
-    EXPECT_NEAR((cam.position - resolve_camera(p, b, 1.5f, /*orbit=*/true).position).norm(), 0, tol::kFloat);
+    EXPECT_NEAR((cam.position - resolve_camera(p, b, 1.5f, /*orbit=*/true).position).norm(), 0,
+                tol::kFloat);
     EXPECT_NEAR((cam.position - Vec3f(1, 2, 3)).norm(), 0, tol::kFloat);
     EXPECT_NEAR((cam.target - Vec3f(0, 1, 0)).norm(), 0, tol::kFloat);
     EXPECT_FLOAT_EQ(cam.fov_deg, 50);
@@ -104,7 +110,8 @@ TEST(Camera, TurntableOrbitsAtConstantDistanceAndHeight) {
     const Camera q = turntable_camera(base, 2, views);
     const Vec3f r0 = base.position - base.target, r1 = q.position - q.target;
     EXPECT_NEAR(r0.x() * r1.x() + r0.z() * r1.z(), 0.0, kOrbitAbs);
-    EXPECT_NEAR((turntable_camera(base, views, views).position - base.position).norm(), 0, kOrbitAbs);
+    EXPECT_NEAR((turntable_camera(base, views, views).position - base.position).norm(), 0,
+                kOrbitAbs);
 }
 
 TEST(Camera, ViewMatrixLooksDownMinusZ) {

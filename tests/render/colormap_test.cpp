@@ -9,20 +9,22 @@ namespace {
 
 // tolerances, named by what they bound
 constexpr double kSrgbRoundTrip = 1e-5;  // sRGB -> linear -> sRGB in float
-constexpr double kTabulated = 1e-3;     // a value against its 4-digit reference
+constexpr double kTabulated = 1e-3;      // a value against its 4-digit reference
 
 Vec3f rgb8(int r, int g, int b) { return Vec3f(float(r), float(g), float(b)) / 255.0f; }
 
 void expect_color_near(const Vec3f& got, const Vec3f& want, double tol8) {
     for (int k = 0; k < 3; ++k)
-        EXPECT_NEAR(got[k] * 255.0, want[k] * 255.0, tol8) << "channel " << k << " got " << got.transpose() * 255
-                                                             << " want " << want.transpose() * 255;
+        EXPECT_NEAR(got[k] * 255.0, want[k] * 255.0, tol8)
+            << "channel " << k << " got " << got.transpose() * 255 << " want "
+            << want.transpose() * 255;
 }
 
 TEST(Colormap, HardeningMapsKnownAlphasToKnownColors) {
     const float alpha0 = -0.2f, range = 0.4f;
     // half way to the hardened end (alpha0 - range/2 -> t = 0.25): Moreland's light blue stop
-    expect_color_near(hardening_color(alpha0 - 0.5f * range, alpha0, range), rgb8(141, 176, 254), 0.01);
+    expect_color_near(hardening_color(alpha0 - 0.5f * range, alpha0, range), rgb8(141, 176, 254),
+                      0.01);
     // fully softened (alpha0 + range -> t = 1): the dark red end
     expect_color_near(hardening_color(alpha0 + range, alpha0, range), rgb8(180, 4, 38), 0.01);
     // the center is neutral grey, beyond the range it saturates
@@ -54,11 +56,13 @@ TEST(Colormap, WetterIsDarker) {
     }
     EXPECT_NEAR(moisture_color(albedo, 1).x(), 0.55 * (1 - kMoistureDarkening), tol::kFloat);
     EXPECT_NEAR(moisture_color(albedo, 0).x(), 0.55, tol::kFloat);
-    EXPECT_NEAR(moisture_color(albedo, 7).x(), 0.55 * (1 - kMoistureDarkening), tol::kFloat) << "s clamps";
+    EXPECT_NEAR(moisture_color(albedo, 7).x(), 0.55 * (1 - kMoistureDarkening), tol::kFloat)
+        << "s clamps";
 }
 
 TEST(Colormap, SrgbRoundTrip) {
-    for (float c = 0; c <= 1.0f; c += 0.05f) EXPECT_NEAR(linear_to_srgb(srgb_to_linear(c)), c, kSrgbRoundTrip) << c;
+    for (float c = 0; c <= 1.0f; c += 0.05f)
+        EXPECT_NEAR(linear_to_srgb(srgb_to_linear(c)), c, kSrgbRoundTrip) << c;
     EXPECT_NEAR(linear_to_srgb(0.18f), 0.4613, kTabulated);  // middle grey
 }
 

@@ -35,7 +35,8 @@ ImageDiff compare_rgb(const Image& a, const Image& b) {
     for (size_t i = 0; i < n; ++i) {
         double m = 0;
         for (int k = 0; k < 3; ++k) {
-            const double e = std::abs(double(a.pixels[i * a.channels + k]) - double(b.pixels[i * b.channels + k]));
+            const double e = std::abs(double(a.pixels[i * a.channels + k]) -
+                                      double(b.pixels[i * b.channels + k]));
             sum += e;
             m = std::max(m, e);
         }
@@ -54,7 +55,8 @@ Image diff_image(const Image& a, const Image& b) {
     d.pixels.resize(size_t(a.width) * a.height * 3);
     for (size_t i = 0; i < size_t(a.width) * a.height; ++i)
         for (int k = 0; k < 3; ++k) {
-            const int e = std::abs(int(a.pixels[i * a.channels + k]) - int(b.pixels[i * b.channels + k]));
+            const int e =
+                std::abs(int(a.pixels[i * a.channels + k]) - int(b.pixels[i * b.channels + k]));
             d.pixels[i * 3 + k] = uint8_t(std::min(255, 4 * e));
         }
     return d;
@@ -96,9 +98,10 @@ void expect_matches_golden(const RenderedImage& actual, const std::string& name)
         write_png(dir / (name + ".actual.png"), got);
         write_png(dir / (name + ".diff.png"), diff_image(got, want));
         ADD_FAILURE() << name << " differs from " << golden << ": mean |diff| = " << d.mean_abs
-                      << " (tolerance " << tol::kImageMeanAbs << "), p99 = " << d.p99 << " (tolerance "
-                      << tol::kImageP99 << "), max = " << d.max << " levels; actual and 4x diff written to "
-                      << (dir / (name + ".actual.png")) << " and " << (dir / (name + ".diff.png"));
+                      << " (tolerance " << tol::kImageMeanAbs << "), p99 = " << d.p99
+                      << " (tolerance " << tol::kImageP99 << "), max = " << d.max
+                      << " levels; actual and 4x diff written to " << (dir / (name + ".actual.png"))
+                      << " and " << (dir / (name + ".diff.png"));
     }
 }
 

@@ -50,7 +50,8 @@ class McRenderCli : public ::testing::Test {
 protected:
     void SetUp() override {
         const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
-        m_dir = fs::temp_directory_path() / ("mudcrack_render_cli_" + std::to_string(getpid()) + "_" + info->name());
+        m_dir = fs::temp_directory_path() /
+                ("mudcrack_render_cli_" + std::to_string(getpid()) + "_" + info->name());
         fs::remove_all(m_dir);
         fs::create_directories(m_dir / "out");
     }
@@ -70,12 +71,16 @@ protected:
     void write_surface(const Shot& shot, int frames) {
         const fs::path dir = out() / "surface";
         fs::create_directories(dir);
-        nlohmann::json records = nlohmann::json::array();  // the files' checksums, which mc-render verifies
+        // the files' checksums, which mc-render verifies
+        nlohmann::json records = nlohmann::json::array();
         for (int f = 1; f <= frames; ++f) {
             TriMesh sphere = test::uv_sphere(Vec3f(0, 0.5f + 0.1f * f, 0), 0.5f, 16, 32);
             export_meshes(frame_path(dir, "boundary", f, "glb"), {sphere}, "glb");
             TriMesh crack = test::box_mesh(Vec3f(0.6f, 0, -0.2f), Vec3f(1.0f, 0.2f, 0.2f), "crack",
-                                           [](const Vec3f&, float& s, float& a) { s = 0.8f; a = -0.2f; });
+                                           [](const Vec3f&, float& s, float& a) {
+                                               s = 0.8f;
+                                               a = -0.2f;
+                                           });
             export_meshes(frame_path(dir, "crack", f, "glb"), {crack}, "glb");
             records.push_back(file_record(frame_path(dir, "boundary", f, "glb")));
             records.push_back(file_record(frame_path(dir, "crack", f, "glb")));
@@ -89,7 +94,8 @@ protected:
     void write_particles(const Shot& shot, int frames) {
         const fs::path dir = out() / "sim";
         fs::create_directories(dir);
-        nlohmann::json caches = nlohmann::json::array();  // the caches' checksums, which mc-render verifies
+        // the caches' checksums, which mc-render verifies
+        nlohmann::json caches = nlohmann::json::array();
         for (int f = 1; f <= frames; ++f) {
             const ParticleSprites ps = test::particle_ball(Vec3f(0, 0.3f, 0), 0.3f, 0.05f);
             ParticleFrame pf;
@@ -108,9 +114,10 @@ protected:
     /// Runs mc-render; returns the exit code and keeps stderr in m_stderr.
     int run(const std::string& extra = "") {
         const fs::path err = m_dir / "stderr.txt";
-        const std::string cmd = std::string(MUDCRACK_BIN_DIR) + "/mc-render --shot '" + (m_dir / "shot.json").string() +
-                                "' --out '" + out().string() + "' " + extra + " > '" + (m_dir / "stdout.txt").string() +
-                                "' 2> '" + err.string() + "'";
+        const std::string cmd = std::string(MUDCRACK_BIN_DIR) + "/mc-render --shot '" +
+                                (m_dir / "shot.json").string() + "' --out '" + out().string() +
+                                "' " + extra + " > '" + (m_dir / "stdout.txt").string() + "' 2> '" +
+                                err.string() + "'";
         const int status = std::system(cmd.c_str());
         std::ifstream is(err);
         std::stringstream ss;
@@ -186,8 +193,9 @@ std::map<std::string, std::string> files_of(const fs::path& dir) {
 
 TEST_F(McRenderCli, ChunksPlusAssembleAreByteIdenticalToAFullRun) {
     // 5 frames of a sphere drifting up: chunk 1-2 alone would frame it lower than the full run
-    const Shot shot = write_shot(std::string(kSurfacedShot).replace(std::string(kSurfacedShot).find("\"end\": 3"), 8,
-                                                                    "\"end\": 5"));
+    const Shot shot =
+        write_shot(std::string(kSurfacedShot)
+                       .replace(std::string(kSurfacedShot).find("\"end\": 3"), 8, "\"end\": 5"));
     write_surface(shot, 5);
     ASSERT_EQ(run(), 0) << m_stderr;
     const fs::path r = out() / "render";
@@ -202,7 +210,8 @@ TEST_F(McRenderCli, ChunksPlusAssembleAreByteIdenticalToAFullRun) {
     ASSERT_EQ(run("--assemble"), 0) << m_stderr;
     std::map<std::string, std::string> assembled = files_of(r);
     // the chunk statistics stay, hidden, with the frames' checksums for a later assembly
-    EXPECT_EQ(assembled.erase(".chunk.0001-0002.json") + assembled.erase(".chunk.0003-0005.json"), 2u);
+    EXPECT_EQ(assembled.erase(".chunk.0001-0002.json") + assembled.erase(".chunk.0003-0005.json"),
+              2u);
 
     // same files; every PNG and movie byte for byte (the manifests differ in timings)
     full.erase("manifest.json");
@@ -235,7 +244,8 @@ TEST_F(McRenderCli, FramesTheShotFromTheSurfaceManifestsBounds) {
     write_surface(shot, 3);
     const fs::path r = out() / "render";
     const auto frame_png = [&] { return files_of(r).at("frame.0002.png"); };
-    ASSERT_EQ(run(), 0) << m_stderr;  // a manifest without bounds (an older mc-surface): read the meshes
+    // a manifest without bounds (an older mc-surface): read the meshes
+    ASSERT_EQ(run(), 0) << m_stderr;
     EXPECT_NE(m_stderr.find("scanned 3 frames for bounds"), std::string::npos) << m_stderr;
     const std::string scanned = frame_png();
 
@@ -251,14 +261,17 @@ TEST_F(McRenderCli, FramesTheShotFromTheSurfaceManifestsBounds) {
                     lo = lo.cwiseMin(p);
                     hi = hi.cwiseMax(p);
                 }
-        m["per_frame"].push_back({{"frame", f}, {"bounds", {{"min", {lo.x(), lo.y(), lo.z()}}, {"max", {hi.x(), hi.y(), hi.z()}}}}});
+        m["per_frame"].push_back(
+            {{"frame", f},
+             {"bounds", {{"min", {lo.x(), lo.y(), lo.z()}}, {"max", {hi.x(), hi.y(), hi.z()}}}}});
     }
     write_manifest(manifest_dir, m);
     fs::remove_all(r);
     ASSERT_EQ(run(), 0) << m_stderr;
     EXPECT_EQ(m_stderr.find("scanned"), std::string::npos) << m_stderr;
     EXPECT_NE(m_stderr.find("bounds of frames 1-3 from"), std::string::npos) << m_stderr;
-    EXPECT_TRUE(frame_png() == scanned) << "the manifest's bounds framed the shot differently from the files'";
+    EXPECT_TRUE(frame_png() == scanned)
+        << "the manifest's bounds framed the shot differently from the files'";
 
     // bounds twice as wide in the manifest: the camera pulls back, so they are what it reads
     for (nlohmann::json& e : m["per_frame"])
@@ -333,12 +346,14 @@ TEST_F(McRenderCli, UnhashedOrStaleSurfaceIsRefused) {
     m.erase("shot_slice_hash");
     write_manifest(out() / "surface", m);
     EXPECT_EQ(run(), 1);
-    EXPECT_NE(m_stderr.find("surface/manifest.json: /shot_slice_hash: missing"), std::string::npos) << m_stderr;
+    EXPECT_NE(m_stderr.find("surface/manifest.json: /shot_slice_hash: missing"), std::string::npos)
+        << m_stderr;
     m["shot_slice_hash"] = "0000000000000000";
     write_manifest(out() / "surface", m);
     EXPECT_EQ(run(), 1);
-    EXPECT_NE(m_stderr.find("surface/manifest.json: /shot_slice_hash = \"0000000000000000\": stale"),
-              std::string::npos)
+    EXPECT_NE(
+        m_stderr.find("surface/manifest.json: /shot_slice_hash = \"0000000000000000\": stale"),
+        std::string::npos)
         << m_stderr;
     EXPECT_FALSE(fs::exists(out() / "render"));
 }
@@ -346,7 +361,8 @@ TEST_F(McRenderCli, UnhashedOrStaleSurfaceIsRefused) {
 TEST_F(McRenderCli, BadShotValuesAreRefused) {
     // an unknown color mode and a zero resolution never get past the shot layer
     std::string text = kSurfacedShot;
-    std::ofstream(m_dir / "shot.json") << std::string(text).replace(text.find("COLOR"), 5, "rainbow");
+    std::ofstream(m_dir / "shot.json")
+        << std::string(text).replace(text.find("COLOR"), 5, "rainbow");
     EXPECT_EQ(run(), 1);
     EXPECT_NE(m_stderr.find("/render/color_mode"), std::string::npos) << m_stderr;
     text.replace(text.find("[96, 64]"), 8, "[0, 64]");
@@ -357,7 +373,8 @@ TEST_F(McRenderCli, BadShotValuesAreRefused) {
 }
 
 TEST_F(McRenderCli, UsageErrorsExit2) {
-    const int status = std::system((std::string(MUDCRACK_BIN_DIR) + "/mc-render > /dev/null 2>&1").c_str());
+    const int status =
+        std::system((std::string(MUDCRACK_BIN_DIR) + "/mc-render > /dev/null 2>&1").c_str());
     EXPECT_EQ(WEXITSTATUS(status), 2);
 }
 

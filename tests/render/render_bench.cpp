@@ -13,9 +13,13 @@ namespace {
 const Scene& million_triangle_scene() {
     static const Scene scene = [] {
         Scene s;
-        s.meshes.push_back({test::uv_sphere(Vec3f(0, 0.5f, 0), 0.5f, 500, 1000), SurfaceKind::Boundary});
+        s.meshes.push_back(
+            {test::uv_sphere(Vec3f(0, 0.5f, 0), 0.5f, 500, 1000), SurfaceKind::Boundary});
         s.meshes.push_back({test::box_mesh(Vec3f(0.6f, 0, -0.3f), Vec3f(1.1f, 0.3f, 0.2f), "crack",
-                                           [](const Vec3f& p, float& sat, float& a) { sat = p.y(); a = 0; }),
+                                           [](const Vec3f& p, float& sat, float& a) {
+                                               sat = p.y();
+                                               a = 0;
+                                           }),
                             SurfaceKind::Crack});
         return s;
     }();

@@ -12,7 +12,8 @@ namespace {
 using nlohmann::json;
 
 json entry(int frame, json bounds, bool has_crack_file = true) {
-    json e = {{"frame", frame}, {"crack", {{"file", has_crack_file ? json("crack.glb") : json(nullptr)}}}};
+    json e = {{"frame", frame},
+              {"crack", {{"file", has_crack_file ? json("crack.glb") : json(nullptr)}}}};
     if (!bounds.is_discarded()) e["bounds"] = std::move(bounds);
     return e;
 }
@@ -21,8 +22,11 @@ json box(float lo, float hi) { return {{"min", {lo, lo, lo}}, {"max", {hi, hi, h
 
 TEST(RenderJob, SurfaceFramesAreIndexedOnce) {
     const json manifest = {{"per_frame",
-                            {entry(1, box(0, 1)), entry(2, nullptr, false), "not an object",
-                             {{"frame", "3"}}, entry(3, box(-2, 0.5f))}}};
+                            {entry(1, box(0, 1)),
+                             entry(2, nullptr, false),
+                             "not an object",
+                             {{"frame", "3"}},
+                             entry(3, box(-2, 0.5f))}}};
     const SurfaceFrameIndex index = index_surface_frames(manifest);
     EXPECT_EQ(index.frames_without_cracks, (std::set<int>{2}));
     ASSERT_EQ(index.bounds.size(), 3u);
@@ -39,7 +43,8 @@ TEST(RenderJob, SurfaceFramesAreIndexedOnce) {
 
 TEST(RenderJob, MissingOrMalformedBoundsFallBackToTheMeshes) {
     // a frame without bounds (an older mc-surface) or with malformed ones: read the meshes instead
-    const json no_bounds = {{"per_frame", {entry(1, box(0, 1)), entry(2, json(json::value_t::discarded))}}};
+    const json no_bounds = {
+        {"per_frame", {entry(1, box(0, 1)), entry(2, json(json::value_t::discarded))}}};
     EXPECT_FALSE(manifest_bounds(index_surface_frames(no_bounds), 1, 2, "m").has_value());
     EXPECT_TRUE(manifest_bounds(index_surface_frames(no_bounds), 1, 1, "m").has_value());
     const json bad = {{"per_frame", {entry(1, {{"min", {0, 0}}, {"max", {1, 1, 1}}})}}};

@@ -39,10 +39,12 @@ Scene sphere_scene() {
     return s;
 }
 
-RenderedImage render_auto(const RenderParams& params, const Scene& scene, const ShadingOptions& options = {}) {
+RenderedImage render_auto(const RenderParams& params, const Scene& scene,
+                          const ShadingOptions& options = {}) {
     Renderer r(params, options);
     r.set_scene(scene);
-    return r.render(auto_frame(scene_bounds(scene), 35, float(params.width) / float(params.height)));
+    return r.render(
+        auto_frame(scene_bounds(scene), 35, float(params.width) / float(params.height)));
 }
 
 TEST(RenderGolden, SphereMoisture) {
@@ -56,18 +58,21 @@ TEST(RenderGolden, SphereHardening) {
 }
 
 TEST(RenderGolden, SpherePlain) {
-    test::expect_matches_golden(render_auto(small_params(ColorMode::Plain), sphere_scene()), "sphere_plain");
+    test::expect_matches_golden(render_auto(small_params(ColorMode::Plain), sphere_scene()),
+                                "sphere_plain");
 }
 
 TEST(RenderGolden, ParticlesMoisture) {
     Scene s;
     s.particles = test::particle_ball(Vec3f(0, 0.3f, 0), 0.3f, 0.06f);
-    test::expect_matches_golden(render_auto(small_params(ColorMode::Moisture), s), "particles_moisture");
+    test::expect_matches_golden(render_auto(small_params(ColorMode::Moisture), s),
+                                "particles_moisture");
 }
 
 /// A slab split at x = 0 seen from the front (screen x follows world x): left half `left_s`,
 /// right half `right_s` saturation. Returns (left, right) mean luma of object pixels.
-std::pair<double, double> half_lumas(ColorMode mode, float left_s, float right_s, SurfaceKind kind) {
+std::pair<double, double> half_lumas(ColorMode mode, float left_s, float right_s,
+                                     SurfaceKind kind) {
     Scene s;
     auto half = [&](float x0, float x1, float sat) {
         return test::box_mesh(Vec3f(x0, 0, -0.5f), Vec3f(x1, 0.1f, 0.5f), "boundary",
@@ -110,11 +115,14 @@ TEST(RenderCracks, CrackFacesReadDarkerThanBoundary) {
 }
 
 /// Unlit render of two flat patches seen from above; mean RGB of each (full-coverage pixels).
-std::pair<Vec3f, Vec3f> unlit_patch_colors(const RenderParams& p, const ShadingOptions& o, float s_left,
-                                           float a_left, float s_right, float a_right) {
+std::pair<Vec3f, Vec3f> unlit_patch_colors(const RenderParams& p, const ShadingOptions& o,
+                                           float s_left, float a_left, float s_right,
+                                           float a_right) {
     Scene s;
-    s.meshes.push_back({test::flat_patch(-1.0f, -0.05f, -0.5f, 0.5f, 0, 4, s_left, a_left), SurfaceKind::Boundary});
-    s.meshes.push_back({test::flat_patch(0.05f, 1.0f, -0.5f, 0.5f, 0, 4, s_right, a_right), SurfaceKind::Boundary});
+    s.meshes.push_back({test::flat_patch(-1.0f, -0.05f, -0.5f, 0.5f, 0, 4, s_left, a_left),
+                        SurfaceKind::Boundary});
+    s.meshes.push_back({test::flat_patch(0.05f, 1.0f, -0.5f, 0.5f, 0, 4, s_right, a_right),
+                        SurfaceKind::Boundary});
     Renderer r(p, o);
     r.set_scene(s);
     Camera cam;
@@ -140,7 +148,8 @@ std::pair<Vec3f, Vec3f> unlit_patch_colors(const RenderParams& p, const ShadingO
 void expect_rgb_near(const Vec3f& got, const Vec3f& want, const char* what) {
     for (int k = 0; k < 3; ++k)
         EXPECT_NEAR(got[k] * 255.0, want[k] * 255.0, tol::kColor8)
-            << what << " channel " << k << ": got " << (got * 255).transpose() << " want " << (want * 255).transpose();
+            << what << " channel " << k << ": got " << (got * 255).transpose() << " want "
+            << (want * 255).transpose();
 }
 
 TEST(RenderHardening, FlatPatchShowsTheColormap) {
@@ -152,8 +161,10 @@ TEST(RenderHardening, FlatPatchShowsTheColormap) {
     o.has_ground = false;
     const float hardened = o.alpha0 - 0.2f, softened = o.alpha0 + 0.4f;
     const auto [left, right] = unlit_patch_colors(p, o, 0, hardened, 0, softened);
-    expect_rgb_near(left, hardening_color(hardened, o.alpha0, float(p.alpha_range)), "hardened patch");
-    expect_rgb_near(right, hardening_color(softened, o.alpha0, float(p.alpha_range)), "softened patch");
+    expect_rgb_near(left, hardening_color(hardened, o.alpha0, float(p.alpha_range)),
+                    "hardened patch");
+    expect_rgb_near(right, hardening_color(softened, o.alpha0, float(p.alpha_range)),
+                    "softened patch");
     // and those are the known colors: Moreland's light blue stop and the red end
     expect_rgb_near(left, Vec3f(141, 176, 254) / 255.0f, "hardened patch (known)");
     expect_rgb_near(right, Vec3f(180, 4, 38) / 255.0f, "softened patch (known)");
@@ -165,7 +176,9 @@ TEST(RenderMoisture, FlatPatchShowsTheDocumentedDarkening) {
     o.is_unlit = true;
     o.has_ground = false;
     const auto [wet, dry] = unlit_patch_colors(p, o, 1.0f, 0, 0.0f, 0);
-    auto srgb = [](const Vec3f& c) { return Vec3f(linear_to_srgb(c.x()), linear_to_srgb(c.y()), linear_to_srgb(c.z())); };
+    auto srgb = [](const Vec3f& c) {
+        return Vec3f(linear_to_srgb(c.x()), linear_to_srgb(c.y()), linear_to_srgb(c.z()));
+    };
     const Vec3f albedo = p.albedo.cast<float>();
     expect_rgb_near(wet, srgb(moisture_color(albedo, 1.0f)), "wet patch");
     expect_rgb_near(dry, srgb(albedo), "dry patch");
@@ -219,7 +232,8 @@ TEST(Render, GroundSitsUnderTheStage) {
     no_ground.has_ground = false;
     const RenderedImage with = render_auto(p, sphere_scene());
     const RenderedImage without = render_auto(p, sphere_scene(), no_ground);
-    const test::ImageDiff d = test::compare_rgb(test::to_rgb_image(with), test::to_rgb_image(without));
+    const test::ImageDiff d =
+        test::compare_rgb(test::to_rgb_image(with), test::to_rgb_image(without));
     EXPECT_GT(d.mean_abs, 5.0);
 }
 

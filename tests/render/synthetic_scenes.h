@@ -40,12 +40,14 @@ inline TriMesh uv_sphere(const Vec3f& center, float radius, int rings, int segme
 
 /// A flat, upward-facing square patch [x0,x1]x[z0,z1] at height y with n x n cells, every vertex
 /// carrying saturation `s` and alpha `a`.
-inline TriMesh flat_patch(float x0, float x1, float z0, float z1, float y, int n, float s, float a) {
+inline TriMesh flat_patch(float x0, float x1, float z0, float z1, float y, int n, float s,
+                          float a) {
     TriMesh m;
     m.name = "boundary";
     for (int i = 0; i <= n; ++i)
         for (int j = 0; j <= n; ++j) {
-            m.positions.push_back(Vec3f(x0 + (x1 - x0) * float(j) / float(n), y, z0 + (z1 - z0) * float(i) / float(n)));
+            m.positions.push_back(Vec3f(x0 + (x1 - x0) * float(j) / float(n), y,
+                                        z0 + (z1 - z0) * float(i) / float(n)));
             m.normals.push_back(Vec3f(0, 1, 0));
             m.saturation.push_back(s);
             m.alpha.push_back(a);

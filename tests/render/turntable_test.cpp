@@ -25,13 +25,15 @@ namespace {
 /// An asymmetric scene: a long slab and a ball, so coverage changes with the view angle.
 Scene asymmetric_scene() {
     Scene s;
-    s.meshes.push_back({test::box_mesh(Vec3f(-1.0f, 0, -0.15f), Vec3f(1.0f, 0.3f, 0.15f), "boundary",
-                                       [](const Vec3f& p, float& sat, float& a) {
-                                           sat = 0.5f + 0.5f * p.x();
-                                           a = 0;
-                                       }),
-                        SurfaceKind::Boundary});
-    s.meshes.push_back({test::uv_sphere(Vec3f(0.6f, 0.55f, 0), 0.25f, 16, 32), SurfaceKind::Boundary});
+    s.meshes.push_back(
+        {test::box_mesh(Vec3f(-1.0f, 0, -0.15f), Vec3f(1.0f, 0.3f, 0.15f), "boundary",
+                        [](const Vec3f& p, float& sat, float& a) {
+                            sat = 0.5f + 0.5f * p.x();
+                            a = 0;
+                        }),
+         SurfaceKind::Boundary});
+    s.meshes.push_back(
+        {test::uv_sphere(Vec3f(0.6f, 0.55f, 0), 0.25f, 16, 32), SurfaceKind::Boundary});
     return s;
 }
 
@@ -45,7 +47,8 @@ std::vector<RenderedImage> render_turntable(int views, int width, int height) {
     r.set_scene(s);
     // frame the whole orbit: the bounds of the scene's horizontal circle
     Bounds b = scene_bounds(s);
-    const float R = std::max({std::abs(b.min.x()), std::abs(b.max.x()), std::abs(b.min.z()), std::abs(b.max.z())});
+    const float R = std::max(
+        {std::abs(b.min.x()), std::abs(b.max.x()), std::abs(b.min.z()), std::abs(b.max.z())});
     b.extend(Vec3f(-R, b.min.y(), -R));
     b.extend(Vec3f(R, b.max.y(), R));
     const Camera base = auto_frame(b, 35, float(width) / float(height));
@@ -72,11 +75,13 @@ TEST(Turntable, CoverageVariesSmoothly) {
     const auto [lo, hi] = std::minmax_element(cov.begin(), cov.end());
     const double range = *hi - *lo;
     double max_step = 0;
-    for (int v = 0; v < views; ++v) max_step = std::max(max_step, std::abs(cov[(v + 1) % views] - cov[v]));
+    for (int v = 0; v < views; ++v)
+        max_step = std::max(max_step, std::abs(cov[(v + 1) % views] - cov[v]));
     EXPECT_GT(*lo, 0.02) << "the object is in every view";
     EXPECT_GT(range, 0.01) << "an asymmetric object changes its silhouette";
     RecordProperty("max_step_over_range", std::to_string(max_step / range));
-    EXPECT_LT(max_step, 0.4 * range) << "coverage jumps: max step " << max_step << ", range " << range;
+    EXPECT_LT(max_step, 0.4 * range)
+        << "coverage jumps: max step " << max_step << ", range " << range;
     // views half a turn apart see mirror-like silhouettes of similar area
     EXPECT_NEAR(cov[0], cov[views / 2], 0.25 * range);
 }
@@ -86,7 +91,8 @@ TEST(Turntable, MovieHasOneFramePerView) {
         GTEST_SKIP() << "ffmpeg/ffprobe not on PATH: movies are skipped (PNGs only)";
     const int views = 12;
     const std::vector<RenderedImage> images = render_turntable(views, 121, 91);  // odd: padded
-    const fs::path dir = fs::temp_directory_path() / ("mudcrack_render_movie_" + std::to_string(getpid()));
+    const fs::path dir =
+        fs::temp_directory_path() / ("mudcrack_render_movie_" + std::to_string(getpid()));
     fs::create_directories(dir);
     const fs::path movie = dir / "turntable.mp4";
     {
@@ -111,7 +117,8 @@ TEST(Turntable, MovieHasOneFramePerView) {
 
 TEST(Turntable, UnfinishedMovieLeavesNothing) {
     if (find_on_path("ffmpeg").empty()) GTEST_SKIP() << "ffmpeg not on PATH";
-    const fs::path dir = fs::temp_directory_path() / ("mudcrack_render_abort_" + std::to_string(getpid()));
+    const fs::path dir =
+        fs::temp_directory_path() / ("mudcrack_render_abort_" + std::to_string(getpid()));
     fs::create_directories(dir);
     RenderedImage frame;
     frame.width = 32;
@@ -147,7 +154,8 @@ TEST(ContactSheet, GridWithFrameLabels) {
     // its label is drawn in light text near the bottom left
     int text_pixels = 0;
     for (int y = 72 + 60 - 12; y < 72 + 60; ++y)
-        for (int x = 6; x < 6 + 40; ++x) text_pixels += sheet.rgba[(size_t(y) * sheet.width + x) * 4 + 1] > 200;
+        for (int x = 6; x < 6 + 40; ++x)
+            text_pixels += sheet.rgba[(size_t(y) * sheet.width + x) * 4 + 1] > 200;
     EXPECT_GT(text_pixels, 20);
     EXPECT_THROW(contact_sheet({}, 3), InputError);
 }

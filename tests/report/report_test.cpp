@@ -61,7 +61,8 @@ TEST(ReportAccuracy, Diffusion3dConvergesInH) {
 
 TEST(ReportAccuracy, FreeDryingBlockEndsAtDryVolume) {
     for (const Sweep& s : {sweep_shrinkage_h(Scale::Reduced), sweep_shrinkage_ppc(Scale::Reduced)})
-        for (const SweepPoint& p : s.points) EXPECT_LT(p.error, kMaxShrinkageError) << s.id << " knob " << p.knob;
+        for (const SweepPoint& p : s.points)
+            EXPECT_LT(p.error, kMaxShrinkageError) << s.id << " knob " << p.knob;
 }
 
 TEST(ReportAccuracy, ColumnSettlementConvergesInH) {
@@ -76,7 +77,8 @@ TEST(ReportAccuracy, FiveCgIterationsSufficeInThePapersRegime) {
     for (const Sweep& s : sweeps) {
         // more iterations never move further from the converged solve
         for (size_t i = 1; i < s.points.size(); ++i)
-            EXPECT_LE(s.points[i].error, s.points[i - 1].error * (1 + 1e-9) + tol::kRoundoff) << s.id;
+            EXPECT_LE(s.points[i].error, s.points[i - 1].error * (1 + 1e-9) + tol::kRoundoff)
+                << s.id;
         EXPECT_EQ(s.points.back().error, 0) << "the converged reference is the last point";
     }
     const Sweep& paper = sweeps.front();  // D dt / h^2 = 0.01, the paper's regime
@@ -133,20 +135,23 @@ INSTANTIATE_TEST_SUITE_P(Cases, StabilityMatrix, ::testing::ValuesIn(case_names(
 // the cases that stopped with "J <= 0" before substeps were retried: they complete, with retries
 TEST(StabilityRecovery, InvertingCasesCompleteThroughRetries) {
     for (const char* name : {"wall_impact_200", "sinh_overflow_drying", "dt_past_bound_forced"}) {
-        const StabilityResult r = run_stability_case(name, Scale::Reduced, stability_limits(Scale::Reduced));
+        const StabilityResult r =
+            run_stability_case(name, Scale::Reduced, stability_limits(Scale::Reduced));
         EXPECT_EQ(r.outcome, Outcome::Completed) << name << ": " << r.message;
         EXPECT_GT(r.retries, 0) << name;
     }
 }
 
 TEST(StabilityRefusals, FixedDtPastTheElasticBoundIsRefusedByTheShotLoader) {
-    const StabilityResult r = run_stability_case("dt_past_bound_shot", Scale::Reduced, stability_limits(Scale::Reduced));
+    const StabilityResult r =
+        run_stability_case("dt_past_bound_shot", Scale::Reduced, stability_limits(Scale::Reduced));
     EXPECT_EQ(r.outcome, Outcome::Refused) << r.message;
     EXPECT_NE(r.message.find("exceeds the elastic bound"), std::string::npos) << r.message;
 }
 
 TEST(StabilityRefusals, FlatTetWithZeroRestVolumeIsRefused) {
-    const StabilityResult r = run_stability_case("tet_flat", Scale::Reduced, stability_limits(Scale::Reduced));
+    const StabilityResult r =
+        run_stability_case("tet_flat", Scale::Reduced, stability_limits(Scale::Reduced));
     EXPECT_EQ(r.outcome, Outcome::Refused) << r.message;
     EXPECT_NE(r.message.find("volume0 0"), std::string::npos) << r.message;
 }

@@ -34,7 +34,8 @@ class McShotCli : public ::testing::Test {
 protected:
     void SetUp() override {
         m_dir = fs::temp_directory_path() /
-                ("mudcrack_mc_shot_cli_" + std::string(::testing::UnitTest::GetInstance()->current_test_info()->name()));
+                ("mudcrack_mc_shot_cli_" +
+                 std::string(::testing::UnitTest::GetInstance()->current_test_info()->name()));
         fs::remove_all(m_dir);
         fs::create_directories(m_dir);
     }
@@ -43,8 +44,8 @@ protected:
     // runs mc-shot with `args`, capturing stdout and stderr in files
     Result mc_shot(const std::string& args) const {
         const fs::path out = m_dir / "stdout.txt", err = m_dir / "stderr.txt";
-        const std::string cmd = std::string(MUDCRACK_BIN_DIR) + "/mc-shot " + args + " >" + out.string() +
-                                " 2>" + err.string();
+        const std::string cmd = std::string(MUDCRACK_BIN_DIR) + "/mc-shot " + args + " >" +
+                                out.string() + " 2>" + err.string();
         const int status = std::system(cmd.c_str());
         return {WIFEXITED(status) ? WEXITSTATUS(status) : -1, read(out), read(err)};
     }
@@ -75,9 +76,12 @@ TEST_F(McShotCli, ValidateBadShotExitsOneNamingEveryKey) {
         "material": {"youngs_modulus": -300000}, "sim": {"h": -1}})");
     const Result r = mc_shot("validate " + shot.string());
     EXPECT_EQ(r.code, 1);
-    EXPECT_NE(r.err.find("mc-shot: error: " + shot.string() + ": /material/youngs_modulus = -300000: must be > 0 [Pa]"),
-              std::string::npos) << r.err;
-    EXPECT_NE(r.err.find("mc-shot: error: " + shot.string() + ": /sim/h = -1"), std::string::npos) << r.err;
+    EXPECT_NE(r.err.find("mc-shot: error: " + shot.string() +
+                         ": /material/youngs_modulus = -300000: must be > 0 [Pa]"),
+              std::string::npos)
+        << r.err;
+    EXPECT_NE(r.err.find("mc-shot: error: " + shot.string() + ": /sim/h = -1"), std::string::npos)
+        << r.err;
     EXPECT_EQ(r.out.find("ok"), std::string::npos);
     EXPECT_EQ(mc_shot("validate " + (m_dir / "missing.json").string()).code, 1);
 }
@@ -131,7 +135,8 @@ TEST_F(McShotCli, SummaryAsJsonHasTheTablesNumbers) {
     std::ofstream(m_dir / "out" / "sim" / "manifest.json")
         << R"({"stage": "sim", "shot": "shots/fig8_c.json", "wall_seconds": 12.5, "peak_memory_bytes": 20971520,
                "frames": {"first": 1, "last": 48}, "particle_steps_per_second": 2500000})";
-    fs::create_directories(m_dir / "out" / "render");  // a manifest written before the key was renamed
+    // a manifest written before the key was renamed
+    fs::create_directories(m_dir / "out" / "render");
     std::ofstream(m_dir / "out" / "render" / "manifest.json")
         << R"({"stage": "render", "wall_seconds": 3, "peak_rss_bytes": 1048576})";
     const Result r = mc_shot("summary --json " + (m_dir / "out").string());
@@ -166,7 +171,8 @@ TEST_F(McShotCli, SummaryNamesTheFrameASimResumedFrom) {
     EXPECT_NE(table.out.find("1-96 from 90"), std::string::npos) << table.out;
     const Result json = mc_shot("summary --json " + (m_dir / "out").string());
     ASSERT_EQ(json.code, 0) << json.err;
-    EXPECT_EQ(nlohmann::json::parse(json.out).at("stages")[0].at("resumed_from_frame"), 90) << json.out;
+    EXPECT_EQ(nlohmann::json::parse(json.out).at("stages")[0].at("resumed_from_frame"), 90)
+        << json.out;
 }
 
 TEST_F(McShotCli, SliceIsRewrittenOnlyWhenItChanges) {
@@ -175,7 +181,8 @@ TEST_F(McShotCli, SliceIsRewrittenOnlyWhenItChanges) {
     char text[256];
     std::snprintf(text, sizeof text, base.c_str(), 640);
     const fs::path shot = write("s.json", text);
-    const fs::path sim = m_dir / "out" / "sim.params.json", render = m_dir / "out" / "render.params.json";
+    const fs::path sim = m_dir / "out" / "sim.params.json",
+                   render = m_dir / "out" / "render.params.json";
     ASSERT_EQ(mc_shot("slice " + shot.string() + " sim --out " + sim.string()).code, 0);
     ASSERT_EQ(mc_shot("slice " + shot.string() + " render --out " + render.string()).code, 0);
     const Result printed = mc_shot("slice " + shot.string() + " sim");

@@ -63,7 +63,9 @@ std::string error_of(const std::string& text, const std::string& path = "shots/t
 }
 
 void expect_contains(const std::string& message, std::initializer_list<const char*> parts) {
-    for (const char* part : parts) EXPECT_NE(message.find(part), std::string::npos) << "missing \"" << part << "\" in:\n" << message;
+    for (const char* part : parts)
+        EXPECT_NE(message.find(part), std::string::npos) << "missing \"" << part << "\" in:\n"
+                                                         << message;
 }
 
 int line_count(const std::string& s) {
@@ -113,7 +115,8 @@ TEST_F(ShotTest, OmittedSectionsTurnFeaturesOff) {
 TEST_F(ShotTest, PresentSectionsGetDefaultsAndDerivedValues) {
     const Shot shot = parse_shot(kFull, "shots/full.json");
     EXPECT_EQ(shot.name, "full");
-    ASSERT_TRUE(shot.sim.nacc && shot.sim.moisture && shot.sim.ground && shot.surface && shot.render);
+    ASSERT_TRUE(shot.sim.nacc && shot.sim.moisture && shot.sim.ground && shot.surface &&
+                shot.render);
     // beta is shorthand for beta0 = beta1 (docs/physics.md §4.8 T21)
     EXPECT_EQ(shot.sim.nacc->beta0, 1);
     EXPECT_EQ(shot.sim.nacc->beta1, 1);
@@ -136,13 +139,15 @@ TEST_F(ShotTest, PresentSectionsGetDefaultsAndDerivedValues) {
     // surfacing with moisture and plasticity needs every attribute
     const CacheAttributes& c = shot.sim.cache;
     EXPECT_TRUE(c.velocity && c.theta && c.saturation && c.alpha && c.Jw && c.Fe);
-    expect_contains(shot.slice(Stage::Sim), {"\"beta0\": 1.0", "\"theta_init\": 0.4", "\"Jw\": true"});
+    expect_contains(shot.slice(Stage::Sim),
+                    {"\"beta0\": 1.0", "\"theta_init\": 0.4", "\"Jw\": true"});
     EXPECT_EQ(shot.slice(Stage::Sim).find("\"beta\":"), std::string::npos);
 }
 
 TEST_F(ShotTest, RenderWithoutTurntableOrCameraSections) {
     const Shot shot = parse_shot(R"({"mudcrack": 1, "source": {"type": "box"}, "material": {},
-        "plasticity": {}, "render": {"color_mode": "hardening"}})", "t.json");
+        "plasticity": {}, "render": {"color_mode": "hardening"}})",
+                                 "t.json");
     ASSERT_TRUE(shot.render);
     EXPECT_TRUE(shot.render->camera.is_auto);
     EXPECT_FALSE(shot.render->turntable);
@@ -150,7 +155,8 @@ TEST_F(ShotTest, RenderWithoutTurntableOrCameraSections) {
     // the cache holds the physics' state: alpha (plasticity); no moisture, so no theta/saturation;
     // no surfacing, so no Fe
     EXPECT_TRUE(shot.sim.cache.alpha);
-    EXPECT_FALSE(shot.sim.cache.saturation || shot.sim.cache.theta || shot.sim.cache.Jw || shot.sim.cache.Fe);
+    EXPECT_FALSE(shot.sim.cache.saturation || shot.sim.cache.theta || shot.sim.cache.Jw ||
+                 shot.sim.cache.Fe);
 }
 
 // A render key never re-simulates: in a shot with moisture and no surfacing, the color mode (which
@@ -164,7 +170,8 @@ TEST_F(ShotTest, RenderColorModeLeavesTheSimSliceOfAShotWithoutSurfacing) {
         std::string text = base;
         text.replace(text.find("MODE"), 4, mode);
         const Shot shot = parse_shot(text, "t.json");
-        EXPECT_TRUE(shot.sim.cache.saturation && shot.sim.cache.alpha && shot.sim.cache.theta) << mode;
+        EXPECT_TRUE(shot.sim.cache.saturation && shot.sim.cache.alpha && shot.sim.cache.theta)
+            << mode;
         EXPECT_FALSE(shot.sim.cache.Fe) << mode;
         if (sim_slice.empty()) sim_slice = shot.slice(Stage::Sim);
         EXPECT_EQ(shot.slice(Stage::Sim), sim_slice) << mode;
@@ -183,7 +190,8 @@ TEST_F(ShotTest, OnRequestAttributeIsCachedOnlyWhenAskedAndNeedsItsPhysics) {
     };
     const Shot plain = parse_shot(with(""), "t.json");
     EXPECT_FALSE(plain.sim.cache.damage);
-    EXPECT_EQ(plain.slice(Stage::Sim).find("damage\":"), std::string::npos) << plain.slice(Stage::Sim);
+    EXPECT_EQ(plain.slice(Stage::Sim).find("damage\":"), std::string::npos)
+        << plain.slice(Stage::Sim);
     const Shot asked = parse_shot(with(R"(, "sim": {"cache": {"damage": true}})"), "t.json");
     EXPECT_TRUE(asked.sim.cache.damage);
     EXPECT_NE(asked.slice(Stage::Sim), plain.slice(Stage::Sim));
@@ -191,32 +199,42 @@ TEST_F(ShotTest, OnRequestAttributeIsCachedOnlyWhenAskedAndNeedsItsPhysics) {
     const Shot declined = parse_shot(with(R"(, "sim": {"cache": {"damage": false}})"), "t.json");
     EXPECT_FALSE(declined.sim.cache.damage);
     // no damage physics (no /plasticity/damage_strain): the request names the key and what it needs
-    expect_contains(error_of(R"({"mudcrack": 1, "source": {"type": "box"}, "material": {}, "plasticity": {},
+    expect_contains(
+        error_of(R"({"mudcrack": 1, "source": {"type": "box"}, "material": {}, "plasticity": {},
         "sim": {"cache": {"damage": true}}})"),
-                    {"shots/t.json: /sim/cache/damage = true", "/plasticity/damage_strain"});
+        {"shots/t.json: /sim/cache/damage = true", "/plasticity/damage_strain"});
 }
 
 TEST_F(ShotTest, MalformedJsonNamesFileLineAndColumn) {
-    const std::string msg = error_of("{\n  \"mudcrack\": 1,\n  \"source\": {\"type\": \"box\",}\n}", "shots/x.json");
+    const std::string msg =
+        error_of("{\n  \"mudcrack\": 1,\n  \"source\": {\"type\": \"box\",}\n}", "shots/x.json");
     expect_contains(msg, {"shots/x.json:3:", "line 3", "malformed JSON"});
 }
 
 TEST_F(ShotTest, DuplicateKeysNameFilePointerAndBothValues) {
     const std::string msg = error_of(R"({"mudcrack": 1, "source": {"type": "box"},
         "material": {"density": 1, "youngs_modulus": 2000, "density": 5},
-        "render": {"camera": {"fov": 40, "fov": 50}}})", "shots/dup.json");
-    expect_contains(msg, {"shots/dup.json: /material/density = 5: duplicate key: the same object sets it earlier to 1",
-                          "shots/dup.json: /render/camera/fov = 50: duplicate key: the same object sets it earlier to 40"});
+        "render": {"camera": {"fov": 40, "fov": 50}}})",
+                                     "shots/dup.json");
+    expect_contains(
+        msg,
+        {"shots/dup.json: /material/density = 5: duplicate key: the same object sets it earlier to 1",
+         "shots/dup.json: /render/camera/fov = 50: duplicate key: the same object sets it earlier to 40"});
     EXPECT_EQ(line_count(msg), 2) << msg;
     // a whole section written twice, and a key whose name needs escaping in a pointer
-    expect_contains(error_of(R"({"mudcrack": 1, "source": {"type": "box"}, "material": {},
+    expect_contains(
+        error_of(R"({"mudcrack": 1, "source": {"type": "box"}, "material": {},
         "sim": {"h": 0.04}, "sim": {"h": 0.02}})"),
-                    {"/sim = {\"h\":0.02}: duplicate key: the same object sets it earlier to {\"h\":0.04}"});
-    expect_contains(error_of(R"({"mudcrack": 1, "source": {"type": "box"}, "material": {}, "a/b": 1, "a/b": 2})"),
-                    {"/a~1b = 2: duplicate key: the same object sets it earlier to 1"});
+        {"/sim = {\"h\":0.02}: duplicate key: the same object sets it earlier to {\"h\":0.04}"});
+    expect_contains(
+        error_of(
+            R"({"mudcrack": 1, "source": {"type": "box"}, "material": {}, "a/b": 1, "a/b": 2})"),
+        {"/a~1b = 2: duplicate key: the same object sets it earlier to 1"});
     // the same key in different objects is no duplicate; comments are still allowed
-    EXPECT_EQ(error_of(R"({"mudcrack": 1, "source": {"type": "box", "box": {"min": [0, 0, 0]}}, /* note */
-        "material": {}, "colliders": {"domain": {"min": [-1, -1, -1]}}})"), "");
+    EXPECT_EQ(
+        error_of(R"({"mudcrack": 1, "source": {"type": "box", "box": {"min": [0, 0, 0]}}, /* note */
+        "material": {}, "colliders": {"domain": {"min": [-1, -1, -1]}}})"),
+        "");
 }
 
 TEST_F(ShotTest, MissingVersionIsAnError) {
@@ -234,13 +252,17 @@ TEST_F(ShotTest, VersionMustBeTheInteger1) {
                     {"/mudcrack = 2.0: unsupported"});
     expect_contains(error_of(R"({"mudcrack": "1", "source": {"type": "box"}, "material": {}})"),
                     {"/mudcrack = \"1\": must be an integer"});
-    EXPECT_EQ(parse_shot(R"({"mudcrack": 1.0, "source": {"type": "box"}, "material": {}})", "t.json").sim.h, 0.05);
+    EXPECT_EQ(
+        parse_shot(R"({"mudcrack": 1.0, "source": {"type": "box"}, "material": {}})", "t.json")
+            .sim.h,
+        0.05);
     expect_contains(error_of("[1, 2]"), {"shots/t.json:  = [1,2]: a shot must be a JSON object"});
 }
 
 TEST_F(ShotTest, HeightfieldAndImagePaths) {
     const Shot shot = parse_shot(R"({"mudcrack": 1, "material": {},
-        "source": {"type": "heightfield", "heightfield": {"size": [2, 3], "base": 0.4}}})", "t.json");
+        "source": {"type": "heightfield", "heightfield": {"size": [2, 3], "base": 0.4}}})",
+                                 "t.json");
     EXPECT_EQ(shot.init.type, SourceType::Heightfield);
     EXPECT_EQ(shot.init.heightfield.size, Vec3(2, 0, 3));
     EXPECT_EQ(shot.init.heightfield.base, 0.4);
@@ -248,19 +270,23 @@ TEST_F(ShotTest, HeightfieldAndImagePaths) {
     const std::string msg = error_of(R"({"mudcrack": 1, "material": {},
         "source": {"type": "heightfield", "heightfield": {"base": 0.1, "channel_depth": 0.2, "image": "h.png"}}})",
                                      "/tmp/mudcrack_none/t.json");
-    expect_contains(msg, {"/source/heightfield/image = \"h.png\": file not found (looked for /tmp/mudcrack_none/h.png"});
+    expect_contains(
+        msg,
+        {"/source/heightfield/image = \"h.png\": file not found (looked for /tmp/mudcrack_none/h.png"});
 }
 
 TEST_F(ShotTest, UnknownKeysSuggestTheNearestKey) {
     const std::string msg = error_of(R"({"mudcrack": 1, "source": {"type": "box"},
         "material": {"youngs_modulis": 3}, "sim": {"fps": 24}, "grund": {}})");
-    expect_contains(msg, {"/material/youngs_modulis = 3: unknown key (did you mean /material/youngs_modulus?)",
-                          "/sim/fps = 24: unknown key (did you mean /frames/fps?)",
-                          "/grund = {}: unknown key (did you mean /colliders/ground?)"});
+    expect_contains(
+        msg, {"/material/youngs_modulis = 3: unknown key (did you mean /material/youngs_modulus?)",
+              "/sim/fps = 24: unknown key (did you mean /frames/fps?)",
+              "/grund = {}: unknown key (did you mean /colliders/ground?)"});
 }
 
 TEST_F(ShotTest, WrongTypesAreErrors) {
-    const std::string msg = error_of(R"({"mudcrack": 1, "source": {"type": "box", "box": {"min": [0, 0]}},
+    const std::string msg =
+        error_of(R"({"mudcrack": 1, "source": {"type": "box", "box": {"min": [0, 0]}},
         "material": {"density": "heavy"}, "frames": {"end": 2.5}, "surfacing": {"cracks": 1},
         "sim": []})");
     expect_contains(msg, {"/material/density = \"heavy\": must be a number [kg/m^3]",
@@ -273,36 +299,46 @@ TEST_F(ShotTest, WrongTypesAreErrors) {
 
 TEST_F(ShotTest, OutOfRangeNamesPointerValueAndUnits) {
     const std::string msg = error_of(R"({"mudcrack": 1, "source": {"type": "box"},
-        "material": {"youngs_modulus": -300000}})", "shots/riverbed.json");
+        "material": {"youngs_modulus": -300000}})",
+                                     "shots/riverbed.json");
     EXPECT_EQ(msg, "shots/riverbed.json: /material/youngs_modulus = -300000: must be > 0 [Pa]");
-    expect_contains(error_of(R"({"mudcrack": 1, "source": {"type": "box"}, "material": {"poisson_ratio": 0.5}})"),
-                    {"/material/poisson_ratio = 0.5: must be in (-1, 0.5)"});
+    expect_contains(
+        error_of(
+            R"({"mudcrack": 1, "source": {"type": "box"}, "material": {"poisson_ratio": 0.5}})"),
+        {"/material/poisson_ratio = 0.5: must be in (-1, 0.5)"});
     expect_contains(error_of(R"({"mudcrack": 1, "source": {"type": "box"}, "material": {},
-        "render": {"resolution": [8, 360]}})"), {"/render/resolution/0 = 8: must be in [16, 16384] [px]"});
+        "render": {"resolution": [8, 360]}})"),
+                    {"/render/resolution/0 = 8: must be in [16, 16384] [px]"});
     // the renderer's own limit is checked here, at the shot, where the file can be named
     expect_contains(error_of(R"({"mudcrack": 1, "source": {"type": "box"}, "material": {},
-        "render": {"resolution": [960, 16385]}})", "shots/huge.json"),
+        "render": {"resolution": [960, 16385]}})",
+                             "shots/huge.json"),
                     {"shots/huge.json: /render/resolution/1 = 16385: must be in [16, 16384] [px]"});
 }
 
 TEST_F(ShotTest, EnumTypoSuggestsTheChoice) {
     const std::string msg = error_of(R"({"mudcrack": 1, "source": {"type": "bx"}, "material": {},
         "colliders": {"ground": {"mode": "stiky"}}})");
-    expect_contains(msg, {"/source/type = \"bx\": must be one of \"mesh\", \"box\", \"heightfield\" (did you mean \"box\"?)",
-                          "/colliders/ground/mode = \"stiky\": must be one of \"sticky\", \"slip\", \"separate\" "
-                          "(did you mean \"sticky\"?)"});
+    expect_contains(
+        msg,
+        {"/source/type = \"bx\": must be one of \"mesh\", \"box\", \"heightfield\" (did you mean \"box\"?)",
+         "/colliders/ground/mode = \"stiky\": must be one of \"sticky\", \"slip\", \"separate\" "
+         "(did you mean \"sticky\"?)"});
     // the bad required key is reported once, not again as missing
     EXPECT_EQ(line_count(msg), 2) << msg;
 }
 
 TEST_F(ShotTest, FbxIsRefusedWithTheReason) {
     expect_contains(error_of(R"({"mudcrack": 1, "source": {"type": "box"}, "material": {},
-        "surfacing": {"format": "fbx"}})"), {"/surfacing/format = \"fbx\":", "4686", "glb"});
+        "surfacing": {"format": "fbx"}})"),
+                    {"/surfacing/format = \"fbx\":", "4686", "glb"});
 }
 
 TEST_F(ShotTest, PlatesKeysAreBoundedAndDebrisNeedsThePlatesMode) {
-    const Shot shot = parse_shot(R"({"mudcrack": 1, "source": {"type": "box"}, "material": {}, "sim": {"h": 0.03},
-        "surfacing": {"mode": "plates", "min_piece_size": 3, "debris": "points"}})", "t.json");
+    const Shot shot =
+        parse_shot(R"({"mudcrack": 1, "source": {"type": "box"}, "material": {}, "sim": {"h": 0.03},
+        "surfacing": {"mode": "plates", "min_piece_size": 3, "debris": "points"}})",
+                   "t.json");
     ASSERT_TRUE(shot.surface.has_value());
     EXPECT_EQ(shot.surface->mode, SurfaceMode::Plates);
     EXPECT_EQ(shot.surface->debris, DebrisOutput::Points);
@@ -312,10 +348,13 @@ TEST_F(ShotTest, PlatesKeysAreBoundedAndDebrisNeedsThePlatesMode) {
         "surfacing": {"mode": "ours", "debris": "points", "min_piece_size": 0, "debris_gap": 0,
                       "close_gaps": -1, "wall_smoothing": 1000}})");
     expect_contains(msg, {"/surfacing/debris = \"points\": needs /surfacing/mode = \"plates\"",
-                          "/surfacing/min_piece_size = 0: must be > 0", "/surfacing/debris_gap = 0: must be > 0",
-                          "/surfacing/close_gaps = -1: must be in [0, 1]", "/surfacing/wall_smoothing = 1000: must be in [0, 100]"});
+                          "/surfacing/min_piece_size = 0: must be > 0",
+                          "/surfacing/debris_gap = 0: must be > 0",
+                          "/surfacing/close_gaps = -1: must be in [0, 1]",
+                          "/surfacing/wall_smoothing = 1000: must be in [0, 100]"});
     expect_contains(error_of(R"({"mudcrack": 1, "source": {"type": "box"}, "material": {},
-        "surfacing": {"mode": "plate"}})"), {"/surfacing/mode = \"plate\"", "(did you mean \"plates\"?)"});
+        "surfacing": {"mode": "plate"}})"),
+                    {"/surfacing/mode = \"plate\"", "(did you mean \"plates\"?)"});
 }
 
 TEST_F(ShotTest, FixedDtAboveTheElasticBoundIsRefused) {
@@ -325,13 +364,15 @@ TEST_F(ShotTest, FixedDtAboveTheElasticBoundIsRefused) {
         "sim": {"h": 0.02, "dt": %s}})";
     char text[512];
     std::snprintf(text, sizeof text, shot, "1e-3");
-    expect_contains(error_of(text), {"/sim/dt = 0.001: exceeds the elastic bound C_E h / c_p = 0.000353 s",
-                                     "E=1000 Pa", "nu=0.35", "rho=2 kg/m^3", "h=0.02 m"});
+    expect_contains(error_of(text),
+                    {"/sim/dt = 0.001: exceeds the elastic bound C_E h / c_p = 0.000353 s",
+                     "E=1000 Pa", "nu=0.35", "rho=2 kg/m^3", "h=0.02 m"});
     std::snprintf(text, sizeof text, shot, "3.5e-4");
     const Shot ok = parse_shot(text, "t.json");
     EXPECT_EQ(ok.sim.time.dt_fixed, 3.5e-4);
     EXPECT_LE(ok.sim.time.dt_fixed, elastic_dt_bound(ok.sim));
-    EXPECT_NEAR(elastic_dt_bound(ok.sim), 0.5 * 0.02 / std::sqrt(1000 * 0.65 / (1.35 * 0.3 * 2)), tol::kRoundoff);
+    EXPECT_NEAR(elastic_dt_bound(ok.sim), 0.5 * 0.02 / std::sqrt(1000 * 0.65 / (1.35 * 0.3 * 2)),
+                tol::kRoundoff);
 }
 
 TEST_F(ShotTest, CrossKeyChecks) {
@@ -339,17 +380,22 @@ TEST_F(ShotTest, CrossKeyChecks) {
         "source": {"type": "box", "box": {"min": [0, 0, 0], "max": [1, -0.1, 1]}},
         "material": {}, "frames": {"start": 10, "end": 5},
         "moisture": {"eta": 0.4, "theta_init": 0.5}})");
-    expect_contains(msg, {"/source/box/max = [1,-0.1,1]: must be > /source/box/min = [0,0,0] on every axis [m]",
-                          "/frames/end = 5: must be >= /frames/start = 10",
-                          "/moisture/theta_init = 0.5: must be in [0, /moisture/eta = 0.4]"});
+    expect_contains(
+        msg, {"/source/box/max = [1,-0.1,1]: must be > /source/box/min = [0,0,0] on every axis [m]",
+              "/frames/end = 5: must be >= /frames/start = 10",
+              "/moisture/theta_init = 0.5: must be in [0, /moisture/eta = 0.4]"});
     EXPECT_EQ(line_count(msg), 3) << msg;
 }
 
 TEST_F(ShotTest, MissingMeshFileIsAnError) {
-    const std::string msg = error_of(R"({"mudcrack": 1, "source": {"type": "mesh", "mesh": {"path": "assets/none.obj"}},
-        "material": {}})", "/tmp/mudcrack_no_such_dir/shot.json");
-    expect_contains(msg, {"/tmp/mudcrack_no_such_dir/shot.json: /source/mesh/path = \"assets/none.obj\": file not found",
-                          "/tmp/mudcrack_no_such_dir/assets/none.obj"});
+    const std::string msg =
+        error_of(R"({"mudcrack": 1, "source": {"type": "mesh", "mesh": {"path": "assets/none.obj"}},
+        "material": {}})",
+                 "/tmp/mudcrack_no_such_dir/shot.json");
+    expect_contains(
+        msg,
+        {"/tmp/mudcrack_no_such_dir/shot.json: /source/mesh/path = \"assets/none.obj\": file not found",
+         "/tmp/mudcrack_no_such_dir/assets/none.obj"});
     expect_contains(error_of(R"({"mudcrack": 1, "source": {"type": "mesh"}, "material": {}})"),
                     {"/source/mesh/path = (missing): required when /source/type = \"mesh\""});
 }
@@ -360,7 +406,8 @@ TEST_F(ShotTest, AllErrorsAreReportedAtOnce) {
         "sim": {"h": 0, "cfl_elastic": 2}, "plasticity": {"M": -1}})");
     EXPECT_EQ(line_count(msg), 7) << msg;
     expect_contains(msg, {"/mudcrack = 3", "/material/youngs_modulus = 0", "/material/density = -1",
-                          "/material/poisson_ratio = 0.7", "/sim/h = 0", "/sim/cfl_elastic = 2", "/plasticity/M = -1"});
+                          "/material/poisson_ratio = 0.7", "/sim/h = 0", "/sim/cfl_elastic = 2",
+                          "/plasticity/M = -1"});
     // every line names the file
     size_t pos = 0;
     int n = 0;
@@ -415,21 +462,25 @@ TEST_F(ShotTest, SlicesNestAndIgnoreSpelling) {
       "surfacing": { "zeta": 2.0 }, "colliders": { "ground": { "height": 0.0 } },
       "frames": { "fps": 24.0, "start": 1, "end": 48 }, "sim": { "h": 0.04 },
       "moisture": { "eta": 0.4, "k_r": 1.0, "eps": 1.0, "D": 0.01, "lambda": 0.1, "theta_init": 0.4 },
-      "plasticity": { "alpha0": -0.04, "beta0": 1, "beta1": 1.0, "xi": 1, "M": 1.87 },  // no shorthand
+      // no shorthand
+      "plasticity": { "alpha0": -0.04, "beta0": 1, "beta1": 1.0, "xi": 1, "M": 1.87 },
       "material": { "poisson_ratio": 0.35, "youngs_modulus": 2e3, "density": 1 },
       "source": { "box": { "spacing": 0.02, "min": [0, 0, 0], "max": [0.5, 0.1, 0.5] }, "type": "box" },
-      "name": "renamed", "mudcrack": 1 })", "elsewhere/full.json");
+      "name": "renamed", "mudcrack": 1 })",
+                              "elsewhere/full.json");
     for (Stage s : {Stage::Init, Stage::Sim, Stage::Surface, Stage::Render})
         EXPECT_EQ(a.slice(s), b.slice(s)) << stage_name(s);
 }
 
 TEST_F(ShotTest, LowZetaWarns) {
     parse_shot(R"({"mudcrack": 1, "source": {"type": "box"}, "material": {},
-        "moisture": {"eta": 0.5}, "surfacing": {"zeta": 1.5}})", "t.json");
+        "moisture": {"eta": 0.5}, "surfacing": {"zeta": 1.5}})",
+               "t.json");
     // (1 - 0.5)^(-2/3) = 1.587 > 1.5
     EXPECT_EQ(log::warning_count(), 1);
     parse_shot(R"({"mudcrack": 1, "source": {"type": "box"}, "material": {},
-        "moisture": {"eta": 0.5}, "surfacing": {"zeta": 1.6}})", "t.json");
+        "moisture": {"eta": 0.5}, "surfacing": {"zeta": 1.6}})",
+               "t.json");
     EXPECT_EQ(log::warning_count(), 1);
     m_expected_warnings = 1;
 }
@@ -453,7 +504,8 @@ TEST_F(ShotTest, ShippedShotsValidate) {
     for (const char* name : {"bench_nacc_cube.json", "bench_moisture_cube.json"}) {
         const Shot bench = load_shot(dir + name);
         const Vec3 e = bench.init.box.max - bench.init.box.min;
-        for (int a = 0; a < 3; ++a) EXPECT_EQ(std::round(e[a] / bench.init.box.spacing) + 1, 50) << name;
+        for (int a = 0; a < 3; ++a)
+            EXPECT_EQ(std::round(e[a] / bench.init.box.spacing) + 1, 50) << name;
         EXPECT_EQ(bench.sim.time.dt_fixed, 2e-4) << name;
         EXPECT_EQ(bench.sim.initial_velocity, Vec3(0, -2, 0)) << name;
         // one frame of 404 steps
@@ -478,7 +530,8 @@ TEST_F(ShotTest, EveryShippedShotLoads) {
     }
     EXPECT_GE(count, 3);
     // Table 1's Fig. 8 ablation: eta = 0 (a), eps = 0 (b), the full model (c)
-    const Shot a = load_shot((dir / "fig8_a.json").string()), b = load_shot((dir / "fig8_b.json").string()),
+    const Shot a = load_shot((dir / "fig8_a.json").string()),
+               b = load_shot((dir / "fig8_b.json").string()),
                c = load_shot((dir / "fig8_c.json").string());
     ASSERT_TRUE(a.sim.moisture && b.sim.moisture && c.sim.moisture);
     EXPECT_EQ(a.sim.moisture->eta, 0);

@@ -33,8 +33,8 @@ const fs::path kBin = MUDCRACK_BIN_DIR;
 
 // a 0.2 x 0.1 x 0.2 m elastic block on a 0.025 m lattice (9 x 5 x 9 = 405 particles) dropped
 // onto a sticky ground; `extra` is spliced into the top-level object
-std::string block_shot(const std::string& frames, const std::string& extra = "", double spacing = 0.025,
-                       double h = 0.05) {
+std::string block_shot(const std::string& frames, const std::string& extra = "",
+                       double spacing = 0.025, double h = 0.05) {
     std::ostringstream os;
     os << R"({ "mudcrack": 1,
   "source": { "type": "box", "initial_velocity": [0.2, -0.5, 0.0],
@@ -42,8 +42,10 @@ std::string block_shot(const std::string& frames, const std::string& extra = "",
        << spacing << R"( } },
   "material": { "density": 1, "youngs_modulus": 2000, "poisson_ratio": 0.35 },
   "plasticity": { "alpha0": -0.04, "beta": 1, "xi": 1, "M": 1.87 },
-  "sim": { "h": )" << h << R"(, "checkpoint_every": 2 },
-  "frames": )" << frames << R"(,
+  "sim": { "h": )"
+       << h << R"(, "checkpoint_every": 2 },
+  "frames": )"
+       << frames << R"(,
   "colliders": { "ground": { "height": 0, "mode": "sticky" } })"
        << extra << "\n}\n";
     return os.str();
@@ -53,7 +55,8 @@ class McSimCli : public ::testing::Test {
 protected:
     void SetUp() override {
         const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
-        m_dir = fs::temp_directory_path() / ("mc_sim_cli_" + std::string(info->name()) + "_" + std::to_string(::getpid()));
+        m_dir = fs::temp_directory_path() /
+                ("mc_sim_cli_" + std::string(info->name()) + "_" + std::to_string(::getpid()));
         fs::remove_all(m_dir);
         fs::create_directories(m_dir);
     }
@@ -68,13 +71,15 @@ protected:
     }
     // runs `bin args`, stderr to a file; returns the exit code
     int run(const std::string& bin, const std::string& args) {
-        const std::string cmd = (kBin / bin).string() + " " + args + " > /dev/null 2> " + (m_dir / "stderr.txt").string();
+        const std::string cmd = (kBin / bin).string() + " " + args + " > /dev/null 2> " +
+                                (m_dir / "stderr.txt").string();
         const int status = std::system(cmd.c_str());
         m_stderr = read_text(m_dir / "stderr.txt");
         return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
     }
     void init(const fs::path& shot, const fs::path& out) {
-        ASSERT_EQ(run("mc-init", "--quiet --shot " + shot.string() + " --out " + out.string()), 0) << m_stderr;
+        ASSERT_EQ(run("mc-init", "--quiet --shot " + shot.string() + " --out " + out.string()), 0)
+            << m_stderr;
     }
     static std::string read_text(const fs::path& path) {
         std::ifstream is(path, std::ios::binary);
@@ -108,12 +113,15 @@ protected:
 TEST_F(McSimCli, SameShotTwiceGivesByteIdenticalCaches) {
     // 3 short frames (~12 substeps each) on 2 threads: bitwise determinism is promised per
     // thread count, so test the parallel path; kept small for a loaded 2-core machine
-    const fs::path shot = write_shot("twice", block_shot(R"({ "start": 1, "end": 3, "fps": 192 })"));
+    const fs::path shot =
+        write_shot("twice", block_shot(R"({ "start": 1, "end": 3, "fps": 192 })"));
     const fs::path out_a = m_dir / "a", out_b = m_dir / "b";
     init(shot, out_a);
     init(shot, out_b);
     for (const fs::path& out : {out_a, out_b})
-        ASSERT_EQ(run("mc-sim", "--threads 2 --shot " + shot.string() + " --out " + out.string()), 0) << m_stderr;
+        ASSERT_EQ(run("mc-sim", "--threads 2 --shot " + shot.string() + " --out " + out.string()),
+                  0)
+            << m_stderr;
     expect_identical_caches(out_a / "sim", out_b / "sim", 3);
 
     // per-frame plain progress lines off a terminal; the manifest's numbers
@@ -144,7 +152,9 @@ TEST_F(McSimCli, SameShotTwiceGivesByteIdenticalCaches) {
     EXPECT_EQ(frame3.meta_int.at("mudcrack:format_version"), kPointsFormatVersion);
 
     // --quiet silences the progress
-    ASSERT_EQ(run("mc-sim", "--quiet --threads 1 --frames 1 --shot " + shot.string() + " --out " + out_b.string()), 0)
+    ASSERT_EQ(run("mc-sim", "--quiet --threads 1 --frames 1 --shot " + shot.string() + " --out " +
+                                out_b.string()),
+              0)
         << m_stderr;
     EXPECT_EQ(m_stderr.find("frame 1/1"), std::string::npos) << m_stderr;
     EXPECT_TRUE(fs::exists(out_b / "sim" / "particles.0001.vdb"));
@@ -152,18 +162,25 @@ TEST_F(McSimCli, SameShotTwiceGivesByteIdenticalCaches) {
 
 TEST_F(McSimCli, KillThenResumeGivesByteIdenticalCaches) {
     // 2601 particles, h = 0.025: long enough per frame to be killed mid-run
-    const fs::path shot = write_shot("kill", block_shot(R"({ "start": 1, "end": 10, "fps": 24 })", "", 0.0125, 0.025));
+    const fs::path shot = write_shot(
+        "kill", block_shot(R"({ "start": 1, "end": 10, "fps": 24 })", "", 0.0125, 0.025));
     const fs::path straight = m_dir / "straight", killed = m_dir / "killed";
     init(shot, straight);
     init(shot, killed);
-    ASSERT_EQ(run("mc-sim", "--quiet --threads 1 --shot " + shot.string() + " --out " + straight.string()), 0) << m_stderr;
+    ASSERT_EQ(run("mc-sim",
+                  "--quiet --threads 1 --shot " + shot.string() + " --out " + straight.string()),
+              0)
+        << m_stderr;
 
     // start, wait for frame 3's cache, SIGKILL
-    const std::string bin = (kBin / "mc-sim").string(), shot_arg = shot.string(), out_arg = killed.string();
-    std::vector<const char*> argv = {bin.c_str(), "--quiet", "--threads", "1", "--shot", shot_arg.c_str(),
-                                     "--out", out_arg.c_str(), nullptr};
+    const std::string bin = (kBin / "mc-sim").string(), shot_arg = shot.string(),
+                      out_arg = killed.string();
+    std::vector<const char*> argv = {bin.c_str(),      "--quiet", "--threads",     "1",    "--shot",
+                                     shot_arg.c_str(), "--out",   out_arg.c_str(), nullptr};
     pid_t pid = 0;
-    ASSERT_EQ(posix_spawn(&pid, bin.c_str(), nullptr, nullptr, const_cast<char* const*>(argv.data()), environ), 0);
+    ASSERT_EQ(posix_spawn(&pid, bin.c_str(), nullptr, nullptr,
+                          const_cast<char* const*>(argv.data()), environ),
+              0);
     const fs::path frame3 = killed / "sim" / "particles.0003.vdb";
     const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(120);
     while (!fs::exists(frame3) && std::chrono::steady_clock::now() < deadline)
@@ -176,7 +193,10 @@ TEST_F(McSimCli, KillThenResumeGivesByteIdenticalCaches) {
     EXPECT_FALSE(fs::exists(killed / "sim" / "manifest.json"));
     EXPECT_FALSE(fs::exists(killed / "sim" / "particles.0010.vdb"));
 
-    ASSERT_EQ(run("mc-sim", "--resume --threads 1 --shot " + shot.string() + " --out " + killed.string()), 0) << m_stderr;
+    ASSERT_EQ(
+        run("mc-sim", "--resume --threads 1 --shot " + shot.string() + " --out " + killed.string()),
+        0)
+        << m_stderr;
     EXPECT_NE(m_stderr.find("resuming from"), std::string::npos) << m_stderr;
     expect_identical_caches(straight / "sim", killed / "sim", 10);
     const nlohmann::json m = nlohmann::json::parse(read_text(killed / "sim" / "manifest.json"));
@@ -206,7 +226,8 @@ TEST_F(McSimCli, UnstableShotStopsWithFrameAndParticle) {
     // either the velocity-CFL guard or the finite-ness check stops it, with a reason, once the
     // retries at half the dt each (each one logged) reach their floor
     EXPECT_TRUE(m_stderr.find("non-finite") != std::string::npos ||
-                m_stderr.find("unstable") != std::string::npos) << m_stderr;
+                m_stderr.find("unstable") != std::string::npos)
+        << m_stderr;
     EXPECT_NE(m_stderr.find("mc-sim: retry: frame 1 substep 1"), std::string::npos) << m_stderr;
     EXPECT_NE(m_stderr.find("halved 10 times"), std::string::npos) << m_stderr;
     EXPECT_FALSE(fs::exists(out / "sim" / "manifest.json"));
@@ -218,11 +239,14 @@ TEST_F(McSimCli, FailureKeepsEarlierFramesAndWritesNoManifest) {
     const fs::path shot = write_shot("nan", block_shot(R"({ "start": 1, "end": 4, "fps": 96 })"));
     const fs::path out = m_dir / "out";
     init(shot, out);
-    EXPECT_EQ(run("mc-sim", "--threads 1 --inject-nan-at-frame 3 --shot " + shot.string() + " --out " + out.string()), 1);
+    EXPECT_EQ(run("mc-sim", "--threads 1 --inject-nan-at-frame 3 --shot " + shot.string() +
+                                " --out " + out.string()),
+              1);
     EXPECT_NE(m_stderr.find("error: frame 3 substep 1"), std::string::npos) << m_stderr;
     EXPECT_NE(m_stderr.find("particle 0 "), std::string::npos) << m_stderr;
     EXPECT_NE(m_stderr.find("frames 1-2 are kept"), std::string::npos) << m_stderr;
-    EXPECT_EQ(frame_files(out / "sim"), (std::vector<fs::path>{"particles.0001.vdb", "particles.0002.vdb"}));
+    EXPECT_EQ(frame_files(out / "sim"),
+              (std::vector<fs::path>{"particles.0001.vdb", "particles.0002.vdb"}));
     EXPECT_FALSE(fs::exists(out / "sim" / "manifest.json"));
     // the kept frames are complete caches
     EXPECT_EQ(read_points(out / "sim" / "particles.0002.vdb").P.size(), 405u);
@@ -230,22 +254,29 @@ TEST_F(McSimCli, FailureKeepsEarlierFramesAndWritesNoManifest) {
 
 TEST_F(McSimCli, FrameRangeStartsFromTheShotsFirstFrame) {
     // --frames 3-3 simulates frames 1-2 without writing them, so frame 3 is the same bytes
-    const fs::path shot = write_shot("range", block_shot(R"({ "start": 1, "end": 3, "fps": 192 })"));
+    const fs::path shot =
+        write_shot("range", block_shot(R"({ "start": 1, "end": 3, "fps": 192 })"));
     const fs::path full = m_dir / "full", part = m_dir / "part";
     init(shot, full);
     init(shot, part);
-    ASSERT_EQ(run("mc-sim", "--quiet --threads 1 --shot " + shot.string() + " --out " + full.string()), 0) << m_stderr;
-    ASSERT_EQ(run("mc-sim", "--quiet --threads 1 --frames 3 --shot " + shot.string() + " --out " + part.string()), 0)
+    ASSERT_EQ(
+        run("mc-sim", "--quiet --threads 1 --shot " + shot.string() + " --out " + full.string()), 0)
+        << m_stderr;
+    ASSERT_EQ(run("mc-sim", "--quiet --threads 1 --frames 3 --shot " + shot.string() + " --out " +
+                                part.string()),
+              0)
         << m_stderr;
     EXPECT_EQ(frame_files(part / "sim"), std::vector<fs::path>{"particles.0003.vdb"});
-    EXPECT_TRUE(read_text(full / "sim" / "particles.0003.vdb") == read_text(part / "sim" / "particles.0003.vdb"));
+    EXPECT_TRUE(read_text(full / "sim" / "particles.0003.vdb") ==
+                read_text(part / "sim" / "particles.0003.vdb"));
     const nlohmann::json m = nlohmann::json::parse(read_text(part / "sim" / "manifest.json"));
     EXPECT_EQ(m["frames"]["first"], 3);
     EXPECT_EQ(m["frames"]["count"], 1);
 }
 
 TEST_F(McSimCli, MissingInitIsAClearError) {
-    const fs::path shot = write_shot("noinit", block_shot(R"({ "start": 1, "end": 2, "fps": 96 })"));
+    const fs::path shot =
+        write_shot("noinit", block_shot(R"({ "start": 1, "end": 2, "fps": 96 })"));
     EXPECT_EQ(run("mc-sim", "--shot " + shot.string() + " --out " + (m_dir / "out").string()), 1);
     EXPECT_NE(m_stderr.find("run mc-init first"), std::string::npos) << m_stderr;
     EXPECT_FALSE(fs::exists(m_dir / "out" / "sim" / "manifest.json"));
@@ -255,7 +286,8 @@ TEST_F(McSimCli, StaleInitIsRefused) {
     const fs::path out = m_dir / "out";
     init(write_shot("stale", block_shot(R"({ "start": 1, "end": 2, "fps": 96 })")), out);
     // the same shot with a different lattice: the init outputs no longer match it
-    const fs::path changed = write_shot("stale", block_shot(R"({ "start": 1, "end": 2, "fps": 96 })", "", 0.02));
+    const fs::path changed =
+        write_shot("stale", block_shot(R"({ "start": 1, "end": 2, "fps": 96 })", "", 0.02));
     EXPECT_EQ(run("mc-sim", "--shot " + changed.string() + " --out " + out.string()), 1);
     EXPECT_NE(m_stderr.find("stale"), std::string::npos) << m_stderr;
     EXPECT_NE(m_stderr.find("mc-init"), std::string::npos) << m_stderr;
@@ -264,10 +296,12 @@ TEST_F(McSimCli, StaleInitIsRefused) {
 TEST_F(McSimCli, MoistureLessShotCachesAndAllocatesNoMoisture) {
     // with surfacing on, a moisture shot would cache saturation and Jw; this one has no moisture
     const fs::path shot = write_shot("dry", block_shot(R"({ "start": 1, "end": 2, "fps": 96 })",
-                                                        R"(, "surfacing": { "mode": "ours" })"));
+                                                       R"(, "surfacing": { "mode": "ours" })"));
     const fs::path out = m_dir / "out";
     init(shot, out);
-    ASSERT_EQ(run("mc-sim", "--quiet --threads 1 --shot " + shot.string() + " --out " + out.string()), 0) << m_stderr;
+    ASSERT_EQ(
+        run("mc-sim", "--quiet --threads 1 --shot " + shot.string() + " --out " + out.string()), 0)
+        << m_stderr;
     const PointCloud frame = read_points(out / "sim" / "particles.0002.vdb");
     EXPECT_EQ(frame.find_float("theta"), nullptr);
     EXPECT_EQ(frame.find_float("saturation"), nullptr);

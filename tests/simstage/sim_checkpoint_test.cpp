@@ -21,7 +21,8 @@ using namespace mudcrack;
 namespace {
 
 fs::path temp_dir(const std::string& name) {
-    const fs::path dir = fs::temp_directory_path() / ("mudcrack_simstage_" + name + "_" + std::to_string(::getpid()));
+    const fs::path dir = fs::temp_directory_path() /
+                         ("mudcrack_simstage_" + name + "_" + std::to_string(::getpid()));
     fs::remove_all(dir);
     fs::create_directories(dir);
     return dir;
@@ -29,10 +30,13 @@ fs::path temp_dir(const std::string& name) {
 
 template <class T>
 bool same_bits(const std::vector<T>& a, const std::vector<T>& b) {
-    return a.size() == b.size() && (a.empty() || std::memcmp(a.data(), b.data(), a.size() * sizeof(T)) == 0);
+    return a.size() == b.size() &&
+           (a.empty() || std::memcmp(a.data(), b.data(), a.size() * sizeof(T)) == 0);
 }
 
-bool same_bits(const Vec3& a, const Vec3& b) { return std::memcmp(a.data(), b.data(), sizeof(Vec3)) == 0; }
+bool same_bits(const Vec3& a, const Vec3& b) {
+    return std::memcmp(a.data(), b.data(), sizeof(Vec3)) == 0;
+}
 
 // every array and scalar of the state, bit for bit (the workspace is scratch)
 void expect_same_state(const SimState& a, const SimState& b) {
@@ -203,13 +207,15 @@ void fill_random_bits(std::vector<T>& values, size_t n, std::mt19937_64& rng) {
 std::map<std::string, std::string> array_bytes(const SimState& s) {
     std::map<std::string, std::string> out;
     s.for_each_array([&](const char* name, const auto& array, ArrayPresence) {
-        out[name].assign(reinterpret_cast<const char*>(array.data()), array.size() * sizeof(array[0]));
+        out[name].assign(reinterpret_cast<const char*>(array.data()),
+                         array.size() * sizeof(array[0]));
     });
     return out;
 }
 
 TEST(SimCheckpoint, EveryTableArrayRoundTripsBitForBit) {
-    // driven by MC_SIM_STATE_ARRAYS, so an array added to the table is covered without editing this test
+    // driven by MC_SIM_STATE_ARRAYS, so an array added to the table is covered without editing this
+    // test
     const fs::path dir = temp_dir("table");
     for (const bool is_optional_empty : {false, true}) {
         std::mt19937_64 rng(is_optional_empty ? 7 : 11);
@@ -218,8 +224,10 @@ TEST(SimCheckpoint, EveryTableArrayRoundTripsBitForBit) {
         size_t arrays = 0;
         saved.state.for_each_array([&](const char*, auto& array, ArrayPresence presence) {
             ++arrays;
-            if (presence == ArrayPresence::Optional && is_optional_empty) array.clear();
-            else fill_random_bits(array, n, rng);
+            if (presence == ArrayPresence::Optional && is_optional_empty)
+                array.clear();
+            else
+                fill_random_bits(array, n, rng);
         });
         ASSERT_GE(arrays, 13u);
         const fs::path file = checkpoint_path(dir, saved.frame);
@@ -241,10 +249,11 @@ TEST(SimCheckpoint, SavesEveryStateField) {
     // SimState's size changes when a field is added; the checkpoint must then save it too
     // (sim_checkpoint.cpp), or a resumed run silently diverges. Update this number with it.
     constexpr size_t kVectors = 13, kVec3s = 2;
-    constexpr size_t kExpected = sizeof(double) + sizeof(int64_t) + kVectors * sizeof(std::vector<Real>) +
-                                 kVec3s * sizeof(Vec3) + sizeof(MoistureFluxHistory) +
-                                 sizeof(Scratch<SimWorkspace>);
-    EXPECT_EQ(sizeof(SimState), kExpected) << "SimState gained or lost a field: update sim_checkpoint.cpp";
+    constexpr size_t kExpected = sizeof(double) + sizeof(int64_t) +
+                                 kVectors * sizeof(std::vector<Real>) + kVec3s * sizeof(Vec3) +
+                                 sizeof(MoistureFluxHistory) + sizeof(Scratch<SimWorkspace>);
+    EXPECT_EQ(sizeof(SimState), kExpected)
+        << "SimState gained or lost a field: update sim_checkpoint.cpp";
 }
 
 TEST(SimCheckpoint, CorruptionAndTruncationAreRefused) {
@@ -344,7 +353,8 @@ void expect_bitwise_resume(const SimModel& model, const fs::path& dir) {
     SimState straight = small_state(model);
     SimTotals straight_totals;
     RetryingStepper straight_stepper;
-    for (int frame = 1; frame <= 3; ++frame) advance_frame(model, straight, frame, straight_stepper, straight_totals);
+    for (int frame = 1; frame <= 3; ++frame)
+        advance_frame(model, straight, frame, straight_stepper, straight_totals);
 
     // interrupted after frame 1: saved, read back into a fresh state (no workspace), continued
     SimState first_part = small_state(model);
@@ -357,7 +367,8 @@ void expect_bitwise_resume(const SimModel& model, const fs::path& dir) {
     SimCheckpoint resumed = read_sim_checkpoint(checkpoint_path(dir, 1));
     EXPECT_EQ(resumed.state.workspace, nullptr);
     RetryingStepper resumed_stepper;
-    for (int frame = 2; frame <= 3; ++frame) advance_frame(model, resumed.state, frame, resumed_stepper, resumed.totals);
+    for (int frame = 2; frame <= 3; ++frame)
+        advance_frame(model, resumed.state, frame, resumed_stepper, resumed.totals);
 
     EXPECT_GT(straight.step_count, 32);
     expect_same_state(straight, resumed.state);
@@ -368,11 +379,13 @@ void expect_bitwise_resume(const SimModel& model, const fs::path& dir) {
 }
 
 TEST_F(SimFrameStepper, ResumeFromCheckpointIsBitwiseIdentical) {
-    set_thread_count(2);  // bitwise determinism is promised per thread count: test the parallel path
+    // bitwise determinism is promised per thread count: test the parallel path
+    set_thread_count(2);
     for (bool moisture : {false, true}) {
         SCOPED_TRACE(moisture ? "with moisture" : "without moisture");
         SimModel model = small_model();
-        model.time.fps = 192;  // ~12 substeps a frame: 3 frames cross the particle re-sorts (every 16)
+        // ~12 substeps a frame: 3 frames cross the particle re-sorts (every 16)
+        model.time.fps = 192;
         // with moisture the CG's flux history carries from step to step outside the state
         if (moisture) model.moisture = MoistureParams{};
         expect_bitwise_resume(model, temp_dir(moisture ? "resume_moist" : "resume"));
@@ -389,8 +402,8 @@ TEST_F(SimFrameStepper, FailedSubstepsAreRetriedAndResumeStaysBitwise) {
 
     // without retries the run stops: the case is one that needs them
     SimState plain = small_state(model);
-    EXPECT_THROW(
-        for (int i = 0; i < 60; ++i) step(model, plain, stable_dt(model, plain)), RuntimeError);
+    EXPECT_THROW(for (int i = 0; i < 60; ++i) step(model, plain, stable_dt(model, plain)),
+                 RuntimeError);
 
     SimState state = small_state(model);
     SimTotals totals;

@@ -29,7 +29,8 @@ using test::box_lattice;
 using test::LatticeUv;
 
 /// An affine frame x = A X + b with Fe = Fe_value and uniform Jw.
-ParticleFrame affine_frame(const TetMesh& mesh, const Mat3& A, const Vec3& b, const Mat3& Fe, float jw, int frame = 1) {
+ParticleFrame affine_frame(const TetMesh& mesh, const Mat3& A, const Vec3& b, const Mat3& Fe,
+                           float jw, int frame = 1) {
     ParticleFrame f;
     f.frame = frame;
     for (const Vec3& X : mesh.X) {
@@ -58,13 +59,15 @@ double enclosed_volume(const std::vector<Tri>& faces, const Pos& pos) {
     for (const auto& [e, n] : directed) {
         if (n != 1) return ::testing::AssertionFailure() << "directed edge used " << n << " times";
         const auto it = directed.find({e.second, e.first});
-        if (it == directed.end()) return ::testing::AssertionFailure() << "edge without an opposite half-edge";
+        if (it == directed.end())
+            return ::testing::AssertionFailure() << "edge without an opposite half-edge";
     }
     return ::testing::AssertionSuccess() << directed.size() / 2 << " edges";
 }
 
-std::vector<std::array<uint64_t, 3>> faces_by_key(const TriMesh& mesh, const std::vector<uint64_t>& key,
-                                                 int fragment = -1) {
+std::vector<std::array<uint64_t, 3>> faces_by_key(const TriMesh& mesh,
+                                                  const std::vector<uint64_t>& key,
+                                                  int fragment = -1) {
     std::vector<std::array<uint64_t, 3>> out;
     for (size_t f = 0; f < mesh.faces.size(); ++f)
         if (fragment < 0 || mesh.face_fragment[f] == fragment)
@@ -88,7 +91,9 @@ double rest_volume(const TetMesh& mesh) {
     return v;
 }
 
-Mat3 rotation(double angle, const Vec3& axis) { return Eigen::AngleAxis<Real>(angle, axis.normalized()).toRotationMatrix(); }
+Mat3 rotation(double angle, const Vec3& axis) {
+    return Eigen::AngleAxis<Real>(angle, axis.normalized()).toRotationMatrix();
+}
 
 void expect_same_mesh(const TriMesh& a, const TriMesh& b) {
     EXPECT_EQ(a.positions, b.positions);
@@ -106,7 +111,8 @@ TEST(CoreTopology, LatticeCountsMatchTheKuhnSplit) {
     const CoreTopology topo = build_core_topology(mesh);
     const int64_t axis_edges = int64_t(nx) * (ny + 1) * (nz + 1) + int64_t(nx + 1) * ny * (nz + 1) +
                                int64_t(nx + 1) * (ny + 1) * nz;
-    const int64_t face_diagonals = int64_t(nx) * ny * (nz + 1) + int64_t(nx) * (ny + 1) * nz + int64_t(nx + 1) * ny * nz;
+    const int64_t face_diagonals =
+        int64_t(nx) * ny * (nz + 1) + int64_t(nx) * (ny + 1) * nz + int64_t(nx + 1) * ny * nz;
     const int64_t body_diagonals = int64_t(nx) * ny * nz;
     EXPECT_EQ(topo.n_edges(), axis_edges + face_diagonals + body_diagonals);
     EXPECT_EQ(topo.n_tets(), 6 * nx * ny * nz);
@@ -143,7 +149,8 @@ TEST(CoreTopology, RejectsBadMeshes) {
         build_core_topology(out_of_range);
         FAIL() << "expected InputError";
     } catch (const InputError& e) {
-        EXPECT_NE(std::string(e.what()).find("tet 0 corner 2 = 1000"), std::string::npos) << e.what();
+        EXPECT_NE(std::string(e.what()).find("tet 0 corner 2 = 1000"), std::string::npos)
+            << e.what();
     }
 }
 
@@ -184,7 +191,7 @@ TEST(BreakThreshold, FollowsEq14AndItsVariants) {
 
 struct IntactCase {
     const char* name;
-    Mat3 A;       // x = A X + b
+    Mat3 A;  // x = A X + b
     Mat3 Fe;
     float jw;
     SurfaceMode mode;
@@ -216,7 +223,8 @@ TEST(SurfaceFrame, IntactBoundaryIsClosedAndEnclosesTheParticleVolume) {
         // the particles' current volume: sum V0 det(F)
         const double expected = v0 * c.A.determinant();
         EXPECT_NEAR(mesh_volume(out.boundary), expected, 0.01 * expected) << c.name;
-        EXPECT_NEAR(mesh_volume(out.boundary), expected, 1e-5 * expected) << c.name << " (float round-off only)";
+        EXPECT_NEAR(mesh_volume(out.boundary), expected, 1e-5 * expected)
+            << c.name << " (float round-off only)";
         // attributes carried per vertex
         ASSERT_EQ(out.boundary.saturation.size(), out.boundary.positions.size());
         EXPECT_FLOAT_EQ(out.boundary.saturation[0], 0.5f);
@@ -227,10 +235,12 @@ TEST(SurfaceFrame, IntactBoundaryIsClosedAndEnclosesTheParticleVolume) {
 }
 
 TEST(SurfaceFrame, NormalsPointOutward) {
-    const TetMesh mesh = box_lattice(3, 3, 3, 0.1, LatticeUv::Continuous, Vec3(-0.15, -0.15, -0.15));
+    const TetMesh mesh =
+        box_lattice(3, 3, 3, 0.1, LatticeUv::Continuous, Vec3(-0.15, -0.15, -0.15));
     const CoreTopology topo = build_core_topology(mesh);
-    const SurfacedFrame out = surface_frame(topo, affine_frame(mesh, Mat3::Identity(), Vec3::Zero(), Mat3::Identity(), 1),
-                                            no_edge_breaks(topo), SurfaceParams{});
+    const SurfacedFrame out =
+        surface_frame(topo, affine_frame(mesh, Mat3::Identity(), Vec3::Zero(), Mat3::Identity(), 1),
+                      no_edge_breaks(topo), SurfaceParams{});
     // the box is centred at the origin: outward normals point away from it
     for (size_t v = 0; v < out.boundary.positions.size(); ++v)
         EXPECT_GT(out.boundary.normals[v].dot(out.boundary.positions[v]), 0.f) << "vertex " << v;
@@ -241,12 +251,13 @@ TEST(SurfaceFrame, BoundaryUvsMatchTheInitUvsOnAnUndeformedFrame) {
         const TetMesh mesh = box_lattice(3, 2, 4, 0.1, kind);
         const CoreTopology topo = build_core_topology(mesh);
         const SurfacedFrame out = surface_frame(
-            topo, affine_frame(mesh, Mat3::Identity(), Vec3::Zero(), Mat3::Identity(), 1), no_edge_breaks(topo),
-            SurfaceParams{});
+            topo, affine_frame(mesh, Mat3::Identity(), Vec3::Zero(), Mat3::Identity(), 1),
+            no_edge_breaks(topo), SurfaceParams{});
         const TriMesh& b = out.boundary;
         ASSERT_EQ(b.faces.size(), 6 * mesh.boundary.size());
         for (size_t f = 0; f < b.faces.size(); ++f) {
-            // skin triangle f lies in boundary face f / 6: interpolate that face's UVs at the vertex
+            // skin triangle f lies in boundary face f / 6: interpolate that face's UVs at the
+            // vertex
             const Tri& bf = mesh.boundary[f / 6];
             const Vec3 a = mesh.X[bf[0]], e1 = mesh.X[bf[1]] - a, e2 = mesh.X[bf[2]] - a;
             Eigen::Matrix<Real, 3, 2> E;
@@ -255,8 +266,10 @@ TEST(SurfaceFrame, BoundaryUvsMatchTheInitUvsOnAnUndeformedFrame) {
                 const int v = b.faces[f][c];
                 const Vec2 w = E.colPivHouseholderQr().solve(b.positions[v].cast<Real>() - a);
                 const auto& fuv = mesh.boundary_uv[f / 6];
-                const Vec2 expected = (1 - w.x() - w.y()) * fuv[0] + w.x() * fuv[1] + w.y() * fuv[2];
-                EXPECT_NEAR((b.uvs[v].cast<Real>() - expected).norm(), 0, tol::kFloat) << "face " << f << " corner " << c;
+                const Vec2 expected =
+                    (1 - w.x() - w.y()) * fuv[0] + w.x() * fuv[1] + w.y() * fuv[2];
+                EXPECT_NEAR((b.uvs[v].cast<Real>() - expected).norm(), 0, tol::kFloat)
+                    << "face " << f << " corner " << c;
             }
         }
         // seams split vertices but not the surface: closed by weld key
@@ -282,9 +295,11 @@ ParticleFrame wavy_frame(const TetMesh& mesh, int frame, double amplitude) {
     ParticleFrame f;
     f.frame = frame;
     for (const Vec3& X : mesh.X) {
-        const Vec3 u = amplitude * Vec3(std::sin(7 * X.y()), std::sin(5 * X.z() + 1), std::cos(6 * X.x()));
+        const Vec3 u =
+            amplitude * Vec3(std::sin(7 * X.y()), std::sin(5 * X.z() + 1), std::cos(6 * X.x()));
         f.P.push_back((X + u).cast<float>());
-        f.Fe.push_back((rotation(amplitude * 3 * X.x(), Vec3(0, 1, 0)) * (1 + amplitude * X.y())).cast<float>());
+        f.Fe.push_back((rotation(amplitude * 3 * X.x(), Vec3(0, 1, 0)) * (1 + amplitude * X.y()))
+                           .cast<float>());
         f.Jw.push_back(float(1 - 0.4 * X.x()));
         f.saturation.push_back(float(X.z()));
         f.alpha.push_back(float(-X.y()));
@@ -297,7 +312,8 @@ TEST(SurfaceFrame, EveryFragmentIsClosedAndCracksAppearExactlyAtBrokenInterfaces
     const CoreTopology topo = build_core_topology(mesh);
     for (double fraction : {0.05, 0.3, 0.8}) {
         const std::vector<int32_t> fb = random_breaks(topo, fraction, 7);
-        const SurfacedFrame out = surface_frame(topo, wavy_frame(mesh, 1, 0.02), fb, SurfaceParams{});
+        const SurfacedFrame out =
+            surface_frame(topo, wavy_frame(mesh, 1, 0.02), fb, SurfaceParams{});
         // crack faces: 2 sides x 2 interface triangles per incident tet of each broken edge
         int64_t expected = 0;
         for (int32_t e = 0; e < topo.n_edges(); ++e)
@@ -318,7 +334,8 @@ TEST(SurfaceFrame, EveryFragmentIsClosedAndCracksAppearExactlyAtBrokenInterfaces
             auto faces = faces_by_key(out.boundary, out.boundary_weld_key, frag);
             const auto crack = faces_by_key(out.crack, out.crack_weld_key, frag);
             faces.insert(faces.end(), crack.begin(), crack.end());
-            ASSERT_TRUE(is_closed_oriented(faces)) << "fraction " << fraction << " fragment " << frag;
+            ASSERT_TRUE(is_closed_oriented(faces))
+                << "fraction " << fraction << " fragment " << frag;
         }
     }
 }
@@ -401,7 +418,8 @@ TEST(SurfaceFrame, CracksOffBuildsNoCrackFacesButStillSplitsTheBoundary) {
     SurfaceParams on, off;
     off.cracks = false;
     const ParticleFrame frame = wavy_frame(mesh, 1, 0.02);
-    const SurfacedFrame a = surface_frame(topo, frame, fb, on), b = surface_frame(topo, frame, fb, off);
+    const SurfacedFrame a = surface_frame(topo, frame, fb, on),
+                        b = surface_frame(topo, frame, fb, off);
     EXPECT_TRUE(b.crack.faces.empty());
     EXPECT_TRUE(b.crack.positions.empty());
     expect_same_mesh(a.boundary, b.boundary);
@@ -416,10 +434,12 @@ TEST(SurfaceFrame, SmallFragmentsAreCulled) {
     std::vector<int32_t> fb = no_edge_breaks(topo);
     for (int32_t e = 0; e < topo.n_edges(); ++e)
         if (topo.edges[e][0] == 0) fb[e] = 1;
-    const ParticleFrame frame = affine_frame(mesh, Mat3::Identity(), Vec3::Zero(), Mat3::Identity(), 1);
+    const ParticleFrame frame =
+        affine_frame(mesh, Mat3::Identity(), Vec3::Zero(), Mat3::Identity(), 1);
     SurfaceParams keep, cull;
     cull.min_fragment_particles = 2;
-    const SurfacedFrame a = surface_frame(topo, frame, fb, keep), b = surface_frame(topo, frame, fb, cull);
+    const SurfacedFrame a = surface_frame(topo, frame, fb, keep),
+                        b = surface_frame(topo, frame, fb, cull);
     EXPECT_EQ(a.fragments, 2);
     EXPECT_EQ(b.fragments, 1);
     EXPECT_EQ(b.culled_fragments, 1);
@@ -435,13 +455,15 @@ TEST(SurfaceFrame, SmallFragmentsAreCulled) {
 TEST(SurfaceFrame, RejectsFramesOfAnotherMesh) {
     const TetMesh mesh = box_lattice(2, 2, 2, 0.1);
     const CoreTopology topo = build_core_topology(mesh);
-    ParticleFrame frame = affine_frame(mesh, Mat3::Identity(), Vec3::Zero(), Mat3::Identity(), 1, 12);
+    ParticleFrame frame =
+        affine_frame(mesh, Mat3::Identity(), Vec3::Zero(), Mat3::Identity(), 1, 12);
     frame.P.pop_back();
     try {
         surface_frame(topo, frame, no_edge_breaks(topo), SurfaceParams{});
         FAIL() << "expected InputError";
     } catch (const InputError& e) {
-        EXPECT_NE(std::string(e.what()).find("frame 12: has 26 particles; the tet mesh has 27"), std::string::npos)
+        EXPECT_NE(std::string(e.what()).find("frame 12: has 26 particles; the tet mesh has 27"),
+                  std::string::npos)
             << e.what();
     }
     frame = affine_frame(mesh, Mat3::Identity(), Vec3::Zero(), Mat3::Identity(), 1, 12);
@@ -492,11 +514,13 @@ TEST(EdgeBreaks, OursBreaksMoreInTheDryRegionThanWang2019) {
         }
         return c;
     };
-    const int64_t ours_dry = count(SurfaceMode::Ours, true), wang_dry = count(SurfaceMode::Wang2019, true);
-    const int64_t ours_wet = count(SurfaceMode::Ours, false), wang_wet = count(SurfaceMode::Wang2019, false);
-    EXPECT_GT(wang_dry, 0);                 // the stretch alone breaks some edges
-    EXPECT_GT(ours_dry, 2 * wang_dry);      // Eq. 14 lowers the threshold where Jw < 1
-    EXPECT_EQ(ours_wet, wang_wet);          // and changes nothing where Jw = 1
+    const int64_t ours_dry = count(SurfaceMode::Ours, true),
+                  wang_dry = count(SurfaceMode::Wang2019, true);
+    const int64_t ours_wet = count(SurfaceMode::Ours, false),
+                  wang_wet = count(SurfaceMode::Wang2019, false);
+    EXPECT_GT(wang_dry, 0);             // the stretch alone breaks some edges
+    EXPECT_GT(ours_dry, 2 * wang_dry);  // Eq. 14 lowers the threshold where Jw < 1
+    EXPECT_EQ(ours_wet, wang_wet);      // and changes nothing where Jw = 1
     EXPECT_GT(ours_dry, ours_wet);
 }
 
@@ -523,9 +547,11 @@ TEST(FrameOrder, BreakHistoryAndMeshesDoNotDependOnOrderOrThreads) {
     SurfaceParams params;
     params.zeta = 1.6;
     // history in order, in reverse, and per frame merged
-    std::vector<int32_t> forward = no_edge_breaks(topo), reverse = no_edge_breaks(topo), merged = no_edge_breaks(topo);
+    std::vector<int32_t> forward = no_edge_breaks(topo), reverse = no_edge_breaks(topo),
+                         merged = no_edge_breaks(topo);
     for (const auto& f : frames) record_edge_breaks(topo, f, params, forward);
-    for (auto it = frames.rbegin(); it != frames.rend(); ++it) record_edge_breaks(topo, *it, params, reverse);
+    for (auto it = frames.rbegin(); it != frames.rend(); ++it)
+        record_edge_breaks(topo, *it, params, reverse);
     for (const auto& f : frames) {
         std::vector<int32_t> one = no_edge_breaks(topo);
         record_edge_breaks(topo, f, params, one);
@@ -541,11 +567,13 @@ TEST(FrameOrder, BreakHistoryAndMeshesDoNotDependOnOrderOrThreads) {
     for (const auto& f : frames) in_order.push_back(surface_frame(topo, f, forward, params));
     EXPECT_GT(in_order[3].crack.faces.size(), 0u);
     std::vector<SurfacedFrame> reversed(frames.size());
-    for (int i = int(frames.size()) - 1; i >= 0; --i) reversed[i] = surface_frame(topo, frames[i], reverse, params);
+    for (int i = int(frames.size()) - 1; i >= 0; --i)
+        reversed[i] = surface_frame(topo, frames[i], reverse, params);
     // frames in parallel (each frame single-threaded inside), and one frame on 1 thread
     std::vector<SurfacedFrame> parallel(frames.size());
 #pragma omp parallel for schedule(dynamic, 1) num_threads(2)
-    for (int i = 0; i < int(frames.size()); ++i) parallel[i] = surface_frame(topo, frames[i], merged, params);
+    for (int i = 0; i < int(frames.size()); ++i)
+        parallel[i] = surface_frame(topo, frames[i], merged, params);
     const int threads = thread_count();
     set_thread_count(1);
     const SurfacedFrame serial = surface_frame(topo, frames[2], forward, params);

@@ -21,7 +21,8 @@ inline TetMesh box_lattice(int nx, int ny, int nz, double h, LatticeUv uv = Latt
     for (int k = 0; k <= nz; ++k)
         for (int j = 0; j <= ny; ++j)
             for (int i = 0; i <= nx; ++i) mesh.X.push_back(origin + h * Vec3(i, j, k));
-    const std::array<std::array<int, 3>, 6> perms = {{{0, 1, 2}, {0, 2, 1}, {1, 0, 2}, {1, 2, 0}, {2, 0, 1}, {2, 1, 0}}};
+    const std::array<std::array<int, 3>, 6> perms = {
+        {{0, 1, 2}, {0, 2, 1}, {1, 0, 2}, {1, 2, 0}, {2, 0, 1}, {2, 1, 0}}};
     for (int k = 0; k < nz; ++k)
         for (int j = 0; j < ny; ++j)
             for (int i = 0; i < nx; ++i)
@@ -33,7 +34,8 @@ inline TetMesh box_lattice(int nx, int ny, int nz, double h, LatticeUv uv = Latt
                         ++c[perm[s]];
                         t[s + 1] = id(c[0], c[1], c[2]);
                     }
-                    if (signed_tet_volume(mesh.X[t[0]], mesh.X[t[1]], mesh.X[t[2]], mesh.X[t[3]]) < 0)
+                    if (signed_tet_volume(mesh.X[t[0]], mesh.X[t[1]], mesh.X[t[2]], mesh.X[t[3]]) <
+                        0)
                         std::swap(t[2], t[3]);
                     mesh.tets.push_back(t);
                 }
@@ -57,8 +59,9 @@ inline TetMesh box_lattice(int nx, int ny, int nz, double h, LatticeUv uv = Latt
             std::array<Vec2, 3> fuv;
             for (int c = 0; c < 3; ++c) {
                 const Vec3& x = mesh.X[f[c]];
-                fuv[c] = uv == LatticeUv::Continuous ? Vec2(x.x() + 0.5 * x.z(), x.y() - 0.25 * x.z())
-                                                     : triplanar_uv(x, dominant_axis(n), 2.0);
+                fuv[c] = uv == LatticeUv::Continuous
+                             ? Vec2(x.x() + 0.5 * x.z(), x.y() - 0.25 * x.z())
+                             : triplanar_uv(x, dominant_axis(n), 2.0);
             }
             mesh.boundary_uv.push_back(fuv);
         }

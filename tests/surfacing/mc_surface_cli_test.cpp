@@ -71,7 +71,8 @@ protected:
         nlohmann::json init = make_manifest("init", m_shot.path, m_shot.slice_hash(Stage::Init));
         init["outputs"] = {file_record(out / "init" / "tets.vtu")};
         write_manifest(out / "init", init);
-        for (int n = 1; n <= kFrames; ++n) write_points(cache(out, n), frame_to_points(frame(n)), 0.05);
+        for (int n = 1; n <= kFrames; ++n)
+            write_points(cache(out, n), frame_to_points(frame(n)), 0.05);
         json_manifest(out);
     }
     /// The sim manifest, recording the checksums of the caches there are now.
@@ -88,20 +89,26 @@ protected:
         f.frame = n;
         const double length = 0.4, k = 4 * M_PI / length, stretch = 0.25 * n;
         for (const Vec3& X : m_mesh.X) {
-            f.P.push_back(Vec3(X.x() + stretch / k * std::sin(k * X.x()), X.y(), X.z()).cast<float>());
+            f.P.push_back(
+                Vec3(X.x() + stretch / k * std::sin(k * X.x()), X.y(), X.z()).cast<float>());
             f.Jw.push_back(X.x() < length / 2 ? 1.f - 0.08f * n : 1.f);
             f.saturation.push_back(X.x() < length / 2 ? 1.f - 0.2f * n : 1.f);
             f.alpha.push_back(-0.01f * n);
-            f.Fe.push_back(Eigen::AngleAxis<Real>(0.1 * n * X.y(), Vec3(0, 0, 1)).toRotationMatrix().cast<float>());
+            f.Fe.push_back(Eigen::AngleAxis<Real>(0.1 * n * X.y(), Vec3(0, 0, 1))
+                               .toRotationMatrix()
+                               .cast<float>());
         }
         return f;
     }
-    static fs::path cache(const fs::path& out, int n) { return frame_path(out / "sim", "particles", n, "vdb"); }
+    static fs::path cache(const fs::path& out, int n) {
+        return frame_path(out / "sim", "particles", n, "vdb");
+    }
 
     CliRun mc_surface(const fs::path& out, const std::string& args = "") const {
         const fs::path o = m_dir / "stdout.txt", e = m_dir / "stderr.txt";
-        const std::string cmd = std::string(MUDCRACK_BIN_DIR) + "/mc-surface --shot " + m_shot_path.string() +
-                                " --out " + out.string() + " " + args + " >" + o.string() + " 2>" + e.string();
+        const std::string cmd = std::string(MUDCRACK_BIN_DIR) + "/mc-surface --shot " +
+                                m_shot_path.string() + " --out " + out.string() + " " + args +
+                                " >" + o.string() + " 2>" + e.string();
         const int status = std::system(cmd.c_str());
         return {WIFEXITED(status) ? WEXITSTATUS(status) : -1, read_bytes(o), read_bytes(e)};
     }
@@ -112,7 +119,8 @@ protected:
 };
 
 TEST_F(McSurfaceCli, NoArgumentsIsBadUsage) {
-    const int status = std::system((std::string(MUDCRACK_BIN_DIR) + "/mc-surface >/dev/null 2>&1").c_str());
+    const int status =
+        std::system((std::string(MUDCRACK_BIN_DIR) + "/mc-surface >/dev/null 2>&1").c_str());
     EXPECT_EQ(WEXITSTATUS(status), 2);
 }
 
@@ -171,7 +179,8 @@ TEST_F(McSurfaceCli, AFailedUpdateInPlaceKeepsThePreviousFiles) {
     ASSERT_EQ(mc_surface(out).code, 0);
     const fs::path surface = out / "surface";
     std::map<std::string, std::string> before;
-    for (const auto& e : fs::directory_iterator(surface)) before[e.path().filename().string()] = read_bytes(e.path());
+    for (const auto& e : fs::directory_iterator(surface))
+        before[e.path().filename().string()] = read_bytes(e.path());
     // --frames over the finished folder updates it in place. A disk that fills between a frame's
     // boundary mesh and its (larger) crack mesh: files limited to whole 512-byte blocks (ulimit
     // -f), SIGXFSZ ignored so the write fails with EFBIG
@@ -184,18 +193,21 @@ TEST_F(McSurfaceCli, AFailedUpdateInPlaceKeepsThePreviousFiles) {
         blocks = (before[crack].size() - 1) / 512;
         if (before[boundary].size() <= blocks * 512) frame = n;
     }
-    ASSERT_NE(frame, 0) << "no frame has a crack file larger than its boundary mesh by a 512-byte block";
+    ASSERT_NE(frame, 0)
+        << "no frame has a crack file larger than its boundary mesh by a 512-byte block";
     const fs::path e = m_dir / "stderr.txt";
     const std::string cmd = "trap '' XFSZ; ulimit -f " + std::to_string(blocks) + "; " +
-                            std::string(MUDCRACK_BIN_DIR) + "/mc-surface --threads 1 --shot " + m_shot_path.string() +
-                            " --out " + out.string() + " --frames " + std::to_string(frame) + " >/dev/null 2>" + e.string();
+                            std::string(MUDCRACK_BIN_DIR) + "/mc-surface --threads 1 --shot " +
+                            m_shot_path.string() + " --out " + out.string() + " --frames " +
+                            std::to_string(frame) + " >/dev/null 2>" + e.string();
     const int status = std::system(cmd.c_str());
     ASSERT_TRUE(WIFEXITED(status));
     EXPECT_EQ(WEXITSTATUS(status), 1) << read_bytes(e);
     EXPECT_NE(read_bytes(e).find("File too large"), std::string::npos) << read_bytes(e);
     // every file of the folder is as it was (crack meshes included), and nothing was added
     std::map<std::string, std::string> after;
-    for (const auto& f : fs::directory_iterator(surface)) after[f.path().filename().string()] = read_bytes(f.path());
+    for (const auto& f : fs::directory_iterator(surface))
+        after[f.path().filename().string()] = read_bytes(f.path());
     EXPECT_EQ(after.size(), before.size());
     for (const auto& [name, bytes] : before) {
         ASSERT_TRUE(after.count(name)) << name << " was lost";
@@ -209,8 +221,10 @@ TEST_F(McSurfaceCli, ObjAndWang2019Work) {
     write_inputs(out);
     const CliRun ours = mc_surface(out, "--format obj");
     ASSERT_EQ(ours.code, 0) << ours.err;
-    const int64_t ours_broken = read_manifest(out / "surface")["per_frame"][kFrames - 1]["broken_edges"];
-    const std::vector<TriMesh> back = import_meshes(frame_path(out / "surface", "boundary", 2, "obj"));
+    const int64_t ours_broken =
+        read_manifest(out / "surface")["per_frame"][kFrames - 1]["broken_edges"];
+    const std::vector<TriMesh> back =
+        import_meshes(frame_path(out / "surface", "boundary", 2, "obj"));
     ASSERT_EQ(back.size(), 1u);
     EXPECT_FALSE(back[0].uvs.empty());
     const CliRun wang = mc_surface(out, "--mode wang2019");
@@ -247,8 +261,10 @@ TEST_F(McSurfaceCli, ManifestBoundsAreTheBoundsOfTheFilesVertices) {
             ASSERT_TRUE(entry.contains("bounds")) << "frame " << n;
             ASSERT_TRUE(entry["bounds"].is_object()) << "frame " << n;
             for (int k = 0; k < 3; ++k) {
-                EXPECT_EQ(entry["bounds"]["min"][k].get<float>(), lo[k]) << "frame " << n << " axis " << k;
-                EXPECT_EQ(entry["bounds"]["max"][k].get<float>(), hi[k]) << "frame " << n << " axis " << k;
+                EXPECT_EQ(entry["bounds"]["min"][k].get<float>(), lo[k])
+                    << "frame " << n << " axis " << k;
+                EXPECT_EQ(entry["bounds"]["max"][k].get<float>(), hi[k])
+                    << "frame " << n << " axis " << k;
             }
         }
     }
@@ -332,11 +348,13 @@ TEST_F(McSurfaceCli, PlatesFramesInAnyOrderGiveByteIdenticalClosedPiecesAndDebri
         for (const char* stem : {"boundary", "crack"}) {
             if (entry[stem]["file"].is_null()) continue;
             const fs::path a = frame_path(in_order / "surface", stem, n, "glb");
-            EXPECT_EQ(read_bytes(a), read_bytes(frame_path(chunked / "surface", stem, n, "glb"))) << a;
+            EXPECT_EQ(read_bytes(a), read_bytes(frame_path(chunked / "surface", stem, n, "glb")))
+                << a;
         }
         const fs::path debris = frame_path(in_order / "surface", "debris", n, "ply");
         ASSERT_TRUE(fs::exists(debris)) << debris;
-        EXPECT_EQ(read_bytes(debris), read_bytes(frame_path(chunked / "surface", "debris", n, "ply")));
+        EXPECT_EQ(read_bytes(debris),
+                  read_bytes(frame_path(chunked / "surface", "debris", n, "ply")));
         EXPECT_EQ(entry["debris"]["points"], entry["debris_particles"]);
     }
     EXPECT_GT(m["per_frame"][kFrames - 1]["crack"]["faces"].get<int64_t>(), 0);
@@ -346,7 +364,8 @@ TEST_F(McSurfaceCli, PlatesBadInputNamesTheKeyAndWritesNothing) {
     const fs::path out = m_dir / "out";
     write_inputs(out);
     // a piece size wider than the soil (0.4 x 0.1 x 0.15 m; 100 cells of 0.05 m = 5 m)
-    std::ofstream(m_shot_path) << shot_with_surfacing(R"({ "mode": "plates", "min_piece_size": 100 })");
+    std::ofstream(m_shot_path) << shot_with_surfacing(
+        R"({ "mode": "plates", "min_piece_size": 100 })");
     CliRun r = mc_surface(out);
     EXPECT_EQ(r.code, 1);
     EXPECT_NE(r.err.find("/surfacing/min_piece_size = 100"), std::string::npos) << r.err;
@@ -357,9 +376,11 @@ TEST_F(McSurfaceCli, PlatesBadInputNamesTheKeyAndWritesNothing) {
     std::ofstream(m_shot_path) << shot_with_surfacing(R"({ "mode": "ours", "debris": "points" })");
     r = mc_surface(out);
     EXPECT_EQ(r.code, 1);
-    EXPECT_NE(r.err.find("/surfacing/debris = \"points\": needs /surfacing/mode = \"plates\""), std::string::npos)
+    EXPECT_NE(r.err.find("/surfacing/debris = \"points\": needs /surfacing/mode = \"plates\""),
+              std::string::npos)
         << r.err;
-    std::ofstream(m_shot_path) << shot_with_surfacing(R"({ "mode": "plates", "debris": "points" })");
+    std::ofstream(m_shot_path) << shot_with_surfacing(
+        R"({ "mode": "plates", "debris": "points" })");
     r = mc_surface(out, "--mode wang2019");
     EXPECT_EQ(r.code, 2);  // the flag is refused for this shot, as --frames past it is
     EXPECT_NE(r.err.find("--mode wang2019"), std::string::npos) << r.err;

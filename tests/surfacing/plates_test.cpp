@@ -22,7 +22,7 @@ namespace {
 
 using test::box_lattice;
 
-constexpr double kH = 0.1;          // lattice spacing [m]
+constexpr double kH = 0.1;  // lattice spacing [m]
 constexpr int kNx = 12, kNy = 3, kNz = 4;
 
 int column_of(const Vec3& X) { return int(std::lround(X.x() / kH)); }
@@ -36,7 +36,8 @@ struct TornSlab {
 
     TornSlab() {
         for (int32_t e = 0; e < topo.n_edges(); ++e) {
-            const int a = column_of(topo.X[topo.edges[e][0]]), b = column_of(topo.X[topo.edges[e][1]]);
+            const int a = column_of(topo.X[topo.edges[e][0]]),
+                      b = column_of(topo.X[topo.edges[e][1]]);
             if (a == 5 || a == 6 || b == 5 || b == 6) first_break[e] = 1;
         }
     }
@@ -95,7 +96,8 @@ bool is_closed(const SurfacedFrame& s, int32_t piece) {
     auto add = [&](const TriMesh& m, const std::vector<uint64_t>& key) {
         for (size_t f = 0; f < m.faces.size(); ++f)
             if (m.face_fragment[f] == piece)
-                for (int k = 0; k < 3; ++k) ++directed[{key[m.faces[f][k]], key[m.faces[f][(k + 1) % 3]]}];
+                for (int k = 0; k < 3; ++k)
+                    ++directed[{key[m.faces[f][k]], key[m.faces[f][(k + 1) % 3]]}];
     };
     add(s.boundary, s.boundary_weld_key);
     add(s.crack, s.crack_weld_key);
@@ -118,9 +120,10 @@ TEST(PieceWidth, IsTheSmallerInPlaneSideOfALatticeSlab) {
                 }
         return piece_width(sum, outer, int64_t(nx) * ny * nz, a);
     };
-    EXPECT_NEAR(width(20, 3, 10, 0.01), 0.10, tol::kRoundoffLoose);  // a crust plate: its short side
-    EXPECT_NEAR(width(10, 1, 1, 0.01), 0.01, tol::kRoundoffLoose);   // a sliver: its thickness
-    EXPECT_NEAR(width(1, 1, 1, 0.01), 0.01, tol::kRoundoff);         // one particle: the spacing
+    // a crust plate: its short side
+    EXPECT_NEAR(width(20, 3, 10, 0.01), 0.10, tol::kRoundoffLoose);
+    EXPECT_NEAR(width(10, 1, 1, 0.01), 0.01, tol::kRoundoffLoose);  // a sliver: its thickness
+    EXPECT_NEAR(width(1, 1, 1, 0.01), 0.01, tol::kRoundoff);        // one particle: the spacing
 }
 
 TEST(Pieces, ATornBandOfKnownWidthBecomesTwoPiecesWithOneWallEach) {
@@ -136,17 +139,21 @@ TEST(Pieces, ATornBandOfKnownWidthBecomesTwoPiecesWithOneWallEach) {
         EXPECT_EQ(pieces.id[p], column_of(slab.topo.X[p]) <= 5 ? 0 : 8) << "particle " << p;
     // the only cut edges are those between columns 5 and 6: one wall
     for (int32_t e = 0; e < slab.topo.n_edges(); ++e) {
-        const int a = column_of(slab.topo.X[slab.topo.edges[e][0]]), b = column_of(slab.topo.X[slab.topo.edges[e][1]]);
-        EXPECT_EQ(pieces.is_cut[e] != 0, std::min(a, b) == 5 && std::max(a, b) == 6) << "edge " << e;
+        const int a = column_of(slab.topo.X[slab.topo.edges[e][0]]),
+                  b = column_of(slab.topo.X[slab.topo.edges[e][1]]);
+        EXPECT_EQ(pieces.is_cut[e] != 0, std::min(a, b) == 5 && std::max(a, b) == 6)
+            << "edge " << e;
     }
 
     const SurfacedFrame s = surface_frame(slab.topo, frame, slab.first_break, plates_params());
     EXPECT_EQ(s.fragments, 2);
     std::set<int32_t> ids(s.boundary.face_fragment.begin(), s.boundary.face_fragment.end());
-    EXPECT_EQ(ids, (std::set<int32_t>{0, 8}));  // particle 8: the first of column 8, the first untorn one
+    // particle 8: the first of column 8, the first untorn one
+    EXPECT_EQ(ids, (std::set<int32_t>{0, 8}));
     for (int32_t piece : {0, 8}) {
         EXPECT_TRUE(is_closed(s, piece)) << "piece " << piece;
-        EXPECT_EQ(count_sheets(s.crack, s.crack_weld_key, piece), 1) << "piece " << piece << ": one wall";
+        EXPECT_EQ(count_sheets(s.crack, s.crack_weld_key, piece), 1)
+            << "piece " << piece << ": one wall";
     }
 }
 
@@ -159,7 +166,8 @@ TEST(Pieces, ACrackThatEndsInsideAPlateStaysCut) {
     for (int32_t e = 0; e < slab.topo.n_edges(); ++e) {
         const auto [p, q] = slab.topo.edges[e];
         const int a = column_of(slab.topo.X[p]), b = column_of(slab.topo.X[q]);
-        if (std::min(a, b) == 5 && std::max(a, b) == 6 && std::min(slab.topo.X[p].z(), slab.topo.X[q].z()) >= 0.2 - 1e-9)
+        if (std::min(a, b) == 5 && std::max(a, b) == 6 &&
+            std::min(slab.topo.X[p].z(), slab.topo.X[q].z()) >= 0.2 - 1e-9)
             n_broken += broken[e] = 1;
     }
     ASSERT_GT(n_broken, 0);
@@ -175,7 +183,8 @@ TEST(Pieces, AParticleTornFromBothSidesIsDebrisAndRemembersItsPiece) {
     ParticleFrame frame = slab.opened(0.05);
     int32_t grain = -1;
     for (int32_t p = 0; p < slab.topo.n_particles && grain < 0; ++p)
-        if (column_of(slab.topo.X[p]) == 5 && slab.topo.X[p].y() > 2.5 * kH) grain = p;  // on the top
+        // on the top
+        if (column_of(slab.topo.X[p]) == 5 && slab.topo.X[p].y() > 2.5 * kH) grain = p;
     frame.P[grain] += Vec3f(0, 0.5f, 0);  // thrown up: every edge stretched far past 1.5
     frame.v.assign(frame.P.size(), Vec3f::Zero());
     frame.v[grain] = Vec3f(0, 2, 0);
@@ -187,7 +196,8 @@ TEST(Pieces, AParticleTornFromBothSidesIsDebrisAndRemembersItsPiece) {
     EXPECT_EQ(s.debris.id[0], grain);
     EXPECT_EQ(s.debris.piece[0], 0);  // column 5: the left plate, nearest through the rest mesh
     EXPECT_EQ(s.debris.velocity[0], Vec3f(0, 2, 0));
-    EXPECT_NEAR(s.debris.radius[0], mean_particle_spacing(slab.topo) / 2, tol::kFloat);  // no Jw: not dried
+    // no Jw: not dried
+    EXPECT_NEAR(s.debris.radius[0], mean_particle_spacing(slab.topo) / 2, tol::kFloat);
     EXPECT_TRUE(is_closed(s, 0));  // the plate it left is still closed
     EXPECT_EQ(s.particle_piece[grain], kDebris);
 }
@@ -211,7 +221,8 @@ TEST(Plates, ACrackOpensAsFarAsThePlatesMovedAndAClosedOneShowsNoGap) {
     const TornSlab slab;
     const SurfaceParams params = plates_params();  // close_gaps: 0.25 spacings = 0.025 m
     // moved apart by 0.01 m: under close_gaps, the two walls coincide corner for corner
-    const SurfacedFrame closed = surface_frame(slab.topo, slab.opened(0.01), slab.first_break, params);
+    const SurfacedFrame closed =
+        surface_frame(slab.topo, slab.opened(0.01), slab.first_break, params);
     const auto left = wall_positions(closed, 0), right = wall_positions(closed, 8);
     ASSERT_FALSE(left.empty());
     ASSERT_EQ(left.size(), right.size());
@@ -260,7 +271,8 @@ TEST(WallSmoothing, ACutAtAnAngleLiesCloserToItsPlaneThanTheDualCells) {
     std::vector<uint8_t> cut(topo.edges.size());
     std::vector<int32_t> label(topo.n_particles);
     for (int32_t p = 0; p < topo.n_particles; ++p) label[p] = side(topo.X[p]) > 0;
-    for (int32_t e = 0; e < topo.n_edges(); ++e) cut[e] = label[topo.edges[e][0]] != label[topo.edges[e][1]];
+    for (int32_t e = 0; e < topo.n_edges(); ++e)
+        cut[e] = label[topo.edges[e][0]] != label[topo.edges[e][1]];
     auto rms = [&](int iterations, RestPointKind kind) {
         const WallRestPositions w = smooth_walls(topo, cut, iterations);
         double sum = 0;
@@ -277,7 +289,8 @@ TEST(WallSmoothing, ACutAtAnAngleLiesCloserToItsPlaneThanTheDualCells) {
         }
         return std::sqrt(sum / n_points);
     };
-    const double dual = rms(0, RestPointKind::TetCentroid), smoothed = rms(10, RestPointKind::TetCentroid);
+    const double dual = rms(0, RestPointKind::TetCentroid),
+                 smoothed = rms(10, RestPointKind::TetCentroid);
     EXPECT_GT(dual, 0.3 * kH);
     EXPECT_LT(smoothed, dual / 2.5);
 }
@@ -303,7 +316,6 @@ TEST(Plates, NoPlateWideEnoughLeavesOnlyDebris) {
     EXPECT_EQ(s.debris_particles, slab.topo.n_particles);
     EXPECT_TRUE(s.boundary.faces.empty());
 }
-
 
 /// The slab of TornSlab whose band breaks in two stages: its top half (y above 1.5 spacings) at
 /// frame `top`, the rest at frame `bottom`; `last` is its last frame, the plates `dx` apart.
@@ -331,12 +343,14 @@ struct StagedTear {
 TEST(ShotFracture, EachFrameShowsTheLastFramesCutsMadeByThenAndPiecesOnlySplit) {
     const StagedTear tear(2, 5, 6, 0.05);
     const SurfaceParams params = plates_params();
-    const ShotFracture fracture = plan_shot_fracture(tear.slab.topo, tear.last_frame, tear.slab.first_break, params);
+    const ShotFracture fracture =
+        plan_shot_fracture(tear.slab.topo, tear.last_frame, tear.slab.first_break, params);
     // the last frame is find_pieces of the last frame
     PieceParams piece_params;
     piece_params.min_width = params.min_piece_size * params.cell_size;
     std::vector<uint8_t> broken_last(tear.slab.first_break.size());
-    for (size_t e = 0; e < broken_last.size(); ++e) broken_last[e] = tear.slab.first_break[e] <= tear.last;
+    for (size_t e = 0; e < broken_last.size(); ++e)
+        broken_last[e] = tear.slab.first_break[e] <= tear.last;
     const Pieces direct = find_pieces(tear.slab.topo, tear.last_frame, broken_last, piece_params);
     const Pieces last = pieces_at_frame(tear.slab.topo, fracture, tear.last);
     EXPECT_EQ(last.id, direct.id);
@@ -354,7 +368,8 @@ TEST(ShotFracture, EachFrameShowsTheLastFramesCutsMadeByThenAndPiecesOnlySplit) 
             }
             EXPECT_GE(now.is_cut[e], cut_before[e]) << "frame " << n << ", edge " << e;
         }
-        // the top half alone does not part the plates: one piece, with the smaller id, until frame 5
+        // the top half alone does not part the plates: one piece, with the smaller id, until frame
+        // 5
         EXPECT_EQ(now.count, n < 5 ? 1 : 2) << "frame " << n;
         for (int32_t p = 0; p < tear.slab.topo.n_particles; ++p) {
             EXPECT_EQ(now.id[p], n < 5 ? 0 : direct.id[p]) << "frame " << n << ", particle " << p;
@@ -374,12 +389,13 @@ TEST(Plates, ACrackCutAfterItsParticlesPartedOpensAtABoundedSpeedThenAsFarAsTheP
     // on its own shows them at once
     const StagedTear tear(3, 3, 20, 0.2);
     const SurfaceParams params = plates_params();
-    const ShotFracture fracture = plan_shot_fracture(tear.slab.topo, tear.last_frame, tear.slab.first_break, params);
+    const ShotFracture fracture =
+        plan_shot_fracture(tear.slab.topo, tear.last_frame, tear.slab.first_break, params);
     const double speed = 0.2 * mean_particle_spacing(tear.slab.topo);
     double gap_before = 0;
     for (int n = 3; n <= tear.last; ++n) {
-        const SurfacedFrame s =
-            surface_frame(tear.slab.topo, tear.at(n, 0.2), tear.slab.first_break, params, &fracture);
+        const SurfacedFrame s = surface_frame(tear.slab.topo, tear.at(n, 0.2),
+                                              tear.slab.first_break, params, &fracture);
         ASSERT_EQ(s.fragments, 2) << "frame " << n;
         const double gap = (mean(wall_positions(s, 8)) - mean(wall_positions(s, 0))).x();
         EXPECT_LE(gap - gap_before, 2 * speed + tol::kFloat) << "frame " << n;
@@ -388,8 +404,10 @@ TEST(Plates, ACrackCutAfterItsParticlesPartedOpensAtABoundedSpeedThenAsFarAsTheP
     }
     EXPECT_NEAR(gap_before, 0.2, tol::kFloat);  // by frame 20 each side has parted its last
     // the same frame on its own (no shot around it) shows the crack as open as its plates
-    const SurfacedFrame alone = surface_frame(tear.slab.topo, tear.at(3, 0.2), tear.slab.first_break, params);
-    EXPECT_NEAR((mean(wall_positions(alone, 8)) - mean(wall_positions(alone, 0))).x(), 0.2, tol::kFloat);
+    const SurfacedFrame alone =
+        surface_frame(tear.slab.topo, tear.at(3, 0.2), tear.slab.first_break, params);
+    EXPECT_NEAR((mean(wall_positions(alone, 8)) - mean(wall_positions(alone, 0))).x(), 0.2,
+                tol::kFloat);
 }
 
 /// Each vertex's position by (weld key, piece), over both meshes.
@@ -397,7 +415,8 @@ std::map<std::pair<uint64_t, int32_t>, Vec3f> keyed_positions(const SurfacedFram
     std::map<std::pair<uint64_t, int32_t>, Vec3f> out;
     auto add = [&](const TriMesh& m, const std::vector<uint64_t>& keys) {
         for (size_t f = 0; f < m.faces.size(); ++f)
-            for (int32_t v : m.faces[f]) out.emplace(std::make_pair(keys[v], m.face_fragment[f]), m.positions[v]);
+            for (int32_t v : m.faces[f])
+                out.emplace(std::make_pair(keys[v], m.face_fragment[f]), m.positions[v]);
     };
     add(s.boundary, s.boundary_weld_key);
     add(s.crack, s.crack_weld_key);
@@ -413,11 +432,14 @@ TEST(Plates, AWallDoesNotPopWhenACrackIsCutNextToIt) {
     const StagedTear tear(2, 5, 8, 0.05);
     SurfaceParams params = plates_params();
     params.close_gaps = 0;
-    const ShotFracture fracture = plan_shot_fracture(tear.slab.topo, tear.last_frame, tear.slab.first_break, params);
+    const ShotFracture fracture =
+        plan_shot_fracture(tear.slab.topo, tear.last_frame, tear.slab.first_break, params);
     const double bound = 0.2 * mean_particle_spacing(tear.slab.topo) + tol::kFloat;
-    auto before = keyed_positions(surface_frame(tear.slab.topo, tear.at(2, 0.05), tear.slab.first_break, params, &fracture));
+    auto before = keyed_positions(
+        surface_frame(tear.slab.topo, tear.at(2, 0.05), tear.slab.first_break, params, &fracture));
     for (int n = 3; n <= tear.last; ++n) {
-        auto now = keyed_positions(surface_frame(tear.slab.topo, tear.at(n, 0.05), tear.slab.first_break, params, &fracture));
+        auto now = keyed_positions(surface_frame(tear.slab.topo, tear.at(n, 0.05),
+                                                 tear.slab.first_break, params, &fracture));
         double largest = 0;
         for (const auto& [key, y] : now) {
             const auto it = before.find(key);
@@ -430,7 +452,8 @@ TEST(Plates, AWallDoesNotPopWhenACrackIsCutNextToIt) {
 
 TEST(WallGraph, SmoothsTheWallsWhereTheyAreAndTheirRimsAlongTheRim) {
     const TornSlab slab;
-    const ShotFracture fracture = plan_shot_fracture(slab.topo, slab.opened(0.05), slab.first_break, plates_params());
+    const ShotFracture fracture =
+        plan_shot_fracture(slab.topo, slab.opened(0.05), slab.first_break, plates_params());
     const WallGraph& graph = fracture.wall_graph;
     ASSERT_FALSE(graph.empty());
     // the cut runs through the slab: its walls reach the surface and have a rim, a curve of its own
@@ -446,7 +469,8 @@ TEST(WallGraph, SmoothsTheWallsWhereTheyAreAndTheirRimsAlongTheRim) {
     // nodes jittered by up to +-0.02 m across the wall: the wall loses most of it; the rim, a few
     // short curves whose held ends keep their jitter and whose long waves a curve keeps, about 2/3
     std::vector<Vec3> position(graph.n_nodes);
-    for (int32_t n = 0; n < graph.n_nodes; ++n) position[n] = Vec3(0.02 * (double((n * 7919) % 101) / 50 - 1), 0, 0);
+    for (int32_t n = 0; n < graph.n_nodes; ++n)
+        position[n] = Vec3(0.02 * (double((n * 7919) % 101) / 50 - 1), 0, 0);
     const std::vector<Vec3> jittered = position;
     smooth_wall_nodes(graph, 25, position);
     double wall_before = 0, wall_after = 0, rim_before = 0, rim_after = 0;
@@ -471,7 +495,8 @@ TEST(WallGraph, AWallInsideTheSoilIsHiddenAndNotMeshed) {
     const TetMesh mesh = box_lattice(5, 10, 10, kH);
     const CoreTopology topo = build_core_topology(mesh);
     auto on_patch = [&](int32_t p) {
-        return std::min(topo.X[p].y(), topo.X[p].z()) > 1.5 * kH && std::max(topo.X[p].y(), topo.X[p].z()) < 8.5 * kH;
+        return std::min(topo.X[p].y(), topo.X[p].z()) > 1.5 * kH &&
+               std::max(topo.X[p].y(), topo.X[p].z()) < 8.5 * kH;
     };
     std::vector<int32_t> first_break = no_edge_breaks(topo);
     int32_t deep = -1;
@@ -480,7 +505,8 @@ TEST(WallGraph, AWallInsideTheSoilIsHiddenAndNotMeshed) {
         const int a = column_of(topo.X[p]), b = column_of(topo.X[q]);
         if (std::min(a, b) != 2 || std::max(a, b) != 3 || !on_patch(p) || !on_patch(q)) continue;
         first_break[e] = 1;
-        if ((topo.X[p] - Vec3(2 * kH, 5 * kH, 5 * kH)).norm() < 1e-9) deep = e;  // at the patch's middle
+        // at the patch's middle
+        if ((topo.X[p] - Vec3(2 * kH, 5 * kH, 5 * kH)).norm() < 1e-9) deep = e;
     }
     ASSERT_GE(deep, 0);
     ParticleFrame frame;
@@ -517,7 +543,8 @@ TEST(Plates, EveryFrameOfAGrowingNetworkIsClosed) {
     for (int32_t e = 0; e < topo.n_edges(); ++e) {
         const auto [p, q] = topo.edges[e];
         const int a = column_of(topo.X[p]), b = column_of(topo.X[q]);
-        const bool band = std::max(a, b) >= 5 && std::min(a, b) <= 8 && std::min(topo.X[p].y(), topo.X[q].y()) > 1.5 * kH;
+        const bool band = std::max(a, b) >= 5 && std::min(a, b) <= 8 &&
+                          std::min(topo.X[p].y(), topo.X[q].y()) > 1.5 * kH;
         if (percent() < (band ? 80 : 3)) first_break[e] = 1 + percent() % kLast;
     }
     auto at = [&](int n) {  // the right plate moves away 1 cm a frame
@@ -540,20 +567,23 @@ TEST(Plates, EveryFrameOfAGrowingNetworkIsClosed) {
         EXPECT_FALSE(s.crack.faces.empty()) << "frame " << n;
         std::set<int32_t> pieces(s.boundary.face_fragment.begin(), s.boundary.face_fragment.end());
         pieces.insert(s.crack.face_fragment.begin(), s.crack.face_fragment.end());
-        for (int32_t piece : pieces) EXPECT_TRUE(is_closed(s, piece)) << "frame " << n << ", piece " << piece;
+        for (int32_t piece : pieces)
+            EXPECT_TRUE(is_closed(s, piece)) << "frame " << n << ", piece " << piece;
     }
 }
 
 TEST(WallDeformation, FollowsAnAffineMotionExactlyAndStaysOnItsSideOfEveryCut) {
     const TornSlab slab;
-    const ShotFracture fracture = plan_shot_fracture(slab.topo, slab.opened(0.05), slab.first_break, plates_params());
+    const ShotFracture fracture =
+        plan_shot_fracture(slab.topo, slab.opened(0.05), slab.first_break, plates_params());
     const WallDeformation& d = fracture.wall_motion;
     ASSERT_FALSE(d.empty());
     for (size_t i = 0; i < d.particle.size(); ++i)
         for (int32_t k = d.begin[i]; k < d.begin[i + 1]; ++k)
             EXPECT_EQ(fracture.last.id[d.neighbour[k]], fracture.last.id[d.particle[i]]);
     // rotated about y and stretched: the fitted map is the motion itself
-    const Mat3 M = Eigen::AngleAxisd(0.3, Vec3::UnitY()).toRotationMatrix() * Vec3(1.1, 0.9, 1.0).asDiagonal();
+    const Mat3 M =
+        Eigen::AngleAxisd(0.3, Vec3::UnitY()).toRotationMatrix() * Vec3(1.1, 0.9, 1.0).asDiagonal();
     const Vec3 shift(0.2, -0.1, 0.05);
     ParticleFrame frame;
     frame.frame = 1;

@@ -47,7 +47,7 @@ SimModel still_moisture_model(Real h, Real D) {
 }
 
 struct DiffusionRun {
-    Real error = 0;  // RMS theta error over the particles
+    Real error = 0;                 // RMS theta error over the particles
     std::vector<Real> theta_by_id;  // final theta per particle id
     int steps = 0;
     size_t particles = 0;
@@ -105,7 +105,8 @@ DiffusionRun run_diffusion_3d(int cells_per_side) {
     for (int i = 0; i < steps; ++i) cg += step(model, s, dt).cg_iterations;
     Real err2 = 0;
     const Real amplitude = A * std::exp(-decay_rate * t1);
-    for (size_t p = 0; p < s.size(); ++p) err2 += std::pow(s.theta[p] - (eta / 2 + amplitude * mode(s.x[p])), 2);
+    for (size_t p = 0; p < s.size(); ++p)
+        err2 += std::pow(s.theta[p] - (eta / 2 + amplitude * mode(s.x[p])), 2);
     r.error = std::sqrt(err2 / s.size()) / A;
     r.steps = steps;
     r.particles = s.size();
@@ -117,8 +118,8 @@ DiffusionRun run_diffusion_3d(int cells_per_side) {
 // ---- free drying shrinkage ----------------------------------------------------------------
 
 struct ShrinkageRun {
-    Real error_extent = 0;  // |V_extent / V_extent0 - (1 - eta)| / (1 - eta)
-    Real error_tracked = 0; // the same with V = sum V0 J (the tracked total volume)
+    Real error_extent = 0;   // |V_extent / V_extent0 - (1 - eta)| / (1 - eta)
+    Real error_tracked = 0;  // the same with V = sum V0 J (the tracked total volume)
     int64_t steps = 0;
     size_t particles = 0;
     double wall_s = 0;
@@ -314,7 +315,8 @@ Sweep cg_cap_sweep(Scale scale, Real diffusion_number) {
     sw.id = format("cg_caps_r%g", diffusion_number);
     sw.title = format("CG iteration cap, drying slab, D dt/h^2 = %g", diffusion_number);
     sw.knob = "CG iteration cap";
-    sw.error_measure = format("RMS theta difference from the converged solve after %d steps, / eta", steps);
+    sw.error_measure =
+        format("RMS theta difference from the converged solve after %d steps, / eta", steps);
     const DryingRun ref = run_drying_slab(h, steps, diffusion_number, 2000, 1e-13);
     for (int cap : {1, 2, 5, 10}) {
         const DryingRun r = run_drying_slab(h, steps, diffusion_number, cap, 1e-13);
@@ -327,21 +329,24 @@ Sweep cg_cap_sweep(Scale scale, Real diffusion_number) {
         pt.knob = cap;
         pt.error = std::sqrt(e2 / r.theta_by_id.size()) / eta;
         pt.wall_s = r.wall_s;
-        pt.note = format("mean CG %.2f; saves %.2f s (%.0f%%) vs converged; RMS position diff %.2e m", r.mean_cg,
-                         ref.wall_s - r.wall_s, 100 * (ref.wall_s - r.wall_s) / ref.wall_s,
-                         std::sqrt(dx2 / r.x_by_id.size()));
+        pt.note =
+            format("mean CG %.2f; saves %.2f s (%.0f%%) vs converged; RMS position diff %.2e m",
+                   r.mean_cg, ref.wall_s - r.wall_s, 100 * (ref.wall_s - r.wall_s) / ref.wall_s,
+                   std::sqrt(dx2 / r.x_by_id.size()));
         sw.points.push_back(pt);
     }
     SweepPoint conv;
     conv.knob = 2000;
     conv.error = 0;
     conv.wall_s = ref.wall_s;
-    conv.note = format("converged reference (rel. tol 1e-13, cap 2000): mean CG %.2f; h = %g, dt = %.3g s, %zu particles",
-                       ref.mean_cg, h, ref.dt, ref.theta_by_id.size());
+    conv.note = format(
+        "converged reference (rel. tol 1e-13, cap 2000): mean CG %.2f; h = %g, dt = %.3g s, %zu particles",
+        ref.mean_cg, h, ref.dt, ref.theta_by_id.size());
     sw.points.push_back(conv);
     fit_order(sw);
-    sw.order_note = "CG converges geometrically, so the slope only summarises the table; the error at cap 5 is the "
-                    "paper's claim";
+    sw.order_note =
+        "CG converges geometrically, so the slope only summarises the table; the error at cap 5 is the "
+        "paper's claim";
     return sw;
 }
 
@@ -350,7 +355,8 @@ SweepPoint diffusion_1d_h_point(Real h) {
     const Real D = 0.01, span = 0.25;
     const int steps = static_cast<int>(std::lround(span / (0.4 * h * h / D)));
     const DiffusionRun r = run_diffusion_1d(h, steps);
-    return {h, r.error, r.wall_s, format("%d steps, %zu particles, mean CG %.1f", r.steps, r.particles, r.mean_cg)};
+    return {h, r.error, r.wall_s,
+            format("%d steps, %zu particles, mean CG %.1f", r.steps, r.particles, r.mean_cg)};
 }
 
 SweepPoint diffusion_3d_h_point(Real cells_per_side) {
@@ -371,15 +377,16 @@ SweepPoint shrinkage_ppc_point(Real per_axis) {
     const int k = static_cast<int>(per_axis);
     const ShrinkageRun r = run_shrinkage(0.1, k, 20000);
     return {Real(k * k * k), r.error_extent, r.wall_s,
-            format("%d per axis; tracked-volume error %.2e; %lld steps, %zu particles", k, r.error_tracked,
-                   static_cast<long long>(r.steps), r.particles)};
+            format("%d per axis; tracked-volume error %.2e; %lld steps, %zu particles", k,
+                   r.error_tracked, static_cast<long long>(r.steps), r.particles)};
 }
 
 SweepPoint column_h_point(Real h) {
     const ColumnRun r = run_column(h, 1e6);
-    return {h, r.error, r.wall_s,
-            format("u/u_exact - 1 = %+.2e; u_exact %.3e m, strain %.1e; %lld steps, %zu particles", r.signed_error,
-                   r.u_exact, r.strain, static_cast<long long>(r.steps), r.particles)};
+    return {
+        h, r.error, r.wall_s,
+        format("u/u_exact - 1 = %+.2e; u_exact %.3e m, strain %.1e; %lld steps, %zu particles",
+               r.signed_error, r.u_exact, r.strain, static_cast<long long>(r.steps), r.particles)};
 }
 
 // what one sweep measures: its table header, its knob values (the reduced set, plus more at full
@@ -391,32 +398,56 @@ struct SweepPlan {
     std::function<SweepPoint(Real)> run;
 };
 
-const char* const kShrinkageError = "|V/V0 - (1-eta)|/(1-eta), V from the particle extents (time-averaged once dry)";
+const char* const kShrinkageError =
+    "|V/V0 - (1-eta)|/(1-eta), V from the particle extents (time-averaged once dry)";
 
 // the sweeps whose order is fitted on the table's own error, by id
 const SweepPlan& plan(const std::string& id) {
     static const std::vector<SweepPlan> plans = {
-        {"diffusion_1d_h", "1D moisture diffusion (erfc) over h, dt = 0.4 h^2/D", "h [m]",
-         "RMS theta error at t1 (jump eta/2 = 0.25)", "quadratic B-splines with lumped mass, dt ~ h^2: 2 expected",
-         {0.04, 0.02, 0.01}, {0.005}, diffusion_1d_h_point},
-        {"diffusion_3d_h", "3D moisture diffusion (cosine mode in a cube, zero flux) over h, dt ~ 0.4 h^2/D", "h [m]",
+        {"diffusion_1d_h",
+         "1D moisture diffusion (erfc) over h, dt = 0.4 h^2/D",
+         "h [m]",
+         "RMS theta error at t1 (jump eta/2 = 0.25)",
+         "quadratic B-splines with lumped mass, dt ~ h^2: 2 expected",
+         {0.04, 0.02, 0.01},
+         {0.005},
+         diffusion_1d_h_point},
+        {"diffusion_3d_h",
+         "3D moisture diffusion (cosine mode in a cube, zero flux) over h, dt ~ 0.4 h^2/D",
+         "h [m]",
          "RMS theta error at t = 1/(3 D k^2), / mode amplitude",
          "2 expected in the interior; the material boundary sits within a B-spline support of the faces",
-         {4, 6, 8}, {12, 16}, diffusion_3d_h_point},
-        {"shrinkage_h", "Free drying shrinkage to (1-eta) V0 over h, 2x2x2 particles per cell", "h [m]",
+         {4, 6, 8},
+         {12, 16},
+         diffusion_3d_h_point},
+        {"shrinkage_h",
+         "Free drying shrinkage to (1-eta) V0 over h, 2x2x2 particles per cell",
+         "h [m]",
          kShrinkageError,
          "no spatial order expected: a uniform dry state is exact on any grid; the residual is the settling "
          "oscillation",
-         {0.2, 0.1}, {0.05}, shrinkage_h_point},
-        {"shrinkage_ppc", "Free drying shrinkage to (1-eta) V0 over particles per cell, h = 0.1 m",
-         "particles per cell", kShrinkageError, "slope against particles per cell (not a spatial order)", {1, 2},
-         {3, 4}, shrinkage_ppc_point},
-        {"column_h", "Elastic column settling under gravity (E = 1e6 Pa, nu = 0, H = 0.5 m) over h", "h [m]",
+         {0.2, 0.1},
+         {0.05},
+         shrinkage_h_point},
+        {"shrinkage_ppc",
+         "Free drying shrinkage to (1-eta) V0 over particles per cell, h = 0.1 m",
+         "particles per cell",
+         kShrinkageError,
+         "slope against particles per cell (not a spatial order)",
+         {1, 2},
+         {3, 4},
+         shrinkage_ppc_point},
+        {"column_h",
+         "Elastic column settling under gravity (E = 1e6 Pa, nu = 0, H = 0.5 m) over h",
+         "h [m]",
          "|u_top - u_exact|/|u_exact|, u_exact = rho g (H y - y^2/2)/E at the top layer",
-         "the free top surface is resolved to O(h) by the B-spline mass: about 1 expected", {0.1, 0.05, 0.025},
-         {0.0125, 0.00625}, column_h_point},
+         "the free top surface is resolved to O(h) by the B-spline mass: about 1 expected",
+         {0.1, 0.05, 0.025},
+         {0.0125, 0.00625},
+         column_h_point},
     };
-    const auto it = std::find_if(plans.begin(), plans.end(), [&](const SweepPlan& p) { return p.id == id; });
+    const auto it =
+        std::find_if(plans.begin(), plans.end(), [&](const SweepPlan& p) { return p.id == id; });
     MC_CHECK(it != plans.end());
     return *it;
 }
@@ -429,7 +460,8 @@ Sweep run_sweep(const SweepPlan& plan, Scale scale) {
     sw.knob = plan.knob;
     sw.error_measure = plan.error_measure;
     std::vector<Real> knobs = plan.knobs;
-    if (scale == Scale::Full) knobs.insert(knobs.end(), plan.full_only_knobs.begin(), plan.full_only_knobs.end());
+    if (scale == Scale::Full)
+        knobs.insert(knobs.end(), plan.full_only_knobs.begin(), plan.full_only_knobs.end());
     for (Real k : knobs) sw.points.push_back(plan.run(k));
     fit_order(sw);
     sw.order_note = plan.order_note;
@@ -457,18 +489,20 @@ Sweep sweep_diffusion_1d_dt(Scale scale) {
     for (int steps : step_counts) {
         const DiffusionRun r = run_diffusion_1d(h, steps);
         Real e2 = 0;
-        for (size_t i = 0; i < r.theta_by_id.size(); ++i) e2 += std::pow(r.theta_by_id[i] - ref.theta_by_id[i], 2);
+        for (size_t i = 0; i < r.theta_by_id.size(); ++i)
+            e2 += std::pow(r.theta_by_id[i] - ref.theta_by_id[i], 2);
         const Real time_error = std::sqrt(e2 / r.theta_by_id.size());
         dts.push_back(0.25 / steps);
         time_errors.push_back(time_error);
         sw.points.push_back({0.25 / steps, r.error, r.wall_s,
-                             format("time error %.2e; %d steps, D dt/h^2 = %.3g, mean CG %.1f", time_error, steps,
-                                    0.01 * 0.25 / steps / (h * h), r.mean_cg)});
+                             format("time error %.2e; %d steps, D dt/h^2 = %.3g, mean CG %.1f",
+                                    time_error, steps, 0.01 * 0.25 / steps / (h * h), r.mean_cg)});
     }
     sw.order = log_log_slope(dts, time_errors);
-    sw.order_note = format("fitted on the time error (against %d steps at the same h; in the notes): backward Euler, "
-                           "1 expected; the error against the exact solution levels off at the h error",
-                           8 * step_counts.back());
+    sw.order_note = format(
+        "fitted on the time error (against %d steps at the same h; in the notes): backward Euler, "
+        "1 expected; the error against the exact solution levels off at the h error",
+        8 * step_counts.back());
     return sw;
 }
 
@@ -484,18 +518,22 @@ Sweep sweep_column_h(Scale scale) { return run_sweep(plan("column_h"), scale); }
 Sweep sweep_column_E(Scale scale) {
     const bool full = scale == Scale::Full;
     const Real h = full ? 0.025 : 0.05;
-    SweepPlan p{"column_E", format("Elastic column settling under gravity over E (h = %g m)", h), "E [Pa]",
-                "|u_top - u_exact|/|u_exact| (small-strain theory)",
-                "not a convergence order: at small strain the O(h) error (about constant, see the signs) "
-                "dominates; at large strain (low E) the Neo-Hookean response departs from small-strain "
-                "theory with the opposite sign",
-                full ? std::vector<Real>{1e5, 3e5, 1e6, 3e6, 1e7} : std::vector<Real>{1e5, 1e6, 1e7}, {},
-                [h](Real E) {
-                    const ColumnRun r = run_column(h, E);
-                    return SweepPoint{E, r.error, r.wall_s,
-                                      format("u/u_exact - 1 = %+.2e; strain rho g H/E = %.1e; %lld steps",
-                                             r.signed_error, r.strain, static_cast<long long>(r.steps))};
-                }};
+    SweepPlan p{
+        "column_E",
+        format("Elastic column settling under gravity over E (h = %g m)", h),
+        "E [Pa]",
+        "|u_top - u_exact|/|u_exact| (small-strain theory)",
+        "not a convergence order: at small strain the O(h) error (about constant, see the signs) "
+        "dominates; at large strain (low E) the Neo-Hookean response departs from small-strain "
+        "theory with the opposite sign",
+        full ? std::vector<Real>{1e5, 3e5, 1e6, 3e6, 1e7} : std::vector<Real>{1e5, 1e6, 1e7},
+        {},
+        [h](Real E) {
+            const ColumnRun r = run_column(h, E);
+            return SweepPoint{E, r.error, r.wall_s,
+                              format("u/u_exact - 1 = %+.2e; strain rho g H/E = %.1e; %lld steps",
+                                     r.signed_error, r.strain, static_cast<long long>(r.steps))};
+        }};
     return run_sweep(p, scale);
 }
 

@@ -47,13 +47,16 @@ MachineInfo machine_info(const std::string& source_dir) {
     if (mem >> kib) m.memory_gib = kib / (1024.0 * 1024.0);
     std::ifstream loadavg("/proc/loadavg");
     std::string l1, l5, l15;
-    if (loadavg >> l1 >> l5 >> l15) m.load_average = l1 + " " + l5 + " " + l15;
-    else m.load_average = "unknown";
+    if (loadavg >> l1 >> l5 >> l15)
+        m.load_average = l1 + " " + l5 + " " + l15;
+    else
+        m.load_average = "unknown";
     const std::string git = "git -C '" + source_dir + "' ";
     m.commit = first_line_of(git + "rev-parse HEAD 2>/dev/null");
     if (m.commit.empty()) {
         m.commit = "unknown (not a git checkout)";
-    } else if (!first_line_of(git + "status --porcelain --untracked-files=no 2>/dev/null").empty()) {
+    } else if (!first_line_of(git + "status --porcelain --untracked-files=no 2>/dev/null")
+                    .empty()) {
         m.commit += " + local changes";
     }
     return m;

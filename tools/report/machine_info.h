@@ -5,10 +5,10 @@
 namespace mudcrack::report {
 
 struct MachineInfo {
-    std::string cpu_model;  // /proc/cpuinfo "model name"
-    int cores = 0;          // logical CPUs online
-    double memory_gib = 0;  // /proc/meminfo MemTotal
-    std::string commit;     // git rev-parse HEAD of the source tree, "+ local changes" if dirty
+    std::string cpu_model;     // /proc/cpuinfo "model name"
+    int cores = 0;             // logical CPUs online
+    double memory_gib = 0;     // /proc/meminfo MemTotal
+    std::string commit;        // git rev-parse HEAD of the source tree, "+ local changes" if dirty
     std::string load_average;  // /proc/loadavg 1, 5, 15 min at the start (other work skews times)
 };
 

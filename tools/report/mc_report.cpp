@@ -29,14 +29,18 @@ std::string joined_command(int argc, char** argv) {
 }
 
 int run(int argc, char** argv) {
-    CLI::App app{"mc-report: error against run time and the stability matrix (writes <out>/report.md)"};
+    CLI::App app{
+        "mc-report: error against run time and the stability matrix (writes <out>/report.md)"};
     std::string out = "out/report", only_case;
     bool is_quick = false, is_listing = false, skip_accuracy = false, skip_stability = false;
     int threads = 0;
     app.add_option("--out", out, "report folder")->capture_default_str();
-    app.add_flag("--quick", is_quick, "reduced scale: small grids, few steps (what make test runs)");
-    app.add_option("--threads", threads, "worker threads (0: all cores)")->check(CLI::NonNegativeNumber);
-    app.add_option("--case", only_case, "run one stability case in this process and print its result line");
+    app.add_flag("--quick", is_quick,
+                 "reduced scale: small grids, few steps (what make test runs)");
+    app.add_option("--threads", threads, "worker threads (0: all cores)")
+        ->check(CLI::NonNegativeNumber);
+    app.add_option("--case", only_case,
+                   "run one stability case in this process and print its result line");
     app.add_flag("--list-cases", is_listing, "list the stability cases");
     app.add_flag("--skip-accuracy", skip_accuracy, "leave out the accuracy sweeps");
     app.add_flag("--skip-stability", skip_stability, "leave out the stability matrix");
@@ -74,8 +78,8 @@ int run(int argc, char** argv) {
         content.sweeps = all_sweeps(scale, [&](const Sweep& s) {
             double wall = 0;
             for (const SweepPoint& p : s.points) wall += p.wall_s;
-            std::fprintf(stderr, "mc-report:   %-22s order %6.2f  (%.1f s, at %.0f s)\n", s.id.c_str(), s.order, wall,
-                         total.seconds());
+            std::fprintf(stderr, "mc-report:   %-22s order %6.2f  (%.1f s, at %.0f s)\n",
+                         s.id.c_str(), s.order, wall, total.seconds());
         });
         content.accuracy_wall_s = clock.seconds();
     }
@@ -84,9 +88,10 @@ int run(int argc, char** argv) {
         const std::string exe = fs::read_symlink("/proc/self/exe").string();
         content.cases = stability_cases();
         for (const StabilityCase& c : content.cases) {
-            StabilityResult r = run_stability_case_isolated(exe, c.name, scale, stability_limits(scale), 1);
-            std::fprintf(stderr, "mc-report:   %-30s %s (%lld steps, %.1f s)\n", c.name.c_str(), outcome_name(r.outcome),
-                         static_cast<long long>(r.steps), r.wall_s);
+            StabilityResult r =
+                run_stability_case_isolated(exe, c.name, scale, stability_limits(scale), 1);
+            std::fprintf(stderr, "mc-report:   %-30s %s (%lld steps, %.1f s)\n", c.name.c_str(),
+                         outcome_name(r.outcome), static_cast<long long>(r.steps), r.wall_s);
             content.stability.push_back(std::move(r));
         }
         content.stability_wall_s = clock.seconds();
@@ -97,13 +102,16 @@ int run(int argc, char** argv) {
     const std::vector<Figure> figures = write_figures(dir, content.sweeps);
     content.total_wall_s = total.seconds();
     write_text_file(dir / "report.md", report_markdown(content, figures));
-    std::printf("mc-report: wrote %s (%.1f s)\n", (dir / "report.md").string().c_str(), content.total_wall_s);
+    std::printf("mc-report: wrote %s (%.1f s)\n", (dir / "report.md").string().c_str(),
+                content.total_wall_s);
 
     int failures = 0;
     for (const StabilityResult& r : content.stability) failures += is_product_failure(r.outcome);
     if (failures > 0) {
-        std::fprintf(stderr, "mc-report: error: %d stability case(s) failed (silent NaN, hang or crash); see %s\n",
-                     failures, (dir / "report.md").string().c_str());
+        std::fprintf(
+            stderr,
+            "mc-report: error: %d stability case(s) failed (silent NaN, hang or crash); see %s\n",
+            failures, (dir / "report.md").string().c_str());
         return 1;
     }
     return 0;

@@ -28,8 +28,8 @@ struct Sweep {
     std::string knob;           // knob name with units, e.g. "h [m]"
     std::string error_measure;  // what `error` is
     std::vector<SweepPoint> points;
-    Real order = 0;             // least-squares slope of log(error) against log(knob)
-    std::string order_note;     // how to read the slope (expected order, what limits it)
+    Real order = 0;          // least-squares slope of log(error) against log(knob)
+    std::string order_note;  // how to read the slope (expected order, what limits it)
 };
 
 /// What a stability case ended with. The last three are failures of the product.
@@ -59,13 +59,13 @@ inline bool is_product_failure(Outcome outcome) {
 struct StabilityResult {
     std::string name;
     Outcome outcome = Outcome::Crashed;
-    std::string message;       // the error text (refused / stopped) or what went wrong
-    int64_t steps = 0;         // substeps taken (accepted)
-    int64_t retries = 0;       // substeps that failed their checks and were retried at a smaller dt
-    double sim_time = 0;       // simulated time reached [s]
-    Real max_speed = 0;        // max |v| over the run [m/s]
-    Real energy_drift = 0;     // (E_end - E_0) / E_scale
-    Real energy_growth = 0;    // (max E - E_0) / E_scale: > 0 means energy was created
+    std::string message;     // the error text (refused / stopped) or what went wrong
+    int64_t steps = 0;       // substeps taken (accepted)
+    int64_t retries = 0;     // substeps that failed their checks and were retried at a smaller dt
+    double sim_time = 0;     // simulated time reached [s]
+    Real max_speed = 0;      // max |v| over the run [m/s]
+    Real energy_drift = 0;   // (E_end - E_0) / E_scale
+    Real energy_growth = 0;  // (max E - E_0) / E_scale: > 0 means energy was created
     double wall_s = 0;
 };
 

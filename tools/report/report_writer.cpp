@@ -27,7 +27,8 @@ std::string gp_quote(const std::string& s) {
 
 std::string gnuplot_script(const Sweep& sw, const std::string& dat, const std::string& png) {
     std::ostringstream os;
-    os << "# Pareto plot of the sweep " << sw.id << ": error against wall time, each point labelled with its knob.\n"
+    os << "# Pareto plot of the sweep " << sw.id
+       << ": error against wall time, each point labelled with its knob.\n"
        << "if (strstrt(GPVAL_TERMINALS, 'pngcairo') > 0) {\n"
        << "    set terminal pngcairo noenhanced size 900,600\n"
        << "} else {\n"
@@ -43,8 +44,9 @@ std::string gnuplot_script(const Sweep& sw, const std::string& dat, const std::s
        << "set key top right\n"
        << "set offsets graph 0.05, graph 0.15, graph 0.1, graph 0.1\n"
        << "# errors of 0 (a converged reference) cannot sit on a log axis\n"
-       << "plot " << gp_quote(dat) << " using 3:($2 > 0 ? $2 : 1/0) with linespoints pt 7 ps 1.5 title "
-       << gp_quote(sw.knob) << ", \\\n"
+       << "plot " << gp_quote(dat)
+       << " using 3:($2 > 0 ? $2 : 1/0) with linespoints pt 7 ps 1.5 title " << gp_quote(sw.knob)
+       << ", \\\n"
        << "     '' using 3:($2 > 0 ? $2 : 1/0):(sprintf('%g', $1)) with labels offset 1.5,0.8 notitle\n";
     return os.str();
 }
@@ -68,6 +70,38 @@ Real error_at_cap5(const Sweep& sw) {
     return std::nan("");
 }
 
+// The stability matrix: how its cases run and are judged, and one row per case.
+void write_stability_section(std::ostream& md, const ReportContent& c) {
+    md << "## Stability matrix\n\n"
+       << "Each case runs in its own process on one thread (the scenes are small; under a loaded machine "
+          "OpenMP barriers only add noise), bounded by "
+       << stability_limits(c.scale).max_steps << " substeps and "
+       << format("%.0f", stability_limits(c.scale).max_wall_s)
+       << " s of wall time (plus 30 s grace before the process is killed). Energy = kinetic + gravitational "
+          "(from the ground) + Neo-Hookean elastic; drift = (E_end - E_0)/E_scale and growth = (max E - E_0)/E_scale "
+          "with E_scale the largest |E| seen. Moisture cases change the particle masses, so their energy is not "
+          "conserved even by an exact integrator. Sticky ground impacts dissipate energy (negative drift). A substep "
+          "that fails its checks (J <= 0, a non-finite state, more than 2 cells in one step) is rolled back and "
+          "redone at half the time step, as mc-sim does (sim/mpm/step_retry.h); `retries` counts them, and a case "
+          "stops with an error only when the step would fall below 1/"
+       << (1 << RetryPolicy{}.max_halvings) << " of the stable one.\n\n"
+       << "| case | group | setup | outcome | steps | retries | sim time [s] | max abs v [m/s] | energy drift "
+          "| energy growth | wall [s] | message |\n|---|---|---|---|---|---|---|---|---|---|---|---|\n";
+    for (size_t i = 0; i < c.stability.size(); ++i) {
+        const StabilityResult& r = c.stability[i];
+        const StabilityCase* info = i < c.cases.size() ? &c.cases[i] : nullptr;
+        const bool ran = r.outcome == Outcome::Completed ||
+                         r.outcome == Outcome::StoppedWithError ||
+                         r.outcome == Outcome::SilentNaN || r.outcome == Outcome::Diverged;
+        md << "| " << r.name << " | " << (info ? info->group : "") << " | "
+           << table_cell(info ? info->description : "") << " | " << outcome_name(r.outcome) << " | "
+           << r.steps << " | " << r.retries << " | " << sci(r.sim_time) << " | "
+           << (ran ? sci(r.max_speed) : "-") << " | " << (ran ? sci(r.energy_drift) : "-") << " | "
+           << (ran ? sci(r.energy_growth) : "-") << " | " << format("%.2f", r.wall_s) << " | "
+           << table_cell(r.message) << " |\n";
+    }
+}
+
 }  // namespace
 
 void write_text_file(const fs::path& path, const std::string& text) {
@@ -89,14 +123,16 @@ std::vector<Figure> write_figures(const fs::path& dir, const std::vector<Sweep>&
         std::ostringstream dat;
         dat << "# " << sw.title << "\n# knob: " << sw.knob << "\n# error: " << sw.error_measure
             << "\n# knob error wall_s\n";
-        for (const SweepPoint& p : sw.points) dat << format("%.10g %.10g %.6g\n", p.knob, p.error, p.wall_s);
+        for (const SweepPoint& p : sw.points)
+            dat << format("%.10g %.10g %.6g\n", p.knob, p.error, p.wall_s);
         write_text_file(dir / "data" / (sw.id + ".dat"), dat.str());
         Figure f;
         f.sweep_id = sw.id;
         f.script = fs::path("plots") / (sw.id + ".gp");
         f.png = sw.id + ".png";
-        write_text_file(dir / f.script,
-                        gnuplot_script(sw, (fs::path("data") / (sw.id + ".dat")).string(), f.png.string()));
+        write_text_file(
+            dir / f.script,
+            gnuplot_script(sw, (fs::path("data") / (sw.id + ".dat")).string(), f.png.string()));
         f.command = "gnuplot " + f.script.string();
         if (can_plot) {
             const std::string cmd = "cd '" + dir.string() + "' && " + f.command + " 2>&1";
@@ -111,8 +147,8 @@ std::string report_markdown(const ReportContent& c, const std::vector<Figure>& f
     std::ostringstream md;
     const bool full = c.scale == Scale::Full;
     md << "# mudcrack: error against run time, and stability on stiff and extreme cases\n\n"
-       << "Generated by `" << c.command << "` (" << (full ? "full" : "reduced, --quick") << " scale, "
-       << c.threads << " threads).\n\n"
+       << "Generated by `" << c.command << "` (" << (full ? "full" : "reduced, --quick")
+       << " scale, " << c.threads << " threads).\n\n"
        << "| | |\n|---|---|\n"
        << "| machine | " << c.machine.cpu_model << " |\n"
        << "| cores | " << c.machine.cores << " |\n"
@@ -133,8 +169,9 @@ std::string report_markdown(const ReportContent& c, const std::vector<Figure>& f
        << "Fitted order = least-squares slope of log(error) against log(knob) over all points of the sweep.\n\n"
        << "| sweep | knob | points | fitted order | how to read it |\n|---|---|---|---|---|\n";
     for (const Sweep& sw : c.sweeps)
-        md << "| [" << table_cell(sw.title) << "](#" << sw.id << ") | " << sw.knob << " | " << sw.points.size()
-           << " | " << format("%.2f", sw.order) << " | " << table_cell(sw.order_note) << " |\n";
+        md << "| [" << table_cell(sw.title) << "](#" << sw.id << ") | " << sw.knob << " | "
+           << sw.points.size() << " | " << format("%.2f", sw.order) << " | "
+           << table_cell(sw.order_note) << " |\n";
     md << "\nStability matrix: " << c.stability.size() << " cases, " << failures
        << " failures of the product (silent NaN, hang or crash), " << diverged
        << " diverged without an error (finite state, but energy non-finite or grown more than "
@@ -142,8 +179,8 @@ std::string report_markdown(const ReportContent& c, const std::vector<Figure>& f
 
     // the paper's CG claim
     md << "### The paper's claim: 5 CG iterations suffice\n\n"
-       << "Criterion: RMS theta difference from the converged solve below " << sci(kCgClaimTolerance)
-       << " of eta after the run.\n\n";
+       << "Criterion: RMS theta difference from the converged solve below "
+       << sci(kCgClaimTolerance) << " of eta after the run.\n\n";
     for (const Sweep& sw : c.sweeps) {
         if (sw.id.rfind("cg_caps", 0) != 0) continue;
         const Real e5 = error_at_cap5(sw);
@@ -156,17 +193,18 @@ std::string report_markdown(const ReportContent& c, const std::vector<Figure>& f
     md << "## Accuracy against analytic solutions\n\n"
        << "Each figure is a Pareto plot (error against wall time); pick the cheapest point below the error you "
           "need. Data in `data/<id>.dat`, script in `plots/<id>.gp`; every figure is made by running its command "
-          "in this folder after `" << c.command << "` wrote the data.\n\n";
+          "in this folder after `"
+       << c.command << "` wrote the data.\n\n";
     for (size_t i = 0; i < c.sweeps.size(); ++i) {
         const Sweep& sw = c.sweeps[i];
         const Figure* fig = i < figures.size() ? &figures[i] : nullptr;
         md << "### " << sw.title << " <a name=\"" << sw.id << "\"></a>\n\n"
-           << "Error: " << sw.error_measure << ". Fitted order: **" << format("%.2f", sw.order) << "** ("
-           << sw.order_note << ").\n\n"
+           << "Error: " << sw.error_measure << ". Fitted order: **" << format("%.2f", sw.order)
+           << "** (" << sw.order_note << ").\n\n"
            << "| " << sw.knob << " | error | wall [s] | notes |\n|---|---|---|---|\n";
         for (const SweepPoint& p : sw.points)
-            md << "| " << format("%g", p.knob) << " | " << sci(p.error) << " | " << format("%.2f", p.wall_s) << " | "
-               << table_cell(p.note) << " |\n";
+            md << "| " << format("%g", p.knob) << " | " << sci(p.error) << " | "
+               << format("%.2f", p.wall_s) << " | " << table_cell(p.note) << " |\n";
         md << "\n";
         if (fig) {
             if (fig->is_made)
@@ -177,33 +215,9 @@ std::string report_markdown(const ReportContent& c, const std::vector<Figure>& f
         }
     }
 
-    // stability
-    md << "## Stability matrix\n\n"
-       << "Each case runs in its own process on one thread (the scenes are small; under a loaded machine "
-          "OpenMP barriers only add noise), bounded by " << stability_limits(c.scale).max_steps << " substeps and "
-       << format("%.0f", stability_limits(c.scale).max_wall_s)
-       << " s of wall time (plus 30 s grace before the process is killed). Energy = kinetic + gravitational "
-          "(from the ground) + Neo-Hookean elastic; drift = (E_end - E_0)/E_scale and growth = (max E - E_0)/E_scale "
-          "with E_scale the largest |E| seen. Moisture cases change the particle masses, so their energy is not "
-          "conserved even by an exact integrator. Sticky ground impacts dissipate energy (negative drift). A substep "
-          "that fails its checks (J <= 0, a non-finite state, more than 2 cells in one step) is rolled back and "
-          "redone at half the time step, as mc-sim does (sim/mpm/step_retry.h); `retries` counts them, and a case "
-          "stops with an error only when the step would fall below 1/"
-       << (1 << RetryPolicy{}.max_halvings) << " of the stable one.\n\n"
-       << "| case | group | setup | outcome | steps | retries | sim time [s] | max abs v [m/s] | energy drift "
-          "| energy growth | wall [s] | message |\n|---|---|---|---|---|---|---|---|---|---|---|---|\n";
-    for (size_t i = 0; i < c.stability.size(); ++i) {
-        const StabilityResult& r = c.stability[i];
-        const StabilityCase* info = i < c.cases.size() ? &c.cases[i] : nullptr;
-        const bool ran = r.outcome == Outcome::Completed || r.outcome == Outcome::StoppedWithError ||
-                         r.outcome == Outcome::SilentNaN || r.outcome == Outcome::Diverged;
-        md << "| " << r.name << " | " << (info ? info->group : "") << " | " << table_cell(info ? info->description : "")
-           << " | " << outcome_name(r.outcome) << " | " << r.steps << " | " << r.retries << " | " << sci(r.sim_time) << " | "
-           << (ran ? sci(r.max_speed) : "-") << " | " << (ran ? sci(r.energy_drift) : "-") << " | "
-           << (ran ? sci(r.energy_growth) : "-") << " | " << format("%.2f", r.wall_s) << " | "
-           << table_cell(r.message) << " |\n";
-    }
-    md << "\nOne case alone: `mc-report --case <name>" << (full ? "" : " --quick") << "` (prints its result line).\n";
+    write_stability_section(md, c);
+    md << "\nOne case alone: `mc-report --case <name>" << (full ? "" : " --quick")
+       << "` (prints its result line).\n";
     return md.str();
 }
 

@@ -16,11 +16,11 @@ constexpr Real kCgClaimTolerance = 1e-3;
 /// Everything the report states.
 struct ReportContent {
     MachineInfo machine;
-    std::string command;     // the command line that produced the report
+    std::string command;  // the command line that produced the report
     int threads = 0;
     Scale scale = Scale::Full;
     std::vector<Sweep> sweeps;
-    std::vector<StabilityCase> cases;      // same order as stability
+    std::vector<StabilityCase> cases;  // same order as stability
     std::vector<StabilityResult> stability;
     double accuracy_wall_s = 0;
     double stability_wall_s = 0;
@@ -38,7 +38,8 @@ struct Figure {
 
 /// Writes data/<id>.dat and plots/<id>.gp for every sweep into `dir` and runs gnuplot on each
 /// script when `gnuplot` is on the PATH.
-std::vector<Figure> write_figures(const std::filesystem::path& dir, const std::vector<Sweep>& sweeps);
+std::vector<Figure> write_figures(const std::filesystem::path& dir,
+                                  const std::vector<Sweep>& sweeps);
 
 /// The markdown text of the report.
 std::string report_markdown(const ReportContent& content, const std::vector<Figure>& figures);

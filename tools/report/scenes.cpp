@@ -9,7 +9,8 @@ ParticleBlock lattice_block(const Vec3& lo, const Vec3i& n, Real spacing) {
     b.V0.assign(count, spacing * spacing * spacing);
     for (int k = 0; k < n.z(); ++k)
         for (int j = 0; j < n.y(); ++j)
-            for (int i = 0; i < n.x(); ++i) b.X.push_back(lo + spacing * Vec3(i + 0.5, j + 0.5, k + 0.5));
+            for (int i = 0; i < n.x(); ++i)
+                b.X.push_back(lo + spacing * Vec3(i + 0.5, j + 0.5, k + 0.5));
     return b;
 }
 

@@ -10,8 +10,8 @@ namespace mudcrack::report {
 
 /// Particles with their rest volumes.
 struct ParticleBlock {
-    std::vector<Vec3> X;  // rest positions [m]
-    std::vector<Real> V0; // rest volumes [m^3]
+    std::vector<Vec3> X;   // rest positions [m]
+    std::vector<Real> V0;  // rest volumes [m^3]
 };
 
 /// A box lattice of n[d] particles per axis at `spacing`, the first at lo + spacing/2, each with

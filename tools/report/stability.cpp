@@ -118,12 +118,20 @@ struct DegenerateTet {
     std::array<Vec3, 4> corners;
 };
 const DegenerateTet kDegenerateTets[] = {
-    {"tet_flat", "block plus a flat (coplanar) tet from init: zero rest volumes", true,
+    {"tet_flat",
+     "block plus a flat (coplanar) tet from init: zero rest volumes",
+     true,
      {Vec3(0.05, 0.3, 0.05), Vec3(0.1, 0.3, 0.05), Vec3(0.05, 0.3, 0.1), Vec3(0.1, 0.3, 0.1)}},
-    {"tet_needle", "block plus a needle tet (0.1 m long, 1e-6 m wide) on its top", true,
-     {Vec3(0.1, 0.26, 0.1), Vec3(0.1, 0.36, 0.1), Vec3(0.100001, 0.3, 0.1), Vec3(0.1, 0.3, 0.100001)}},
-    {"tet_sliver_alone", "a lone sliver tet (rest volume ~1e-20 m^3) falling onto the ground", false,
-     {Vec3(0.1, 0.1, 0.1), Vec3(0.13, 0.1, 0.1), Vec3(0.1, 0.13, 0.1), Vec3(0.115, 0.115, 0.1 + 1e-16)}},
+    {"tet_needle",
+     "block plus a needle tet (0.1 m long, 1e-6 m wide) on its top",
+     true,
+     {Vec3(0.1, 0.26, 0.1), Vec3(0.1, 0.36, 0.1), Vec3(0.100001, 0.3, 0.1),
+      Vec3(0.1, 0.3, 0.100001)}},
+    {"tet_sliver_alone",
+     "a lone sliver tet (rest volume ~1e-20 m^3) falling onto the ground",
+     false,
+     {Vec3(0.1, 0.1, 0.1), Vec3(0.13, 0.1, 0.1), Vec3(0.1, 0.13, 0.1),
+      Vec3(0.115, 0.115, 0.1 + 1e-16)}},
 };
 
 // the shot of the "dt past the elastic bound" case: dt twice the bound, through the shot loader
@@ -165,25 +173,31 @@ struct CaseEntry {
 const std::vector<CaseEntry>& case_table() {
     static const std::vector<CaseEntry> table = [] {
         std::vector<CaseEntry> t;
-        auto add = [&](std::string name, std::string group, std::string desc, std::function<CaseSetup(Scale)> fn) {
+        auto add = [&](std::string name, std::string group, std::string desc,
+                       std::function<CaseSetup(Scale)> fn) {
             t.push_back({{std::move(name), std::move(group), std::move(desc)}, std::move(fn)});
         };
         for (Real E : {1e2, 1e4, 1e6, 1e8})
             add(format("E_%.0e", E), "stiffness",
-                format("elastic block dropped on a sticky ground, E = %.0e Pa, nu = 0.3, adaptive dt", E),
+                format(
+                    "elastic block dropped on a sticky ground, E = %.0e Pa, nu = 0.3, adaptive dt",
+                    E),
                 on_base([E](CaseSetup& c) { c.model.elastic.youngs_modulus = E; }));
         for (Real nu : {0.45, 0.49, 0.499})
-            add(format("nu_%g", nu), "incompressibility", format("elastic block dropped, E = 1e4 Pa, nu = %g", nu),
+            add(format("nu_%g", nu), "incompressibility",
+                format("elastic block dropped, E = 1e4 Pa, nu = %g", nu),
                 on_base([nu](CaseSetup& c) { c.model.elastic.poisson_ratio = nu; }));
-        add("nacc_nu_0.499", "incompressibility", "NACC soil block dropped, nu = 0.499", on_base([](CaseSetup& c) {
-            c.model.elastic.poisson_ratio = 0.499;
-            c.model.nacc = soil_nacc();
-        }));
+        add("nacc_nu_0.499", "incompressibility", "NACC soil block dropped, nu = 0.499",
+            on_base([](CaseSetup& c) {
+                c.model.elastic.poisson_ratio = 0.499;
+                c.model.nacc = soil_nacc();
+            }));
         for (Real eta : {0.0, 0.5, 0.9, 0.95})
             add(format("eta_%g", eta), "porosity",
                 format("NACC soil drying on the ground, eta = %g, lambda = 0.5 m/s", eta),
                 [eta](Scale s) { return drying_scene(s, eta); });
-        add("sinh_overflow_alpha0", "hardening", "NACC with xi = 1000, alpha0 = -1: xi*alpha = 1000, sinh overflows",
+        add("sinh_overflow_alpha0", "hardening",
+            "NACC with xi = 1000, alpha0 = -1: xi*alpha = 1000, sinh overflows",
             on_base([](CaseSetup& c) {
                 c.model.nacc = soil_nacc();
                 c.model.nacc->xi = 1000;
@@ -208,17 +222,19 @@ const std::vector<CaseEntry>& case_table() {
             }));
         for (Real r : {1e2, 1e4})
             add(format("D_dt_h2_%.0e", r), "diffusion number",
-                format("drying soil with D dt/h^2 = %.0e at a fixed dt = half the elastic bound", r),
+                format("drying soil with D dt/h^2 = %.0e at a fixed dt = half the elastic bound",
+                       r),
                 [r](Scale s) { return diffusion_number_scene(s, r); });
-        add("dt_past_bound_shot", "time step", "shot with /sim/dt = 2x the elastic bound, through the shot loader",
+        add("dt_past_bound_shot", "time step",
+            "shot with /sim/dt = 2x the elastic bound, through the shot loader",
             on_base([](CaseSetup& c) { c.shot_json = dt_past_bound_shot(); }));
         add("dt_past_bound_forced", "time step",
             "dt = 3x the elastic bound forced in-process (bypasses the shot check)",
             on_base([](CaseSetup& c) { c.model.time.dt_fixed = 3 * elastic_dt_bound(c.model); }));
-        add("wall_impact_20", "impacts", "elastic block thrown at 20 m/s into a domain wall", [](Scale s) {
-            return wall_impact_scene(s, Vec3(20, 0, 0), false);
-        });
-        add("wall_impact_200", "impacts", "NACC block thrown at (200, -100, 50) m/s into the domain corner",
+        add("wall_impact_20", "impacts", "elastic block thrown at 20 m/s into a domain wall",
+            [](Scale s) { return wall_impact_scene(s, Vec3(20, 0, 0), false); });
+        add("wall_impact_200", "impacts",
+            "NACC block thrown at (200, -100, 50) m/s into the domain corner",
             [](Scale s) { return wall_impact_scene(s, Vec3(200, -100, 50), true); });
         add("ground_impact_50", "impacts", "NACC block falling at 50 m/s onto the sticky ground",
             on_base([](CaseSetup& c) {
@@ -227,9 +243,9 @@ const std::vector<CaseEntry>& case_table() {
             }));
         for (const DegenerateTet& d : kDegenerateTets)
             add(d.name, "degenerate tets", d.description, on_base([d](CaseSetup& c) {
-                if (!d.keeps_block) c.particles = {};
-                append_tet(c.particles, d.corners);
-            }));
+                    if (!d.keeps_block) c.particles = {};
+                    append_tet(c.particles, d.corners);
+                }));
         return t;
     }();
     return table;
@@ -238,10 +254,11 @@ const std::vector<CaseEntry>& case_table() {
 // any non-finite value in the state; what the sim's own check must have reported
 bool has_non_finite(const SimState& s) {
     for (size_t p = 0; p < s.size(); ++p) {
-        if (!s.x[p].allFinite() || !s.v[p].allFinite() || !s.Fe[p].allFinite() || !s.C[p].allFinite() ||
-            !std::isfinite(s.J[p]) || !std::isfinite(s.mass[p]))
+        if (!s.x[p].allFinite() || !s.v[p].allFinite() || !s.Fe[p].allFinite() ||
+            !s.C[p].allFinite() || !std::isfinite(s.J[p]) || !std::isfinite(s.mass[p]))
             return true;
-        if (!s.theta.empty() && (!std::isfinite(s.theta[p]) || !std::isfinite(s.Jw[p]))) return true;
+        if (!s.theta.empty() && (!std::isfinite(s.theta[p]) || !std::isfinite(s.Jw[p])))
+            return true;
         if (!s.alpha.empty() && !std::isfinite(s.alpha[p])) return true;
     }
     return false;
@@ -305,8 +322,8 @@ void sample_energy(const SimModel& model, const SimState& s, Tally& tally) {
 // steps the case until the step limit, the wall-time limit, a non-finite state or an error;
 // failed substeps are retried as in mc-sim (sim/mpm/step_retry.h), from the state at t = 0.
 // Sets r's outcome and message.
-void step_case(const SimModel& model, SimState& s, const StabilityLimits& limits, const WallClock& clock,
-               Tally& tally, RetryingStepper& stepper, StabilityResult& r) {
+void step_case(const SimModel& model, SimState& s, const StabilityLimits& limits,
+               const WallClock& clock, Tally& tally, RetryingStepper& stepper, StabilityResult& r) {
     stepper.restart(s);
     Tally at_rollback_point = tally;
     r.outcome = Outcome::Completed;
@@ -314,11 +331,12 @@ void step_case(const SimModel& model, SimState& s, const StabilityLimits& limits
         while (tally.steps < limits.max_steps) {
             if (clock.seconds() > limits.max_wall_s) {
                 r.outcome = Outcome::Hang;
-                r.message = format("exceeded %.0f s of wall time after %lld steps", limits.max_wall_s,
-                                   static_cast<long long>(tally.steps));
+                r.message = format("exceeded %.0f s of wall time after %lld steps",
+                                   limits.max_wall_s, static_cast<long long>(tally.steps));
                 break;
             }
-            const StepAttempt a = stepper.attempt(model, s, stable_dt(model, s) * stepper.dt_scale());
+            const StepAttempt a =
+                stepper.attempt(model, s, stable_dt(model, s) * stepper.dt_scale());
             if (!a.is_accepted) {
                 tally = at_rollback_point;
                 continue;
@@ -326,11 +344,13 @@ void step_case(const SimModel& model, SimState& s, const StabilityLimits& limits
             ++tally.steps;
             if (has_non_finite(s)) {
                 r.outcome = Outcome::SilentNaN;
-                r.message = format("non-finite state after step %lld and no error", static_cast<long long>(tally.steps));
+                r.message = format("non-finite state after step %lld and no error",
+                                   static_cast<long long>(tally.steps));
                 break;
             }
             tally.max_speed = std::max(tally.max_speed, a.stats.max_speed);
-            if (tally.steps % 5 == 0 || tally.steps == limits.max_steps) sample_energy(model, s, tally);
+            if (tally.steps % 5 == 0 || tally.steps == limits.max_steps)
+                sample_energy(model, s, tally);
             if (a.is_rollback_point) at_rollback_point = tally;
         }
     } catch (const RuntimeError& e) {
@@ -347,10 +367,13 @@ void step_case(const SimModel& model, SimState& s, const StabilityLimits& limits
 
 }  // namespace
 
-StabilityResult run_stability_case(const std::string& name, Scale scale, const StabilityLimits& limits) {
+StabilityResult run_stability_case(const std::string& name, Scale scale,
+                                   const StabilityLimits& limits) {
     const auto& table = case_table();
-    const auto it = std::find_if(table.begin(), table.end(), [&](const CaseEntry& e) { return e.info.name == name; });
-    if (it == table.end()) throw InputError("--case " + name + ": no such stability case (see --list-cases)");
+    const auto it = std::find_if(table.begin(), table.end(),
+                                 [&](const CaseEntry& e) { return e.info.name == name; });
+    if (it == table.end())
+        throw InputError("--case " + name + ": no such stability case (see --list-cases)");
     const WallClock clock;
     StabilityResult r;
     r.name = name;
@@ -388,7 +411,8 @@ StabilityResult run_stability_case(const std::string& name, Scale scale, const S
     r.sim_time = s.time;
     if (r.outcome == Outcome::Completed) sample_energy(c.model, s, tally);
     const Real denom = tally.e_scale > 0 ? tally.e_scale : Real(1);
-    const bool is_energy_finite = std::isfinite(tally.e_last) && std::isfinite(tally.e_max) && std::isfinite(denom);
+    const bool is_energy_finite =
+        std::isfinite(tally.e_last) && std::isfinite(tally.e_max) && std::isfinite(denom);
     const Real inf = std::numeric_limits<Real>::infinity();
     r.energy_drift = is_energy_finite ? (tally.e_last - e0) / denom : inf;
     r.energy_growth = is_energy_finite ? (tally.e_max - e0) / denom : inf;
@@ -396,19 +420,21 @@ StabilityResult run_stability_case(const std::string& name, Scale scale, const S
         r.outcome = Outcome::Diverged;
         int inverted = 0;
         for (const Mat3& Fe : s.Fe) inverted += !(Fe.determinant() > 0);
-        r.message = is_energy_finite
-                        ? format("energy grew to %.3g x its scale with no error", r.energy_growth)
-                        : format("elastic energy not finite: %d particles with det Fe <= 0, no error", inverted);
+        r.message =
+            is_energy_finite
+                ? format("energy grew to %.3g x its scale with no error", r.energy_growth)
+                : format("elastic energy not finite: %d particles with det Fe <= 0, no error",
+                         inverted);
     }
     r.wall_s = clock.seconds();
     return r;
 }
 
 std::string serialize_result(const StabilityResult& r) {
-    return format("%s%s\t%d\t%lld\t%lld\t%.17g\t%.17g\t%.17g\t%.17g\t%.17g\t%s", result_line_tag(), r.name.c_str(),
-                  static_cast<int>(r.outcome), static_cast<long long>(r.steps), static_cast<long long>(r.retries),
-                  r.sim_time, r.max_speed,
-                  r.energy_drift, r.energy_growth, r.wall_s, one_line(r.message).c_str());
+    return format("%s%s\t%d\t%lld\t%lld\t%.17g\t%.17g\t%.17g\t%.17g\t%.17g\t%s", result_line_tag(),
+                  r.name.c_str(), static_cast<int>(r.outcome), static_cast<long long>(r.steps),
+                  static_cast<long long>(r.retries), r.sim_time, r.max_speed, r.energy_drift,
+                  r.energy_growth, r.wall_s, one_line(r.message).c_str());
 }
 
 bool parse_result(const std::string& line, StabilityResult& r) {
@@ -438,13 +464,15 @@ bool parse_result(const std::string& line, StabilityResult& r) {
     return true;
 }
 
-StabilityResult run_stability_case_isolated(const std::string& exe, const std::string& name, Scale scale,
-                                            const StabilityLimits& limits, int threads) {
+StabilityResult run_stability_case_isolated(const std::string& exe, const std::string& name,
+                                            Scale scale, const StabilityLimits& limits,
+                                            int threads) {
     StabilityResult r;
     r.name = name;
     const WallClock clock;
     int fds[2];
-    if (pipe(fds) != 0) throw RuntimeError("stability case " + name + ": pipe() failed: " + std::strerror(errno));
+    if (pipe(fds) != 0)
+        throw RuntimeError("stability case " + name + ": pipe() failed: " + std::strerror(errno));
     posix_spawn_file_actions_t actions;
     posix_spawn_file_actions_init(&actions);
     posix_spawn_file_actions_addclose(&actions, fds[0]);
@@ -463,7 +491,8 @@ StabilityResult run_stability_case_isolated(const std::string& exe, const std::s
     close(fds[1]);
     if (rc != 0) {
         close(fds[0]);
-        throw RuntimeError("stability case " + name + ": cannot run " + exe + ": " + std::strerror(rc));
+        throw RuntimeError("stability case " + name + ": cannot run " + exe + ": " +
+                           std::strerror(rc));
     }
 
     // read the child's output until it closes the pipe or the time is up
@@ -507,7 +536,8 @@ StabilityResult run_stability_case_isolated(const std::string& exe, const std::s
         r.message = format("killed after %.0f s without a result", limit);
     } else {
         r.outcome = Outcome::Crashed;
-        r.message = WIFSIGNALED(status) ? format("died by signal %d (%s)", WTERMSIG(status), strsignal(WTERMSIG(status)))
+        r.message = WIFSIGNALED(status) ? format("died by signal %d (%s)", WTERMSIG(status),
+                                                 strsignal(WTERMSIG(status)))
                                         : format("exited %d without a result", WEXITSTATUS(status));
         if (!last_line.empty()) r.message += ": " + one_line(last_line);
     }

@@ -18,8 +18,8 @@ struct StabilityCase {
 
 /// Bounds of one case.
 struct StabilityLimits {
-    int64_t max_steps = 400;   // substeps
-    double max_wall_s = 120;   // the case counts as a hang beyond this
+    int64_t max_steps = 400;  // substeps
+    double max_wall_s = 120;  // the case counts as a hang beyond this
 };
 
 /// The limits used at each scale.
@@ -30,13 +30,15 @@ std::vector<StabilityCase> stability_cases();
 
 /// Runs one case in this process. A hang inside a single step cannot be interrupted here; use
 /// run_stability_case_isolated for that. Throws InputError for an unknown name.
-StabilityResult run_stability_case(const std::string& name, Scale scale, const StabilityLimits& limits);
+StabilityResult run_stability_case(const std::string& name, Scale scale,
+                                   const StabilityLimits& limits);
 
 /// Runs one case in a child process (`exe --case NAME ...`), killed after the wall-time limit
 /// plus a grace period (Hang); a child that dies by a signal or prints no result is Crashed.
 /// @param exe path of the mc-report executable
-StabilityResult run_stability_case_isolated(const std::string& exe, const std::string& name, Scale scale,
-                                            const StabilityLimits& limits, int threads);
+StabilityResult run_stability_case_isolated(const std::string& exe, const std::string& name,
+                                            Scale scale, const StabilityLimits& limits,
+                                            int threads);
 
 /// One line that round-trips a result through a pipe (tab-separated, message last).
 std::string serialize_result(const StabilityResult& r);

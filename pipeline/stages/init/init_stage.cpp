@@ -54,13 +54,12 @@ void add_init_fields(json& m, const InitParams& params, bool parallel_mesh, cons
     m["source"] = source_type_name(params.type);
     m["parallel_mesh"] = parallel_mesh;
     m["seed"] = params.seed;
-    m["counts"] = {{"particles", q.particles}, {"tets", q.tets}, {"boundary_faces", q.boundary_faces}};
-    json quality = {{"min_dihedral_deg", q.min_dihedral_deg},
-                    {"max_dihedral_deg", q.max_dihedral_deg},
-                    {"mean_edge_length", q.mean_edge_length},
-                    {"tet_volume", q.tet_volume},
-                    {"bbox_min", vec_json(q.bbox_min)},
-                    {"bbox_max", vec_json(q.bbox_max)}};
+    m["counts"] = {
+        {"particles", q.particles}, {"tets", q.tets}, {"boundary_faces", q.boundary_faces}};
+    json quality = {
+        {"min_dihedral_deg", q.min_dihedral_deg}, {"max_dihedral_deg", q.max_dihedral_deg},
+        {"mean_edge_length", q.mean_edge_length}, {"tet_volume", q.tet_volume},
+        {"bbox_min", vec_json(q.bbox_min)},       {"bbox_max", vec_json(q.bbox_max)}};
     if (params.type == SourceType::Mesh) {
         quality["surface_volume"] = r.surface_volume;
         quality["volume_error_pct"] = 100 * (q.tet_volume / r.surface_volume - 1);
@@ -69,11 +68,12 @@ void add_init_fields(json& m, const InitParams& params, bool parallel_mesh, cons
     m["quality"] = quality;
     m["uv_method"] = r.uv_method;
     m["build_seconds"] = build_seconds;
-    m["rates"] = {{"tets_per_s", q.tets / build_seconds}, {"particles_per_s", q.particles / build_seconds}};
+    m["rates"] = {{"tets_per_s", q.tets / build_seconds},
+                  {"particles_per_s", q.particles / build_seconds}};
 }
 
-void print_summary(const InitParams& params, const InitResult& r, double build_seconds, double wall_seconds,
-                   const fs::path& dir) {
+void print_summary(const InitParams& params, const InitResult& r, double build_seconds,
+                   double wall_seconds, const fs::path& dir) {
     const MeshQuality& q = r.quality;
     std::printf("mc-init %s -> %s\n", source_type_name(params.type), dir.string().c_str());
     std::printf("  %-22s %14lld\n", "particles", static_cast<long long>(q.particles));
@@ -82,7 +82,8 @@ void print_summary(const InitParams& params, const InitResult& r, double build_s
     std::printf("  %-22s %14.2f\n", "min dihedral [deg]", q.min_dihedral_deg);
     std::printf("  %-22s %14.6g\n", "volume [m^3]", q.tet_volume);
     if (params.type == SourceType::Mesh)
-        std::printf("  %-22s %+14.3f\n", "vs surface [%]", 100 * (q.tet_volume / r.surface_volume - 1));
+        std::printf("  %-22s %+14.3f\n", "vs surface [%]",
+                    100 * (q.tet_volume / r.surface_volume - 1));
     std::printf("  %-22s %14.2f\n", "build [s]", build_seconds);
     std::printf("  %-22s %14.0f\n", "tets/s", q.tets / build_seconds);
     std::printf("  %-22s %14.2f\n", "total [s]", wall_seconds);
@@ -110,7 +111,8 @@ int run_init_stage(const StageOptions& opt, bool parallel_mesh) {
         try {
             return build_init(params, mesher);
         } catch (const ShotValueError& e) {
-            throw InputError(opt.shot + ": " + e.what());  // the builders name the key, not the file
+            // the builders name the key, not the file
+            throw InputError(opt.shot + ": " + e.what());
         }
     }();
     const double build_seconds = build_timer.seconds();
@@ -121,8 +123,8 @@ int run_init_stage(const StageOptions& opt, bool parallel_mesh) {
     json manifest = make_manifest("init", opt.shot, shot.slice_hash(Stage::Init));
     add_init_fields(manifest, params, mesher.parallel, r, build_seconds);
     // what the later stages read, with the checksums they verify
-    manifest["outputs"] =
-        json::array({file_record(staging.path() / "particles.vdb"), file_record(staging.path() / "tets.vtu")});
+    manifest["outputs"] = json::array(
+        {file_record(staging.path() / "particles.vdb"), file_record(staging.path() / "tets.vtu")});
     manifest["wall_seconds"] = wall.seconds();
     manifest["peak_memory_bytes"] = peak_rss_bytes();
     write_manifest(staging.path(), manifest);  // last: its presence means the stage completed

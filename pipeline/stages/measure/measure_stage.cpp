@@ -39,14 +39,15 @@ constexpr Real kGroundBandCells = 1.5;
 /// The edges broken at frame n by the break history (broken at or before n).
 std::vector<uint8_t> broken_at(const BreakHistory& history, int n) {
     std::vector<uint8_t> is_broken(history.first_break.size());
-    for (size_t e = 0; e < is_broken.size(); ++e) is_broken[e] = history.first_break[e] <= n ? 1 : 0;
+    for (size_t e = 0; e < is_broken.size(); ++e)
+        is_broken[e] = history.first_break[e] <= n ? 1 : 0;
     return is_broken;
 }
 
 /// A frame's fragment, surface polygon, crack network and crack depth figures, as the table's JSON
 /// fields.
-json crack_fields(const FragmentSizes& sizes, const SurfacePolygons& polygons, const CrackNetwork& network,
-                  const CrackDepth& depth) {
+json crack_fields(const FragmentSizes& sizes, const SurfacePolygons& polygons,
+                  const CrackNetwork& network, const CrackDepth& depth) {
     return {{"fragments", sizes.count},
             {"largest_fragment_fraction", sizes.largest_fraction},
             {"weighted_mean_fragment_volume", sizes.weighted_mean_volume},
@@ -71,8 +72,8 @@ json crack_fields(const FragmentSizes& sizes, const SurfacePolygons& polygons, c
 /// The first mesh of a frame's surfacing file named by the surface manifest's entry `which`
 /// ("boundary" or "crack"), verified against its recorded checksum, or an empty mesh when the
 /// frame has none.
-TriMesh read_frame_mesh(const fs::path& surface_dir, const RecordedChecksums& surface_files, const json& entry,
-                        const char* which) {
+TriMesh read_frame_mesh(const fs::path& surface_dir, const RecordedChecksums& surface_files,
+                        const json& entry, const char* which) {
     if (!entry.contains(which) || entry[which].value("file", json()).is_null()) return TriMesh();
     const fs::path file = surface_dir / entry[which]["file"].get<std::string>();
     surface_files.verify(file);
@@ -80,13 +81,17 @@ TriMesh read_frame_mesh(const fs::path& surface_dir, const RecordedChecksums& su
     return meshes.empty() ? TriMesh() : std::move(meshes.front());
 }
 
-/// What a close-up sees in frame n's mesh files (mesh_measures.h), when the surface folder has them.
-std::optional<MeshPieces> measure_frame_meshes(const fs::path& surface_dir, const json& surface_manifest,
-                                               const RecordedChecksums& surface_files, int n, Real cell) {
+/// What a close-up sees in frame n's mesh files (mesh_measures.h), when the surface folder has
+/// them.
+std::optional<MeshPieces> measure_frame_meshes(const fs::path& surface_dir,
+                                               const json& surface_manifest,
+                                               const RecordedChecksums& surface_files, int n,
+                                               Real cell) {
     for (const json& entry : surface_manifest.value("per_frame", json::array()))
         if (entry.value("frame", 0) == n)
-            return measure_mesh_pieces(read_frame_mesh(surface_dir, surface_files, entry, "boundary"),
-                                       read_frame_mesh(surface_dir, surface_files, entry, "crack"), cell);
+            return measure_mesh_pieces(
+                read_frame_mesh(surface_dir, surface_files, entry, "boundary"),
+                read_frame_mesh(surface_dir, surface_files, entry, "crack"), cell);
     return std::nullopt;
 }
 
@@ -114,15 +119,21 @@ json motion_fields(const SurfaceMotion& m) {
 class MotionTracker {
 public:
     /// @param fracture the plates mode's fracture of the shot (as mc-surface planned it)
-    MotionTracker(const CoreTopology& topo, const BreakHistory& history, const SurfaceParams& params, Real cell,
-                  std::optional<ShotFracture> fracture)
-        : m_topo(topo), m_history(history), m_params(params), m_cell(cell), m_fracture(std::move(fracture)) {}
+    MotionTracker(const CoreTopology& topo, const BreakHistory& history,
+                  const SurfaceParams& params, Real cell, std::optional<ShotFracture> fracture)
+        : m_topo(topo),
+          m_history(history),
+          m_params(params),
+          m_cell(cell),
+          m_fracture(std::move(fracture)) {}
     /// Surfaces `frame`; the motion from the frame before, when there was one.
     std::optional<SurfaceMotion> step(ParticleFrame frame) {
         SurfacedFrame now = surface_frame(m_topo, frame, m_history.first_break, m_params,
                                           m_fracture ? &*m_fracture : nullptr);
         std::optional<SurfaceMotion> motion;
-        if (m_previous) motion = measure_surface_motion(m_topo, *m_previous, m_previous_frame, now, frame, m_cell);
+        if (m_previous)
+            motion =
+                measure_surface_motion(m_topo, *m_previous, m_previous_frame, now, frame, m_cell);
         m_previous = std::move(now);
         m_previous_frame = std::move(frame);
         return motion;
@@ -138,12 +149,14 @@ private:
     ParticleFrame m_previous_frame;
 };
 
-void print_mesh_row(int n, const std::optional<MeshPieces>& mesh, const std::optional<SurfaceMotion>& motion) {
+void print_mesh_row(int n, const std::optional<MeshPieces>& mesh,
+                    const std::optional<SurfaceMotion>& motion) {
     std::printf("%6d", n);
     if (mesh)
         std::printf(" %7d %6d %6lld %6lld %10.2f %11.4f", mesh->pieces, mesh->chips,
-                    static_cast<long long>(mesh->open_edges), static_cast<long long>(mesh->hole_edges),
-                    mesh->crack_roughness_deg, mesh->crack_area_per_metre);
+                    static_cast<long long>(mesh->open_edges),
+                    static_cast<long long>(mesh->hole_edges), mesh->crack_roughness_deg,
+                    mesh->crack_area_per_metre);
     else
         std::printf(" %7s %6s %6s %6s %10s %11s", "-", "-", "-", "-", "-", "-");
     if (motion)
@@ -196,15 +209,16 @@ struct SurfaceOutputs {
     RecordedChecksums files;
 };
 
-void read_surface_outputs(const Shot& shot, const fs::path& surface_dir, const TetMesh& mesh, int last,
-                          SurfaceOutputs& s) {
+void read_surface_outputs(const Shot& shot, const fs::path& surface_dir, const TetMesh& mesh,
+                          int last, SurfaceOutputs& s) {
     if (!fs::exists(surface_dir / "manifest.json")) return;
     s.manifest = read_current_manifest(surface_dir, shot.slice_hash(Stage::Surface));
     s.files = RecordedChecksums(s.manifest, surface_dir / "manifest.json");
     s.min_particles = s.manifest.value("min_fragment_particles", 1);
     s.files.verify(surface_dir / kBreakHistoryFile);
     s.topo = build_core_topology(mesh);
-    s.history = read_break_history(surface_dir / kBreakHistoryFile, std::nullopt, s.topo->n_edges());
+    s.history =
+        read_break_history(surface_dir / kBreakHistoryFile, std::nullopt, s.topo->n_edges());
     if (!s.history)
         throw InputError((surface_dir / kBreakHistoryFile).string() +
                          ": missing or damaged (or from another mesh): re-run mc-surface");
@@ -216,20 +230,23 @@ void read_surface_outputs(const Shot& shot, const fs::path& surface_dir, const T
 
 // --motion: the tracker that surfaces each frame again, with the shot's fracture in the plates mode
 std::optional<MotionTracker> make_motion_tracker(const Shot& shot, const SurfaceOutputs& surfacing,
-                                                 const fs::path& sim_dir, const fs::path& surface_dir,
+                                                 const fs::path& sim_dir,
+                                                 const fs::path& surface_dir,
                                                  const RecordedChecksums& sim_files) {
     if (!surfacing.topo || !shot.surface)
-        throw InputError("--motion: " + shot.path + " has no surfacing output in " + surface_dir.string() +
-                         ": run mc-surface first");
+        throw InputError("--motion: " + shot.path + " has no surfacing output in " +
+                         surface_dir.string() + ": run mc-surface first");
     std::optional<ShotFracture> fracture;
     if (shot.surface->mode == SurfaceMode::Plates) {
-        const fs::path last_path = frame_path(sim_dir, "particles", surfacing.history->last_frame, "vdb");
+        const fs::path last_path =
+            frame_path(sim_dir, "particles", surfacing.history->last_frame, "vdb");
         sim_files.verify(last_path);
-        fracture = plan_shot_fracture(*surfacing.topo, points_to_frame(read_points(last_path), last_path.string()),
+        fracture = plan_shot_fracture(*surfacing.topo,
+                                      points_to_frame(read_points(last_path), last_path.string()),
                                       surfacing.history->first_break, *shot.surface);
     }
-    return std::make_optional<MotionTracker>(*surfacing.topo, *surfacing.history, *shot.surface, shot.sim.h,
-                                             std::move(fracture));
+    return std::make_optional<MotionTracker>(*surfacing.topo, *surfacing.history, *shot.surface,
+                                             shot.sim.h, std::move(fracture));
 }
 
 // one frame's measures: its JSON row and what the table prints
@@ -246,16 +263,19 @@ struct FrameMeasures {
     std::optional<SurfaceMotion> motion;
 };
 
-FrameMeasures measure_frame(const Shot& shot, const RestSetup& rest, const SurfaceOutputs& surfacing,
-                            const fs::path& init_dir, const fs::path& sim_dir, const fs::path& surface_dir,
-                            const RecordedChecksums& sim_files, std::optional<MotionTracker>& motion_tracker, int n) {
+FrameMeasures measure_frame(const Shot& shot, const RestSetup& rest,
+                            const SurfaceOutputs& surfacing, const fs::path& init_dir,
+                            const fs::path& sim_dir, const fs::path& surface_dir,
+                            const RecordedChecksums& sim_files,
+                            std::optional<MotionTracker>& motion_tracker, int n) {
     const fs::path path = frame_path(sim_dir, "particles", n, "vdb");
     sim_files.verify(path);
     const PointCloud cloud = read_points(path);
     const ParticleFrame frame = points_to_frame(cloud, path.string());
     if (frame.size() != rest.mesh.X.size())
         throw InputError(path.string() + ": " + std::to_string(frame.size()) + " particles, but " +
-                         (init_dir / "tets.vtu").string() + " has " + std::to_string(rest.mesh.X.size()));
+                         (init_dir / "tets.vtu").string() + " has " +
+                         std::to_string(rest.mesh.X.size()));
     std::vector<Vec3> x(frame.size());
     for (size_t p = 0; p < x.size(); ++p) x[p] = frame.P[p].cast<Real>();
     FrameMeasures f;
@@ -279,12 +299,15 @@ FrameMeasures measure_frame(const Shot& shot, const RestSetup& rest, const Surfa
     const CoreTopology& topo = *surfacing.topo;
     f.broken = count_broken_edges(surfacing.history->first_break, n);
     const std::vector<uint8_t> is_broken = broken_at(*surfacing.history, n);
-    f.sizes = measure_fragment_sizes(find_fragments(topo, is_broken, surfacing.min_particles), rest.rest_volume);
+    f.sizes = measure_fragment_sizes(find_fragments(topo, is_broken, surfacing.min_particles),
+                                     rest.rest_volume);
     f.polygons = measure_surface_polygons(topo, is_broken, rest.columns, surfacing.min_particles);
     f.network = measure_crack_network(topo, is_broken, rest.columns, surfacing.min_particles);
     f.row["broken_edges"] = f.broken;
-    f.row.update(crack_fields(f.sizes, f.polygons, f.network, measure_crack_depth(topo, is_broken, rest.columns)));
-    f.meshes = measure_frame_meshes(surface_dir, surfacing.manifest, surfacing.files, n, shot.sim.h);
+    f.row.update(crack_fields(f.sizes, f.polygons, f.network,
+                              measure_crack_depth(topo, is_broken, rest.columns)));
+    f.meshes =
+        measure_frame_meshes(surface_dir, surfacing.manifest, surfacing.files, n, shot.sim.h);
     if (f.meshes) f.row.update(mesh_fields(*f.meshes));
     if (motion_tracker) f.motion = motion_tracker->step(frame);
     if (f.motion) f.row.update(motion_fields(*f.motion));
@@ -292,39 +315,48 @@ FrameMeasures measure_frame(const Shot& shot, const RestSetup& rest, const Surfa
 }
 
 void print_frame_header(const Shot& shot, const RestSetup& rest) {
-    std::printf("%s: %s, %zu particles in %d columns of %.4g m\n", kProgram, shot.name.c_str(), rest.mesh.X.size(),
-                rest.columns.n_columns(), rest.spacing);
-    std::printf("%6s %8s %11s %9s %9s %8s %10s %8s %10s %9s %7s %13s %8s %6s %6s %8s %8s\n", "frame", "time[s]",
-                "rise50[mm]", "curl[mm]", "split[%]", "splitH", "lifted[%]", "broken", "fragments", "polygons",
-                "plates", "polygon[m^2]", "axis[%]", "T[%]", "Y[%]", "str[%]", "comp[%]");
+    std::printf("%s: %s, %zu particles in %d columns of %.4g m\n", kProgram, shot.name.c_str(),
+                rest.mesh.X.size(), rest.columns.n_columns(), rest.spacing);
+    std::printf("%6s %8s %11s %9s %9s %8s %10s %8s %10s %9s %7s %13s %8s %6s %6s %8s %8s\n",
+                "frame", "time[s]", "rise50[mm]", "curl[mm]", "split[%]", "splitH", "lifted[%]",
+                "broken", "fragments", "polygons", "plates", "polygon[m^2]", "axis[%]", "T[%]",
+                "Y[%]", "str[%]", "comp[%]");
 }
 
 void print_frame_row(int n, const FrameMeasures& f, bool has_surfacing) {
-    std::printf("%6d %8.4f %11.2f %9.2f %9.2f %8.2f %10.2f", n, f.time, 1e3 * f.shape.top_rise_median,
-                1e3 * f.shape.curl, 100 * f.shape.split_fraction, f.shape.split_height_median,
-                100 * f.shape.lifted_fraction);
+    std::printf("%6d %8.4f %11.2f %9.2f %9.2f %8.2f %10.2f", n, f.time,
+                1e3 * f.shape.top_rise_median, 1e3 * f.shape.curl, 100 * f.shape.split_fraction,
+                f.shape.split_height_median, 100 * f.shape.lifted_fraction);
     if (has_surfacing)
-        std::printf(" %8lld %10d %9d %7.2f %13.4g %8.1f %6.1f %6.1f", static_cast<long long>(f.broken), f.sizes.count,
-                    f.polygons.count, f.polygons.effective_count, f.polygons.weighted_mean_area,
-                    100 * f.network.axis_aligned_fraction, 100 * f.network.t_fraction, 100 * f.network.y_fraction);
+        std::printf(" %8lld %10d %9d %7.2f %13.4g %8.1f %6.1f %6.1f",
+                    static_cast<long long>(f.broken), f.sizes.count, f.polygons.count,
+                    f.polygons.effective_count, f.polygons.weighted_mean_area,
+                    100 * f.network.axis_aligned_fraction, 100 * f.network.t_fraction,
+                    100 * f.network.y_fraction);
     else
         std::printf(" %8s %10s %9s %7s %13s %8s %6s %6s", "-", "-", "-", "-", "-", "-", "-", "-");
     if (f.halves)
-        std::printf(" %8.1f %8.1f\n", 100 * f.halves->stretched_fraction, 100 * f.halves->compressed_fraction);
+        std::printf(" %8.1f %8.1f\n", 100 * f.halves->stretched_fraction,
+                    100 * f.halves->compressed_fraction);
     else
         std::printf(" %8s %8s\n", "-", "-");
 }
 
 using MeshRow = std::pair<std::optional<MeshPieces>, std::optional<SurfaceMotion>>;
 
-void print_mesh_table(const json& surface_manifest, bool has_motion, int first, const std::vector<MeshRow>& rows) {
-    std::printf("\nsurfacing meshes (%s): pieces, chips under 2 h, edges not shared by two triangles and those of "
-                "an odd number (holes), crack-wall roughness, crack area per metre of top crack line%s\n",
-                surface_manifest.value("mode", "?").c_str(),
-                has_motion ? "; vertex jumps beyond the particles' moves (cells) and particles changing piece" : "");
-    std::printf("%6s %7s %6s %6s %6s %10s %11s %9s %9s %9s\n", "frame", "pieces", "chips", "open", "holes",
-                "rough[deg]", "wall[m2/m]", "jump_max", "jump_p99", "changes");
-    for (size_t i = 0; i < rows.size(); ++i) print_mesh_row(first + int(i), rows[i].first, rows[i].second);
+void print_mesh_table(const json& surface_manifest, bool has_motion, int first,
+                      const std::vector<MeshRow>& rows) {
+    std::printf(
+        "\nsurfacing meshes (%s): pieces, chips under 2 h, edges not shared by two triangles and those of "
+        "an odd number (holes), crack-wall roughness, crack area per metre of top crack line%s\n",
+        surface_manifest.value("mode", "?").c_str(),
+        has_motion
+            ? "; vertex jumps beyond the particles' moves (cells) and particles changing piece"
+            : "");
+    std::printf("%6s %7s %6s %6s %6s %10s %11s %9s %9s %9s\n", "frame", "pieces", "chips", "open",
+                "holes", "rough[deg]", "wall[m2/m]", "jump_max", "jump_p99", "changes");
+    for (size_t i = 0; i < rows.size(); ++i)
+        print_mesh_row(first + int(i), rows[i].first, rows[i].second);
 }
 
 }  // namespace
@@ -337,8 +369,8 @@ int run_measure_stage(const StageOptions& options, const MeasureStageOptions& me
     const json sim_manifest = read_current_manifest(sim_dir, shot.slice_hash(Stage::Sim));
     const RecordedChecksums sim_files(sim_manifest, sim_dir / "manifest.json");
     const ManifestFrames cached = manifest_frames(sim_manifest, sim_dir / "manifest.json");
-    const FrameRange frames =
-        frames_to_process(options, {cached.first, cached.last}, (sim_dir / "manifest.json").string());
+    const FrameRange frames = frames_to_process(options, {cached.first, cached.last},
+                                                (sim_dir / "manifest.json").string());
     const int first = frames.first, last = frames.last;
 
     // the rest state, the surfacing's outputs when it ran, the motion tracker on --motion
@@ -347,14 +379,16 @@ int run_measure_stage(const StageOptions& options, const MeasureStageOptions& me
     read_surface_outputs(shot, surface_dir, rest.mesh, last, surfacing);
     if (!options.quiet) print_frame_header(shot, rest);
     std::optional<MotionTracker> motion_tracker =
-        measure_options.motion ? make_motion_tracker(shot, surfacing, sim_dir, surface_dir, sim_files) : std::nullopt;
+        measure_options.motion
+            ? make_motion_tracker(shot, surfacing, sim_dir, surface_dir, sim_files)
+            : std::nullopt;
 
     // the frames, in order (the motion tracker carries one frame to the next)
     json table = json::array();
     std::vector<MeshRow> mesh_rows;
     for (int n = first; n <= last; ++n) {
-        FrameMeasures f = measure_frame(shot, rest, surfacing, init_dir, sim_dir, surface_dir, sim_files,
-                                        motion_tracker, n);
+        FrameMeasures f = measure_frame(shot, rest, surfacing, init_dir, sim_dir, surface_dir,
+                                        sim_files, motion_tracker, n);
         if (surfacing.topo) mesh_rows.emplace_back(f.meshes, f.motion);
         if (!options.quiet) print_frame_row(n, f, surfacing.topo.has_value());
         table.push_back(std::move(f.row));

@@ -14,7 +14,8 @@ namespace mudcrack {
 /// What mc-measure adds to the common stage flags.
 struct MeasureStageOptions {
     std::string json_file;  // --json: also write the table there as JSON (atomically)
-    bool motion = false;    // --motion: re-surface each frame and measure vertex jumps and piece changes
+    // --motion: re-surface each frame and measure vertex jumps and piece changes
+    bool motion = false;
 };
 
 /// Measures every cached frame (or --frames) and prints the table (unless --quiet). When the

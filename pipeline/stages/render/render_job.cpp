@@ -59,10 +59,12 @@ SurfaceFrameIndex index_surface_frames(const json& surface_manifest) {
     const auto per_frame = surface_manifest.find("per_frame");
     if (per_frame == surface_manifest.end() || !per_frame->is_array()) return index;
     for (const json& entry : *per_frame) {
-        if (!entry.is_object() || !entry.contains("frame") || !entry["frame"].is_number_integer()) continue;
+        if (!entry.is_object() || !entry.contains("frame") || !entry["frame"].is_number_integer())
+            continue;
         const int f = entry["frame"].get<int>();
         const auto crack = entry.find("crack");
-        if (crack != entry.end() && crack->is_object() && crack->contains("file") && (*crack)["file"].is_null())
+        if (crack != entry.end() && crack->is_object() && crack->contains("file") &&
+            (*crack)["file"].is_null())
             index.frames_without_cracks.insert(f);
         if (entry.contains("bounds"))
             index.bounds[f] = entry["bounds"];
@@ -94,9 +96,11 @@ std::optional<Bounds> manifest_bounds(const SurfaceFrameIndex& index, int first,
         if (b.is_null()) continue;  // a frame with no geometry
         Vec3f lo, hi;
         if (!b.is_object() || !corner(b, "min", lo) || !corner(b, "max", hi)) {
-            log::warn("bad bounds", manifest_name + ": /per_frame bounds of frame " + std::to_string(f) + " = " +
-                                        b.dump() +
-                                        ": not {\"min\": [x, y, z], \"max\": [x, y, z]}; reading every frame's meshes instead");
+            log::warn(
+                "bad bounds",
+                manifest_name + ": /per_frame bounds of frame " + std::to_string(f) + " = " +
+                    b.dump() +
+                    ": not {\"min\": [x, y, z], \"max\": [x, y, z]}; reading every frame's meshes instead");
             return std::nullopt;
         }
         stage.extend(lo);
@@ -110,7 +114,8 @@ RenderJob resolve_render_job(const StageOptions& opt, bool force_turntable) {
     job.shot = load_shot(opt.shot);
     const Shot& shot = job.shot;
     if (!shot.render)
-        throw InputError(opt.shot + ": /render: missing: the shot has no render section (add \"render\": {})");
+        throw InputError(opt.shot +
+                         ": /render: missing: the shot has no render section (add \"render\": {})");
     job.params = *shot.render;
     const RenderParams& params = job.params;
     job.do_turntable = params.turntable || force_turntable;
@@ -121,8 +126,8 @@ RenderJob resolve_render_job(const StageOptions& opt, bool force_turntable) {
     src.has_cracks = src.has_meshes && shot.surface->cracks;
     src.dir = fs::path(opt.out) / (src.has_meshes ? "surface" : "sim");
     src.format = src.has_meshes ? shot.surface->format : "vdb";
-    job.input_manifest =
-        read_current_manifest(src.dir, shot.slice_hash(src.has_meshes ? Stage::Surface : Stage::Sim));
+    job.input_manifest = read_current_manifest(
+        src.dir, shot.slice_hash(src.has_meshes ? Stage::Surface : Stage::Sim));
     const json& input = job.input_manifest;
     src.checksums = RecordedChecksums(input, job.input_manifest_path());
     if (src.has_meshes) {
@@ -134,18 +139,21 @@ RenderJob resolve_render_job(const StageOptions& opt, bool force_turntable) {
     job.last = frames.last;
     job.turntable_frame = params.turntable_frame < 0 ? job.last : params.turntable_frame;
     if (job.do_turntable && (job.turntable_frame < job.first || job.turntable_frame > job.last))
-        throw InputError(opt.shot + ": /render/turntable/frame = " + std::to_string(job.turntable_frame) +
-                         ": outside the frames " + std::to_string(job.first) + "-" + std::to_string(job.last) +
-                         " of " + job.input_manifest_path().string());
+        throw InputError(opt.shot +
+                         ": /render/turntable/frame = " + std::to_string(job.turntable_frame) +
+                         ": outside the frames " + std::to_string(job.first) + "-" +
+                         std::to_string(job.last) + " of " + job.input_manifest_path().string());
 
     // every input file exists before any work starts (the camera needs every frame's bounds)
     for (int f = job.first; f <= job.last; ++f)
         for (const fs::path& p : src.files(f))
             if (!fs::is_regular_file(p))
-                throw InputError(p.string() + ": missing: run " + (src.has_meshes ? "mc-surface" : "mc-sim") +
-                                 " for frame " + std::to_string(f));
+                throw InputError(p.string() + ": missing: run " +
+                                 (src.has_meshes ? "mc-surface" : "mc-sim") + " for frame " +
+                                 std::to_string(f));
     if (!src.has_meshes)
-        src.particle_radius = estimate_particle_radius(read_particle_frame(src, job.first), shot.sim.h);
+        src.particle_radius =
+            estimate_particle_radius(read_particle_frame(src, job.first), shot.sim.h);
     return job;
 }
 
@@ -170,13 +178,15 @@ Scene load_scene(const FrameSource& src, int f) {
 Bounds stage_bounds(const RenderJob& job) {
     const std::string manifest = job.input_manifest_path().string();
     const std::optional<Bounds> from_manifest =
-        job.src.has_meshes ? manifest_bounds(job.surface_frames, job.first, job.last, manifest) : std::nullopt;
+        job.src.has_meshes ? manifest_bounds(job.surface_frames, job.first, job.last, manifest)
+                           : std::nullopt;
     if (from_manifest) {
         if (from_manifest->is_empty())
-            throw InputError(manifest + ": frames " + std::to_string(job.first) + "-" + std::to_string(job.last) +
+            throw InputError(manifest + ": frames " + std::to_string(job.first) + "-" +
+                             std::to_string(job.last) +
                              ": no geometry to render (every frame's bounds are null)");
-        log::info("bounds of frames " + std::to_string(job.first) + "-" + std::to_string(job.last) + " from " +
-                  manifest);
+        log::info("bounds of frames " + std::to_string(job.first) + "-" + std::to_string(job.last) +
+                  " from " + manifest);
         return *from_manifest;
     }
     WallTimer scan;
@@ -184,7 +194,8 @@ Bounds stage_bounds(const RenderJob& job) {
     for (int f = job.first; f <= job.last; ++f) stage.extend(scene_bounds(load_scene(job.src, f)));
     if (stage.is_empty())
         throw InputError(job.src.dir.string() + ": frames " + std::to_string(job.first) + "-" +
-                         std::to_string(job.last) + ": no geometry to render (empty meshes or particle caches)");
+                         std::to_string(job.last) +
+                         ": no geometry to render (empty meshes or particle caches)");
     log::info("scanned " + std::to_string(job.last - job.first + 1) + " frames for bounds in " +
               std::to_string(scan.seconds()) + " s");
     return stage;

@@ -10,9 +10,9 @@
 
 #include <nlohmann/json.hpp>
 
-#include "pipeline/stages/stage_options.h"
 #include "pipeline/io/manifest.h"
 #include "pipeline/shot/shot.h"
+#include "pipeline/stages/stage_options.h"
 #include "render/render_params.h"
 #include "render/scene.h"
 
@@ -25,8 +25,10 @@ struct FrameSource {
     std::filesystem::path dir;  // DIR/surface or DIR/sim
     std::string format;         // mesh extension ("glb", ...) or "vdb"
     float particle_radius = 0;  // [m], particles only
-    std::set<int> frames_without_cracks;  // mc-surface writes no crack file for a frame with no crack
-    RecordedChecksums checksums;  // of every file, from the input manifest: each is verified as it is read
+    // mc-surface writes no crack file for a frame with no crack
+    std::set<int> frames_without_cracks;
+    // of every file, from the input manifest: each is verified as it is read
+    RecordedChecksums checksums;
 
     bool has_cracks_at(int f) const { return has_cracks && !frames_without_cracks.count(f); }
     std::filesystem::path boundary_path(int f) const;
@@ -61,7 +63,7 @@ struct RenderJob {
     FrameSource src;
     nlohmann::json input_manifest;
     SurfaceFrameIndex surface_frames;  // meshes only
-    int first = 0, last = 0;  // every frame of the shot (those of the input stage)
+    int first = 0, last = 0;           // every frame of the shot (those of the input stage)
     bool do_turntable = false;
     int turntable_frame = 0;
     float aspect() const { return float(params.width) / float(params.height); }
@@ -73,8 +75,8 @@ struct RenderJob {
 /// @throws InputError naming the file, key and value of what is missing, stale or out of range
 RenderJob resolve_render_job(const StageOptions& opt, bool force_turntable);
 
-/// The scene of frame f, meshes tagged boundary/crack by the file they came from, each file verified
-/// against its recorded checksum (InputError naming a damaged one).
+/// The scene of frame f, meshes tagged boundary/crack by the file they came from, each file
+/// verified against its recorded checksum (InputError naming a damaged one).
 Scene load_scene(const FrameSource& src, int f);
 
 /// Bounds over every frame of the shot: the camera, the ground and the shadow stay put, and a

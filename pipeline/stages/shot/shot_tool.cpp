@@ -52,19 +52,19 @@ std::string shot_summary(const Shot& shot) {
     s += "; source " + std::string(source_type_name(shot.init.type));
     s += "; plasticity " + std::string(sim.nacc ? "on" : "off");
     s += "; moisture " + std::string(sim.moisture ? "on" : "off");
-    s += sim.ground ? "; ground " + std::string(collider_mode_name(sim.ground->mode)) + " at y=" +
-                          number(sim.ground->height)
+    s += sim.ground ? "; ground " + std::string(collider_mode_name(sim.ground->mode)) +
+                          " at y=" + number(sim.ground->height)
                     : "; no ground";
     s += sim.domain.is_auto ? "; domain auto" : "; domain fixed";
     s += "; h " + number(sim.h) + " m";
-    s += "; frames " + std::to_string(sim.time.frame_start) + "-" + std::to_string(sim.time.frame_end) +
-         " at " + number(sim.time.fps) + " fps";
+    s += "; frames " + std::to_string(sim.time.frame_start) + "-" +
+         std::to_string(sim.time.frame_end) + " at " + number(sim.time.fps) + " fps";
     s += sim.time.dt_fixed > 0 ? "; dt fixed " + number(sim.time.dt_fixed) + " s"
                                : "; dt adaptive <= " + number(sim.time.dt_max) + " s";
     if (shot.surface) s += "; surfacing " + std::string(surface_mode_name(shot.surface->mode));
     if (shot.render) {
-        s += "; render " + std::to_string(shot.render->width) + "x" + std::to_string(shot.render->height) +
-             " " + color_mode_name(shot.render->color_mode);
+        s += "; render " + std::to_string(shot.render->width) + "x" +
+             std::to_string(shot.render->height) + " " + color_mode_name(shot.render->color_mode);
         if (shot.render->turntable) s += " + turntable";
     }
     return s;
@@ -122,10 +122,10 @@ double first_number(const nlohmann::json& m, std::initializer_list<const char*> 
 /// What one stage's manifest and output folder say, for `mc-shot summary`.
 struct StageSummary {
     std::string stage, dir, shot;  // shot: the shot file that ran the stage ("" if unrecorded)
-    int first = 0, last = 0;        // frames; both 0 when the stage has none (init)
-    int resumed_from_frame = 0;     // a sim that resumed from its checkpoint at this frame; else 0
+    int first = 0, last = 0;       // frames; both 0 when the stage has none (init)
+    int resumed_from_frame = 0;    // a sim that resumed from its checkpoint at this frame; else 0
     double wall_seconds = std::nan(""), peak_memory_bytes = std::nan("");
-    double rate = std::nan("");     // the stage's throughput, in rate_unit
+    double rate = std::nan("");  // the stage's throughput, in rate_unit
     std::string rate_unit;
     int files = 0;
     std::uintmax_t bytes = 0;
@@ -133,7 +133,10 @@ struct StageSummary {
 
 std::vector<StageSummary> read_stage_summaries(const std::string& out) {
     namespace fs = std::filesystem;
-    struct Throughput { const char* pointer; const char* unit; };
+    struct Throughput {
+        const char* pointer;
+        const char* unit;
+    };
     const std::map<std::string, Throughput> throughput = {
         {"init", {"/rates/particles_per_s", "particles/s"}},
         {"sim", {"/particle_steps_per_second", "particle-steps/s"}},
@@ -155,7 +158,8 @@ std::vector<StageSummary> read_stage_summaries(const std::string& out) {
             ++r.files;
             r.bytes += e.file_size();
         }
-        const double first = first_number(m, {"/frames/first"}), last = first_number(m, {"/frames/last"});
+        const double first = first_number(m, {"/frames/first"}),
+                     last = first_number(m, {"/frames/last"});
         if (!std::isnan(first) && !std::isnan(last)) {
             r.first = int(first);
             r.last = int(last);
@@ -175,7 +179,9 @@ std::vector<StageSummary> read_stage_summaries(const std::string& out) {
 }
 
 /// A number, or null when the manifest did not have it.
-nlohmann::json number_or_null(double v) { return std::isnan(v) ? nlohmann::json(nullptr) : nlohmann::json(v); }
+nlohmann::json number_or_null(double v) {
+    return std::isnan(v) ? nlohmann::json(nullptr) : nlohmann::json(v);
+}
 /// A byte count, or null when the manifest did not have it.
 nlohmann::json bytes_or_null(double v) {
     return std::isnan(v) ? nlohmann::json(nullptr) : nlohmann::json(static_cast<std::int64_t>(v));
@@ -187,35 +193,39 @@ int run_summary(const std::string& out, bool as_json) {
     if (as_json) {
         nlohmann::json doc = {{"out", out}, {"stages", nlohmann::json::array()}};
         for (const StageSummary& r : rows) {
-            nlohmann::json j = {{"stage", r.stage},
-                                {"dir", r.dir},
-                                {"shot", r.shot.empty() ? nlohmann::json(nullptr) : nlohmann::json(r.shot)},
-                                {"frames", r.last > 0 ? nlohmann::json{{"first", r.first}, {"last", r.last}}
-                                                      : nlohmann::json(nullptr)},
-                                {"resumed_from_frame", r.resumed_from_frame > 0
-                                                           ? nlohmann::json(r.resumed_from_frame)
-                                                           : nlohmann::json(nullptr)},
-                                {"wall_seconds", number_or_null(r.wall_seconds)},
-                                {"peak_memory_bytes", bytes_or_null(r.peak_memory_bytes)},
-                                {"throughput", {{"value", number_or_null(r.rate)}, {"unit", r.rate_unit}}},
-                                {"files", r.files},
-                                {"bytes", r.bytes}};
+            nlohmann::json j = {
+                {"stage", r.stage},
+                {"dir", r.dir},
+                {"shot", r.shot.empty() ? nlohmann::json(nullptr) : nlohmann::json(r.shot)},
+                {"frames", r.last > 0 ? nlohmann::json{{"first", r.first}, {"last", r.last}}
+                                      : nlohmann::json(nullptr)},
+                {"resumed_from_frame", r.resumed_from_frame > 0
+                                           ? nlohmann::json(r.resumed_from_frame)
+                                           : nlohmann::json(nullptr)},
+                {"wall_seconds", number_or_null(r.wall_seconds)},
+                {"peak_memory_bytes", bytes_or_null(r.peak_memory_bytes)},
+                {"throughput", {{"value", number_or_null(r.rate)}, {"unit", r.rate_unit}}},
+                {"files", r.files},
+                {"bytes", r.bytes}};
             doc["stages"].push_back(std::move(j));
         }
         std::cout << doc.dump(2) << "\n";
         return 0;
     }
-    std::printf("%-8s %-12s %9s %26s %10s  %s\n", "stage", "frames", "wall [s]", "throughput", "peak MiB",
-                "outputs");
+    std::printf("%-8s %-12s %9s %26s %10s  %s\n", "stage", "frames", "wall [s]", "throughput",
+                "peak MiB", "outputs");
     for (const StageSummary& r : rows) {
         // a resumed sim's wall time and throughput cover only the frames after its checkpoint
-        std::string frames = r.last > 0 ? std::to_string(r.first) + "-" + std::to_string(r.last) : "-";
+        std::string frames =
+            r.last > 0 ? std::to_string(r.first) + "-" + std::to_string(r.last) : "-";
         if (r.resumed_from_frame > 0) frames += " from " + std::to_string(r.resumed_from_frame);
         const std::string rate = std::isnan(r.rate) ? "-" : number(r.rate) + " " + r.rate_unit;
         char outputs[64];
-        std::snprintf(outputs, sizeof outputs, "%d files, %.1f MiB", r.files, static_cast<double>(r.bytes) / 1048576.0);
-        std::printf("%-8s %-12s %9.2f %26s %10.1f  %s in %s\n", r.stage.c_str(), frames.c_str(), r.wall_seconds,
-                    rate.c_str(), r.peak_memory_bytes / 1048576.0, outputs, r.dir.c_str());
+        std::snprintf(outputs, sizeof outputs, "%d files, %.1f MiB", r.files,
+                      static_cast<double>(r.bytes) / 1048576.0);
+        std::printf("%-8s %-12s %9.2f %26s %10.1f  %s in %s\n", r.stage.c_str(), frames.c_str(),
+                    r.wall_seconds, rate.c_str(), r.peak_memory_bytes / 1048576.0, outputs,
+                    r.dir.c_str());
     }
     return 0;
 }
@@ -225,10 +235,13 @@ int run_verify(const std::string& manifest_file) {
     std::ifstream is(path);
     if (!is) throw InputError(manifest_file + ": cannot read");
     const nlohmann::json manifest = nlohmann::json::parse(is, nullptr, /*allow_exceptions=*/false);
-    if (!manifest.is_object()) throw InputError(manifest_file + ": malformed manifest: expected a JSON object");
+    if (!manifest.is_object())
+        throw InputError(manifest_file + ": malformed manifest: expected a JSON object");
     const RecordedChecksums records(manifest, path);
-    if (records.size() == 0) throw InputError(manifest_file + ": records no file checksums: nothing to verify");
-    records.verify_all(path.parent_path().empty() ? std::filesystem::path(".") : path.parent_path());
+    if (records.size() == 0)
+        throw InputError(manifest_file + ": records no file checksums: nothing to verify");
+    records.verify_all(path.parent_path().empty() ? std::filesystem::path(".")
+                                                  : path.parent_path());
     std::cout << "ok: " << records.size() << " files verified against " << manifest_file << "\n";
     return 0;
 }

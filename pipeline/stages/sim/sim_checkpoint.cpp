@@ -15,7 +15,8 @@ namespace mudcrack {
 namespace {
 
 // bump when the set or meaning of the saved arrays changes; a reader refuses other versions
-constexpr int64_t kSimCheckpointVersion = 3;  // 2: strength and damage arrays; 3: the moisture flux history
+// 2: strength and damage arrays; 3: the moisture flux history
+constexpr int64_t kSimCheckpointVersion = 3;
 
 // Eigen fixed-size types are plain arrays of their scalar (column-major, no padding), so the
 // state's arrays are copied as raw doubles: a restored state is bitwise the saved one
@@ -31,17 +32,21 @@ std::vector<double> flatten(const std::vector<Element>& values) {
 
 // the named array as n elements of `Element` (n = 0 accepted for optional arrays)
 template <class Element>
-std::vector<Element> unflatten(const Checkpoint& c, const std::string& name, size_t n, bool is_optional) {
+std::vector<Element> unflatten(const Checkpoint& c, const std::string& name, size_t n,
+                               bool is_optional) {
     constexpr size_t kWidth = sizeof(Element) / sizeof(double);
-    const std::vector<double>& flat =
-        is_optional && c.f64.count(name) && c.f64.at(name).empty() ? c.f64.at(name)
-                                                                   : c.require_f64(name, n * kWidth);
+    const std::vector<double>& flat = is_optional && c.f64.count(name) && c.f64.at(name).empty()
+                                          ? c.f64.at(name)
+                                          : c.require_f64(name, n * kWidth);
     std::vector<Element> values(flat.size() / kWidth);
-    if (!flat.empty()) std::memcpy(static_cast<void*>(values.data()), flat.data(), flat.size() * sizeof(double));
+    if (!flat.empty())
+        std::memcpy(static_cast<void*>(values.data()), flat.data(), flat.size() * sizeof(double));
     return values;
 }
 
-void save_array(Checkpoint& c, const char* name, const std::vector<int32_t>& values) { c.i32[name] = values; }
+void save_array(Checkpoint& c, const char* name, const std::vector<int32_t>& values) {
+    c.i32[name] = values;
+}
 
 template <class Element>
 void save_array(Checkpoint& c, const char* name, const std::vector<Element>& values) {
@@ -66,11 +71,15 @@ enum class TotalPresence { Required, Optional };
 void save_total(Checkpoint& c, const std::string& key, int64_t value) { c.meta_int[key] = value; }
 void save_total(Checkpoint& c, const std::string& key, double value) { c.meta_double[key] = value; }
 // an Optional counter an older checkpoint lacks is 0: that run never counted it
-void load_total(const Checkpoint& c, const std::string& key, TotalPresence presence, int64_t& value) {
+void load_total(const Checkpoint& c, const std::string& key, TotalPresence presence,
+                int64_t& value) {
     value = presence == TotalPresence::Optional && !c.meta_int.count(key) ? 0 : c.require_int(key);
 }
-void load_total(const Checkpoint& c, const std::string& key, TotalPresence presence, double& value) {
-    value = presence == TotalPresence::Optional && !c.meta_double.count(key) ? 0 : c.require_double(key);
+void load_total(const Checkpoint& c, const std::string& key, TotalPresence presence,
+                double& value) {
+    value = presence == TotalPresence::Optional && !c.meta_double.count(key)
+                ? 0
+                : c.require_double(key);
 }
 
 }  // namespace
@@ -108,7 +117,8 @@ void write_sim_checkpoint(const fs::path& path, const SimCheckpoint& checkpoint)
     c.meta_double["time"] = s.time;
     c.meta_int["step_count"] = s.step_count;
     c.meta_int["particles"] = int64_t(s.size());
-    s.for_each_array([&](const char* name, const auto& array, ArrayPresence) { save_array(c, name, array); });
+    s.for_each_array(
+        [&](const char* name, const auto& array, ArrayPresence) { save_array(c, name, array); });
     // the moisture CG's flux history (block keys as int64: they are uint32)
     c.meta_int["moisture_flux.count"] = s.moisture_flux.count;
     c.meta_double["moisture_flux.dt"] = s.moisture_flux.dt;
@@ -139,7 +149,9 @@ SimCheckpoint read_sim_checkpoint(const fs::path& path) {
         throw InputError(path.string() + ": sim_checkpoint_version = " + std::to_string(version) +
                          ": this build reads version " + std::to_string(kSimCheckpointVersion));
     const int64_t n_signed = c.require_int("particles");
-    if (n_signed < 0) throw InputError(path.string() + ": particles = " + std::to_string(n_signed) + ": expected >= 0");
+    if (n_signed < 0)
+        throw InputError(path.string() + ": particles = " + std::to_string(n_signed) +
+                         ": expected >= 0");
     const size_t n = size_t(n_signed);
 
     SimCheckpoint sc;
@@ -161,11 +173,13 @@ SimCheckpoint read_sim_checkpoint(const fs::path& path) {
     h.flux = c.require_f64("moisture_flux.flux", keys.size() * mpm::kBlockNodes);
     h.flux_prev = c.require_f64("moisture_flux.flux_prev", keys.size() * mpm::kBlockNodes);
     if (h.count < 0 || h.count > 2)
-        throw InputError(path.string() + ": moisture_flux.count = " + std::to_string(h.count) + ": expected 0, 1 or 2");
+        throw InputError(path.string() + ": moisture_flux.count = " + std::to_string(h.count) +
+                         ": expected 0, 1 or 2");
     s.domain_min = unflatten<Vec3>(c, "domain_min", 1, false)[0];
     s.domain_max = unflatten<Vec3>(c, "domain_max", 1, false)[0];
     SimTotals& t = sc.totals;
-#define MC_LOAD_TOTAL(type, name, presence) load_total(c, "totals." #name, TotalPresence::presence, t.name);
+#define MC_LOAD_TOTAL(type, name, presence) \
+    load_total(c, "totals." #name, TotalPresence::presence, t.name);
     MC_SIM_TOTALS(MC_LOAD_TOTAL)
 #undef MC_LOAD_TOTAL
     // none recorded (no cache written yet, or an older checkpoint): no frame it precedes is trusted
@@ -174,7 +188,8 @@ SimCheckpoint read_sim_checkpoint(const fs::path& path) {
         const std::vector<int64_t>& crcs = c.require_i64("caches.crc32", frames.size());
         for (size_t i = 0; i < frames.size(); ++i) {
             char hex[16];
-            std::snprintf(hex, sizeof hex, "%08llx", static_cast<unsigned long long>(crcs[i]) & 0xffffffffULL);
+            std::snprintf(hex, sizeof hex, "%08llx",
+                          static_cast<unsigned long long>(crcs[i]) & 0xffffffffULL);
             sc.cache_crc32[int(frames[i])] = hex;
         }
     }

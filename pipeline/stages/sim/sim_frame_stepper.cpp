@@ -13,8 +13,8 @@ namespace {
 
 std::string step_context(int frame, int substep, double time, double dt) {
     char buf[160];
-    std::snprintf(buf, sizeof buf, "frame %d substep %d (t = %.9g s, dt = %.6g s): ", frame, substep,
-                  time, dt);
+    std::snprintf(buf, sizeof buf, "frame %d substep %d (t = %.9g s, dt = %.6g s): ", frame,
+                  substep, time, dt);
     return buf;
 }
 
@@ -32,8 +32,9 @@ std::string fastest_particle(const SimState& state) {
     }
     if (speed2 < 0) return "no particles";
     char buf[160];
-    std::snprintf(buf, sizeof buf, "particle %d moves at %.6g m/s (J = %.6g)", int(state.id[fastest]),
-                  std::sqrt(speed2), state.J.empty() ? 1.0 : state.J[fastest]);
+    std::snprintf(buf, sizeof buf, "particle %d moves at %.6g m/s (J = %.6g)",
+                  int(state.id[fastest]), std::sqrt(speed2),
+                  state.J.empty() ? 1.0 : state.J[fastest]);
     return buf;
 }
 
@@ -41,8 +42,8 @@ std::string fastest_particle(const SimState& state) {
 
 double frame_end_time(const SimModel& model, int frame) { return double(frame) / model.time.fps; }
 
-int advance_frame(const SimModel& model, SimState& state, int frame, RetryingStepper& stepper, SimTotals& totals,
-                  const SubstepCallback& on_substep) {
+int advance_frame(const SimModel& model, SimState& state, int frame, RetryingStepper& stepper,
+                  SimTotals& totals, const SubstepCallback& on_substep) {
     const double t_end = frame_end_time(model, frame);
     const double frame_length = 1.0 / model.time.fps;
     int substeps = 0;
@@ -52,7 +53,8 @@ int advance_frame(const SimModel& model, SimState& state, int frame, RetryingSte
     SimTotals totals_at_rollback_point = totals;
     while (state.time < t_end) {
         const int substep = substeps + 1;
-        // the stable step (reduced while retries are in force), clamped to land exactly on the frame's end
+        // the stable step (reduced while retries are in force), clamped to land exactly on the
+        // frame's end
         double dt = stable_dt(model, state) * stepper.dt_scale();
         if (!std::isfinite(dt) || dt < kCollapsedDtFraction * frame_length)
             throw RuntimeError(step_context(frame, substep, state.time, dt) +
@@ -80,9 +82,11 @@ int advance_frame(const SimModel& model, SimState& state, int frame, RetryingSte
             totals = totals_at_rollback_point;
             totals.retries = retries;
             char redo[160];
-            std::snprintf(redo, sizeof redo, ": rolled back to t = %.9g s, going on from there at %g of the stable dt",
+            std::snprintf(redo, sizeof redo,
+                          ": rolled back to t = %.9g s, going on from there at %g of the stable dt",
                           state.time, double(stepper.dt_scale()));
-            log::info("retry: " + step_context(frame, substep, t_start, dt) + attempt.failure + redo);
+            log::info("retry: " + step_context(frame, substep, t_start, dt) + attempt.failure +
+                      redo);
             continue;
         }
         const StepStats& stats = attempt.stats;

@@ -28,7 +28,8 @@ std::string SimProgress::format_duration(double seconds) {
     const int64_t s = std::llround(seconds);
     char buf[32];
     if (s >= 3600)
-        std::snprintf(buf, sizeof buf, "%lldh%02lldm", (long long)(s / 3600), (long long)(s % 3600 / 60));
+        std::snprintf(buf, sizeof buf, "%lldh%02lldm", (long long)(s / 3600),
+                      (long long)(s % 3600 / 60));
     else if (s >= 60)
         std::snprintf(buf, sizeof buf, "%lldm%02llds", (long long)(s / 60), (long long)(s % 60));
     else
@@ -40,15 +41,16 @@ std::string SimProgress::line(int frame, int frame_substeps, double time, int64_
                               double step_seconds) const {
     // the rate counts step-loop time only; the ETA scales the whole wall time by the simulated
     // time still to go, so cache writing and checkpoints are included in it
-    const double rate = step_seconds > 0 ? double(total_substeps) * double(m_particles) / step_seconds : 0;
+    const double rate =
+        step_seconds > 0 ? double(total_substeps) * double(m_particles) / step_seconds : 0;
     const double done = time - m_t_begin, todo = m_t_end - time;
     const double eta = done > 0 ? m_wall.seconds() * todo / done : -1;
     char buf[256];
-    std::snprintf(buf, sizeof buf,
-                  "frame %d/%d (%d of %d) substeps %d (total %lld) t = %.4f s, %.2f M particle-steps/s, ETA %s",
-                  frame, m_last_frame, frame - m_first_frame + 1, m_last_frame - m_first_frame + 1,
-                  frame_substeps, (long long)total_substeps, time, rate * 1e-6,
-                  format_duration(eta).c_str());
+    std::snprintf(
+        buf, sizeof buf,
+        "frame %d/%d (%d of %d) substeps %d (total %lld) t = %.4f s, %.2f M particle-steps/s, ETA %s",
+        frame, m_last_frame, frame - m_first_frame + 1, m_last_frame - m_first_frame + 1,
+        frame_substeps, (long long)total_substeps, time, rate * 1e-6, format_duration(eta).c_str());
     return buf;
 }
 
@@ -59,7 +61,8 @@ void SimProgress::substep(int frame, int frame_substeps, double time, int64_t to
     if (m_last_print >= 0 && now - m_last_print < kTerminalRefreshSeconds) return;
     m_last_print = now;
     // pad with spaces so a shorter line fully covers the previous one
-    std::fprintf(m_stream, "\r%-110s", line(frame, frame_substeps, time, total_substeps, step_seconds).c_str());
+    std::fprintf(m_stream, "\r%-110s",
+                 line(frame, frame_substeps, time, total_substeps, step_seconds).c_str());
     std::fflush(m_stream);
     m_line_open = true;
 }

@@ -13,12 +13,12 @@
 
 #include <nlohmann/json.hpp>
 
-#include "pipeline/stages/sim/sim_checkpoint.h"
-#include "pipeline/stages/sim/sim_frame_stepper.h"
-#include "pipeline/stages/sim/sim_progress.h"
 #include "pipeline/io/checksum.h"
 #include "pipeline/io/manifest.h"
 #include "pipeline/io/points_io.h"
+#include "pipeline/stages/sim/sim_checkpoint.h"
+#include "pipeline/stages/sim/sim_frame_stepper.h"
+#include "pipeline/stages/sim/sim_progress.h"
 #include "sim/core/error.h"
 #include "sim/core/log.h"
 #include "sim/core/parallel.h"
@@ -35,8 +35,8 @@ constexpr int kCheckpointsKept = 2;  // the newest two: one may be mid-write whe
 
 /// The rest state mc-init produced.
 struct InitParticles {
-    std::vector<Vec3> X;   // rest positions [m], index = particle id
-    std::vector<Real> V0;  // rest volumes [m^3]
+    std::vector<Vec3> X;         // rest positions [m], index = particle id
+    std::vector<Real> V0;        // rest volumes [m^3]
     std::vector<Real> strength;  // p0 multipliers of a heterogeneous soil, else empty
     nlohmann::json manifest;
 };
@@ -51,7 +51,8 @@ InitParticles read_init(const fs::path& init_dir, const Shot& shot) {
     const PointCloud cloud = read_points(particles_file);
     const std::vector<float>* volume0 = cloud.find_float("volume0");
     if (!volume0)
-        throw InputError(particles_file.string() + ": no volume0 attribute: expected the rest volume "
+        throw InputError(particles_file.string() +
+                         ": no volume0 attribute: expected the rest volume "
                          "of every particle (re-run mc-init)");
     if (volume0->size() != cloud.P.size() || cloud.id.size() != cloud.P.size())
         throw InputError(particles_file.string() + ": " + std::to_string(cloud.P.size()) +
@@ -78,7 +79,8 @@ InitParticles read_init(const fs::path& init_dir, const Shot& shot) {
     if (shot.init.strength_field && shot.sim.nacc) {
         const std::vector<float>* strength = cloud.find_float("strength");
         if (!strength || strength->size() != cloud.P.size())
-            throw InputError(particles_file.string() + ": no strength attribute with one value per particle, "
+            throw InputError(particles_file.string() +
+                             ": no strength attribute with one value per particle, "
                              "but the shot sets /init/strength_field: re-run mc-init");
         init.strength.assign(strength->begin(), strength->end());
     }
@@ -115,15 +117,16 @@ void clear_sim_dir(const fs::path& sim_dir, int keep_through) {
 
 // what a failed run leaves for --resume, appended to its one-line error
 std::string kept_frames_note(int first, int kept, const fs::path& sim_dir) {
-    return (kept >= first ? "; frames " + std::to_string(first) + "-" + std::to_string(kept) + " are kept in " +
-                                sim_dir.string()
+    return (kept >= first ? "; frames " + std::to_string(first) + "-" + std::to_string(kept) +
+                                " are kept in " + sim_dir.string()
                           : std::string()) +
            " (no manifest written)";
 }
 
 // a frame cache a resume may keep: the bytes whose checksum the checkpoint recorded (a cache
 // damaged since, missing, or not recorded is not kept: the frames from it on are simulated again)
-bool is_intact_frame(const fs::path& file, int frame, const std::map<int, std::string>& cache_crc32) {
+bool is_intact_frame(const fs::path& file, int frame,
+                     const std::map<int, std::string>& cache_crc32) {
     std::error_code ec;
     if (!fs::is_regular_file(file, ec)) return false;
     std::string problem;
@@ -134,8 +137,8 @@ bool is_intact_frame(const fs::path& file, int frame, const std::map<int, std::s
         try {
             const std::string found = file_crc32(file);
             if (found == recorded->second) return true;
-            problem = file.string() + ": damaged: its CRC-32 is " + found + ", the checkpoint records " +
-                      recorded->second;
+            problem = file.string() + ": damaged: its CRC-32 is " + found +
+                      ", the checkpoint records " + recorded->second;
         } catch (const InputError& e) {
             problem = e.what();
         }
@@ -153,7 +156,8 @@ std::optional<SimCheckpoint> find_resume_checkpoint(const fs::path& sim_dir, con
     for (const int c : frames) {
         const fs::path file = checkpoint_path(sim_dir, c);
         if (c > last) {
-            log::info(file.string() + ": past the last frame " + std::to_string(last) + ", not used");
+            log::info(file.string() + ": past the last frame " + std::to_string(last) +
+                      ", not used");
             continue;
         }
         SimCheckpoint checkpoint;
@@ -164,20 +168,23 @@ std::optional<SimCheckpoint> find_resume_checkpoint(const fs::path& sim_dir, con
             continue;
         }
         if (checkpoint.slice_hash != shot.slice_hash(Stage::Sim)) {
-            log::warn("stale checkpoint", file.string() + ": written for another version of the shot's "
-                                          "sim settings: skipped");
+            log::warn("stale checkpoint", file.string() +
+                                              ": written for another version of the shot's "
+                                              "sim settings: skipped");
             continue;
         }
         if (checkpoint.state.size() != n_particles || checkpoint.frame != c) {
-            log::warn("bad checkpoint", file.string() + ": holds " + std::to_string(checkpoint.state.size()) +
-                                        " particles at frame " + std::to_string(checkpoint.frame) +
-                                        ", expected " + std::to_string(n_particles) + " at frame " +
-                                        std::to_string(c) + ": skipped");
+            log::warn("bad checkpoint",
+                      file.string() + ": holds " + std::to_string(checkpoint.state.size()) +
+                          " particles at frame " + std::to_string(checkpoint.frame) +
+                          ", expected " + std::to_string(n_particles) + " at frame " +
+                          std::to_string(c) + ": skipped");
             continue;
         }
         bool has_frames = true;
         for (int f = first; f <= c && has_frames; ++f)
-            has_frames = is_intact_frame(frame_path(sim_dir, "particles", f, "vdb"), f, checkpoint.cache_crc32);
+            has_frames = is_intact_frame(frame_path(sim_dir, "particles", f, "vdb"), f,
+                                         checkpoint.cache_crc32);
         if (!has_frames) {
             log::info(file.string() + ": some frames before it are missing or damaged, not used");
             continue;
@@ -208,7 +215,8 @@ std::vector<std::string> attribute_names(const PointCloud& cloud) {
 }
 
 // the manifest's records of frames first..last's caches, with the checksums every reader verifies
-json cache_records(const fs::path& sim_dir, int first, int last, const std::map<int, std::string>& cache_crc32) {
+json cache_records(const fs::path& sim_dir, int first, int last,
+                   const std::map<int, std::string>& cache_crc32) {
     json records = json::array();
     for (int f = first; f <= last; ++f)
         records.push_back({{"frame", f},
@@ -250,7 +258,9 @@ SimRun start_run(const Shot& shot, const SimStageOptions& sim_options, const Ini
     std::optional<SimCheckpoint> resumed;
     if (sim_options.resume) {
         resumed = find_resume_checkpoint(sim_dir, shot, init.X.size(), first, last);
-        if (!resumed) log::info("--resume: no usable checkpoint in " + sim_dir.string() + ", starting from t = 0");
+        if (!resumed)
+            log::info("--resume: no usable checkpoint in " + sim_dir.string() +
+                      ", starting from t = 0");
     }
     SimRun run;
     if (resumed) {
@@ -273,8 +283,8 @@ SimRun start_run(const Shot& shot, const SimStageOptions& sim_options, const Ini
 }
 
 // the frame's cache; a failure (a full disk) keeps what is done for --resume
-void write_frame_cache(const SimModel& model, SimRun& run, const fs::path& sim_dir, int frame, int frame_substeps,
-                       int first, SimProgress& progress) {
+void write_frame_cache(const SimModel& model, SimRun& run, const fs::path& sim_dir, int frame,
+                       int frame_substeps, int first, SimProgress& progress) {
     ParticleFrame particles = state_to_frame(model, run.state, model.cache);
     particles.frame = frame;
     particles.time = run.state.time;
@@ -292,8 +302,8 @@ void write_frame_cache(const SimModel& model, SimRun& run, const fs::path& sim_d
 }
 
 // a full-precision checkpoint of the state at the end of `frame`, then the oldest pruned
-void write_frame_checkpoint(const Shot& shot, SimRun& run, const fs::path& sim_dir, int frame, int first,
-                            SimProgress& progress) {
+void write_frame_checkpoint(const Shot& shot, SimRun& run, const fs::path& sim_dir, int frame,
+                            int first, SimProgress& progress) {
     SimCheckpoint checkpoint;
     checkpoint.frame = frame;
     checkpoint.slice_hash = shot.slice_hash(Stage::Sim);
@@ -313,12 +323,12 @@ void write_frame_checkpoint(const Shot& shot, SimRun& run, const fs::path& sim_d
 }
 
 // frames done_frame + 1 .. last: substeps, caches (from `first` on) and checkpoints
-void simulate_frames(const Shot& shot, const SimStageOptions& sim_options, SimRun& run, const fs::path& sim_dir,
-                     int first, int last, bool verbose) {
+void simulate_frames(const Shot& shot, const SimStageOptions& sim_options, SimRun& run,
+                     const fs::path& sim_dir, int first, int last, bool verbose) {
     const SimModel& model = shot.sim;
     SimState& state = run.state;
-    SimProgress progress(int64_t(state.size()), first, last, state.time, frame_end_time(model, last), verbose,
-                         stderr, is_terminal(stderr));
+    SimProgress progress(int64_t(state.size()), first, last, state.time,
+                         frame_end_time(model, last), verbose, stderr, is_terminal(stderr));
     WallTimer step_timer;
     RetryingStepper stepper;
     for (int frame = run.done_frame + 1; frame <= last; ++frame) {
@@ -340,17 +350,19 @@ void simulate_frames(const Shot& shot, const SimStageOptions& sim_options, SimRu
             progress.finish();
             throw RuntimeError(std::string(e.what()) + kept_frames_note(first, frame - 1, sim_dir));
         }
-        run.state_bytes = std::max(run.state_bytes, state_memory_bytes(state) + stepper.memory_bytes());
+        run.state_bytes =
+            std::max(run.state_bytes, state_memory_bytes(state) + stepper.memory_bytes());
 
         // the frame's cache (frames before the requested range are simulated, not written)
-        if (frame >= first) write_frame_cache(model, run, sim_dir, frame, frame_substeps, first, progress);
+        if (frame >= first)
+            write_frame_cache(model, run, sim_dir, frame, frame_substeps, first, progress);
 
         // a checkpoint every checkpoint_every frames (by absolute frame number, so a resumed run
         // checkpoints the same frames as an uninterrupted one)
         if (model.checkpoint_every > 0 && frame % model.checkpoint_every == 0)
             write_frame_checkpoint(shot, run, sim_dir, frame, first, progress);
-        progress.frame_done(frame, frame_substeps, state.time, run.totals.substeps - run.substeps_before,
-                            run.step_seconds);
+        progress.frame_done(frame, frame_substeps, state.time,
+                            run.totals.substeps - run.substeps_before, run.step_seconds);
     }
     progress.finish();
 }
@@ -358,19 +370,24 @@ void simulate_frames(const Shot& shot, const SimStageOptions& sim_options, SimRu
 // the run's particle-steps per second of stepping
 double step_rate(const SimRun& run) {
     const int64_t run_substeps = run.totals.substeps - run.substeps_before;
-    return run.step_seconds > 0 ? double(run_substeps) * double(run.state.size()) / run.step_seconds : 0;
+    return run.step_seconds > 0 ? double(run_substeps) * double(run.state.size()) / run.step_seconds
+                                : 0;
 }
 
-json sim_manifest(const Shot& shot, const fs::path& out, const InitParticles& init, const SimRun& run, int first,
-                  int last, double wall_seconds) {
+json sim_manifest(const Shot& shot, const fs::path& out, const InitParticles& init,
+                  const SimRun& run, int first, int last, double wall_seconds) {
     const SimModel& model = shot.sim;
     const SimTotals& totals = run.totals;
     const fs::path sim_dir = out / "sim";
     const size_t n = init.X.size();
-    const double cg_mean = totals.substeps > 0 ? double(totals.cg_iterations) / double(totals.substeps) : 0;
+    const double cg_mean =
+        totals.substeps > 0 ? double(totals.cg_iterations) / double(totals.substeps) : 0;
     json m = make_manifest("sim", shot.path, shot.slice_hash(Stage::Sim));
-    m["inputs"] = {{"init", {{"dir", (out / "init").string()}, {"slice_hash", manifest_slice_hash(init.manifest)}}}};
-    m["frames"] = {{"first", first}, {"last", last}, {"count", last - first + 1}, {"fps", model.time.fps}};
+    m["inputs"] = {
+        {"init",
+         {{"dir", (out / "init").string()}, {"slice_hash", manifest_slice_hash(init.manifest)}}}};
+    m["frames"] = {
+        {"first", first}, {"last", last}, {"count", last - first + 1}, {"fps", model.time.fps}};
     m["particles"] = n;
     m["threads"] = thread_count();
     m["resumed_from_frame"] = run.resumed ? json(run.done_frame) : json(nullptr);
@@ -382,9 +399,11 @@ json sim_manifest(const Shot& shot, const fs::path& out, const InitParticles& in
     m["dt"] = {{"min", totals.dt_min}, {"max", totals.dt_max}};
     m["max_speed"] = totals.max_speed;
     m["retries"] = totals.retries;
-    m["grid_nodes"] = {{"active_max", totals.active_nodes_max}, {"allocated_max", totals.allocated_nodes_max}};
+    m["grid_nodes"] = {{"active_max", totals.active_nodes_max},
+                       {"allocated_max", totals.allocated_nodes_max}};
     m["moisture"] = model.moisture.has_value();
-    m["cg_iterations"] = {{"mean_per_substep", cg_mean}, {"max", totals.cg_max}, {"total", totals.cg_iterations}};
+    m["cg_iterations"] = {
+        {"mean_per_substep", cg_mean}, {"max", totals.cg_max}, {"total", totals.cg_iterations}};
     m["peak_memory_bytes"] = peak_rss_bytes();
     m["state_bytes"] = run.state_bytes;
     m["bytes_per_particle"] = double(run.state_bytes) / double(n);
@@ -396,14 +415,16 @@ json sim_manifest(const Shot& shot, const fs::path& out, const InitParticles& in
     m["caches"] = cache_records(sim_dir, first, last, run.cache_crc32);
     m["checkpoint_every"] = model.checkpoint_every;
     std::vector<std::string> checkpoints;
-    for (const int c : list_checkpoint_frames(sim_dir)) checkpoints.push_back(checkpoint_path(sim_dir, c).filename().string());
+    for (const int c : list_checkpoint_frames(sim_dir))
+        checkpoints.push_back(checkpoint_path(sim_dir, c).filename().string());
     m["checkpoints"] = checkpoints;
     return m;
 }
 
 }  // namespace
 
-int run_sim_stage(const Shot& shot, const StageOptions& options, const SimStageOptions& sim_options) {
+int run_sim_stage(const Shot& shot, const StageOptions& options,
+                  const SimStageOptions& sim_options) {
     WallTimer wall;
     const SimModel& model = shot.sim;
     const fs::path out(options.out);
@@ -414,26 +435,29 @@ int run_sim_stage(const Shot& shot, const StageOptions& options, const SimStageO
     const int first = frames.first, last = frames.second;
     // the testing aid's frame, like --frames: one this run simulates, else it would never fire
     if (const int k = sim_options.inject_nan_at_frame; k != 0 && (k < first || k > last))
-        throw UsageError("--inject-nan-at-frame " + std::to_string(k) + ": outside the frames " +
-                         std::to_string(first) + "-" + std::to_string(last) + " this run simulates (" +
-                         (options.frame_range.is_set() ? "--frames " + options.frames + " of " : std::string()) +
-                         shot.path + " (/frames/start, /frames/end))");
+        throw UsageError(
+            "--inject-nan-at-frame " + std::to_string(k) + ": outside the frames " +
+            std::to_string(first) + "-" + std::to_string(last) + " this run simulates (" +
+            (options.frame_range.is_set() ? "--frames " + options.frames + " of " : std::string()) +
+            shot.path + " (/frames/start, /frames/end))");
     const InitParticles init = read_init(out / "init", shot);
     SimRun run = start_run(shot, sim_options, init, sim_dir, first, last);
 
     // the frames, then the manifest, last
     simulate_frames(shot, sim_options, run, sim_dir, first, last, !options.quiet);
     if (run.cached_attributes.empty())  // resumed past the last frame: name what the caches hold
-        run.cached_attributes = attribute_names(frame_to_points(state_to_frame(model, run.state, model.cache)));
+        run.cached_attributes =
+            attribute_names(frame_to_points(state_to_frame(model, run.state, model.cache)));
     write_manifest(sim_dir, sim_manifest(shot, out, init, run, first, last, wall.seconds()));
 
     const size_t n = init.X.size();
     char line[240];
-    std::snprintf(line, sizeof line,
-                  "frames %d-%d: %lld substeps, %lld retried, %.3g M particle-steps/s, %.0f bytes/particle",
-                  first, last, (long long)(run.totals.substeps - run.substeps_before),
-                  (long long)(run.totals.retries - run.retries_before), step_rate(run) * 1e-6,
-                  double(run.state_bytes) / double(n));
+    std::snprintf(
+        line, sizeof line,
+        "frames %d-%d: %lld substeps, %lld retried, %.3g M particle-steps/s, %.0f bytes/particle",
+        first, last, (long long)(run.totals.substeps - run.substeps_before),
+        (long long)(run.totals.retries - run.retries_before), step_rate(run) * 1e-6,
+        double(run.state_bytes) / double(n));
     log::info(line);
     return 0;
 }

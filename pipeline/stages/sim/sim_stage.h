@@ -2,8 +2,8 @@
 /// The mc-sim stage: reads DIR/init/, runs the shot's frames, and writes
 /// DIR/sim/particles.####.vdb per frame (each atomically), checkpoint.####.bin every
 /// model.checkpoint_every frames (the last two kept), and manifest.json last.
-#include "pipeline/stages/stage_options.h"
 #include "pipeline/shot/shot.h"
+#include "pipeline/stages/stage_options.h"
 
 namespace mudcrack {
 
@@ -23,6 +23,7 @@ struct SimStageOptions {
 /// incomplete stage. Returns the exit code (0).
 /// @throws InputError when the init outputs are missing or stale for this shot
 /// @throws RuntimeError when the simulation fails (frame, substep, particle id and state)
-int run_sim_stage(const Shot& shot, const StageOptions& options, const SimStageOptions& sim_options);
+int run_sim_stage(const Shot& shot, const StageOptions& options,
+                  const SimStageOptions& sim_options);
 
 }  // namespace mudcrack

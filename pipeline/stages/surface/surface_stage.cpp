@@ -40,27 +40,30 @@ namespace {
 
 /// Hash of everything the break history depends on: the sim run (its manifest), Eq. 14's
 /// parameters, and the mesh.
-uint64_t break_source_hash(const json& sim_manifest, const SurfaceParams& params, const CoreTopology& topo) {
+uint64_t break_source_hash(const json& sim_manifest, const SurfaceParams& params,
+                           const CoreTopology& topo) {
     std::ostringstream os;
     os << sim_manifest.dump() << "|" << surface_mode_name(params.mode) << "|";
     os.precision(17);
-    os << params.zeta << "|" << params.length_consistent << "|" << topo.n_edges() << "|" << topo.n_tets();
+    os << params.zeta << "|" << params.length_consistent << "|" << topo.n_edges() << "|"
+       << topo.n_tets();
     const std::string s = os.str();
     return fnv1a64_of(s);
 }
 
 /// Loads one sim cache, verified against the checksum the sim manifest records, and checks that it
 /// is the expected frame of this mesh.
-ParticleFrame load_frame(const fs::path& sim_dir, const RecordedChecksums& sim_files, int frame_number,
-                         const CoreTopology& topo) {
+ParticleFrame load_frame(const fs::path& sim_dir, const RecordedChecksums& sim_files,
+                         int frame_number, const CoreTopology& topo) {
     const fs::path path = frame_path(sim_dir, "particles", frame_number, "vdb");
     sim_files.verify(path);
-    const PointCloud cloud = read_points(path);  // missing, truncated, foreign or other-version files throw
+    // missing, truncated, foreign or other-version files throw
+    const PointCloud cloud = read_points(path);
     ParticleFrame frame = points_to_frame(cloud, path.string());
     const auto it = cloud.meta_int.find("mudcrack:frame");
     if (it != cloud.meta_int.end() && it->second != frame_number)
-        throw InputError(path.string() + ": mudcrack:frame = " + std::to_string(it->second) + ": expected " +
-                         std::to_string(frame_number));
+        throw InputError(path.string() + ": mudcrack:frame = " + std::to_string(it->second) +
+                         ": expected " + std::to_string(frame_number));
     frame.frame = frame_number;
     try {
         check_frame_fits(topo, frame);
@@ -74,7 +77,8 @@ ParticleFrame load_frame(const fs::path& sim_dir, const RecordedChecksums& sim_f
 /// damaged one is not reused but scanned again.
 bool is_intact_break_history(const fs::path& surface_dir, const json& manifest) {
     try {
-        RecordedChecksums(manifest, surface_dir / "manifest.json").verify(surface_dir / kBreakHistoryFile);
+        RecordedChecksums(manifest, surface_dir / "manifest.json")
+            .verify(surface_dir / kBreakHistoryFile);
         return true;
     } catch (const InputError& e) {
         log::warn("break history", std::string(e.what()) + ": scanning the frames again");
@@ -123,8 +127,9 @@ void link_folder_contents(const fs::path& from, const fs::path& to) {
 }
 
 /// The break history of frames first..last: Eq. 14 on every cached frame (order-free: a minimum).
-BreakHistory scan_breaks(const fs::path& sim_dir, const RecordedChecksums& sim_files, int first, int last,
-                         const CoreTopology& topo, const SurfaceParams& params, uint64_t source_hash) {
+BreakHistory scan_breaks(const fs::path& sim_dir, const RecordedChecksums& sim_files, int first,
+                         int last, const CoreTopology& topo, const SurfaceParams& params,
+                         uint64_t source_hash) {
     BreakHistory h;
     h.source_hash = source_hash;
     h.first_frame = first;
@@ -172,8 +177,9 @@ void check_piece_size(const Shot& shot, const SurfaceParams& params, const CoreT
     const Real soil = piece_width(sum, sum_outer, topo.n_particles, mean_particle_spacing(topo));
     const Real asked = params.min_piece_size * params.cell_size;
     if (asked > soil)
-        throw InputError(shot.path + ": /surfacing/min_piece_size = " + std::to_string(params.min_piece_size) +
-                         ": " + std::to_string(asked) + " m (in cells of /sim/h) is wider than the soil itself (" +
+        throw InputError(shot.path + ": /surfacing/min_piece_size = " +
+                         std::to_string(params.min_piece_size) + ": " + std::to_string(asked) +
+                         " m (in cells of /sim/h) is wider than the soil itself (" +
                          std::to_string(soil) + " m across): no piece could be a plate");
 }
 
@@ -188,7 +194,9 @@ SurfaceParams flagged_params(const Shot& shot, const SurfaceStageOptions& surfac
     const std::string& mode_flag = surface_options.mode;
     const std::string& format_flag = surface_options.format;
     if (!shot.surface)
-        throw InputError(shot.path + ": /surfacing: missing: this shot has no surfacing stage (add a \"surfacing\" section)");
+        throw InputError(
+            shot.path +
+            ": /surfacing: missing: this shot has no surfacing stage (add a \"surfacing\" section)");
     SurfaceParams params = *shot.surface;
     if (!mode_flag.empty()) {
         const std::optional<SurfaceMode> mode = parse_surface_mode(mode_flag);
@@ -225,8 +233,8 @@ SurfaceInputs read_surface_inputs(const Shot& shot, const StageOptions& options)
     const ManifestFrames sim_frames = manifest_frames(in.sim_manifest, sim_dir / "manifest.json");
     in.sim_first = sim_frames.first;
     in.sim_last = sim_frames.last;
-    const FrameRange frames =
-        frames_to_process(options, {sim_frames.first, sim_frames.last}, (sim_dir / "manifest.json").string());
+    const FrameRange frames = frames_to_process(options, {sim_frames.first, sim_frames.last},
+                                                (sim_dir / "manifest.json").string());
     in.first = frames.first;
     in.last = frames.last;
     return in;
@@ -247,17 +255,19 @@ CoreTopology load_topology(const Shot& shot, const SurfaceParams& params, const 
         }
     }();
     if (params.mode == SurfaceMode::Plates) check_piece_size(shot, params, topo);
-    log::info("particle cores: " + std::to_string(topo.n_particles) + " particles, " + std::to_string(topo.n_tets()) +
-              " tets, " + std::to_string(topo.n_edges()) + " edges, " + std::to_string(topo.skin_faces.size()) +
-              " boundary faces (" + std::to_string(timer.seconds()) + " s)");
+    log::info("particle cores: " + std::to_string(topo.n_particles) + " particles, " +
+              std::to_string(topo.n_tets()) + " tets, " + std::to_string(topo.n_edges()) +
+              " edges, " + std::to_string(topo.skin_faces.size()) + " boundary faces (" +
+              std::to_string(timer.seconds()) + " s)");
     return topo;
 }
 
 // the manifest of an existing surface folder of the same shot, mode and format, which --frames
 // updates in place; nullopt when there is none (or no --frames)
-std::optional<json> in_place_manifest(const Shot& shot, const StageOptions& options, const SurfaceParams& params,
-                                      const fs::path& surface_dir) {
-    if (!options.frame_range.is_set() || !fs::exists(surface_dir / "manifest.json")) return std::nullopt;
+std::optional<json> in_place_manifest(const Shot& shot, const StageOptions& options,
+                                      const SurfaceParams& params, const fs::path& surface_dir) {
+    if (!options.frame_range.is_set() || !fs::exists(surface_dir / "manifest.json"))
+        return std::nullopt;
     json previous;
     try {
         previous = read_manifest(surface_dir);
@@ -265,7 +275,8 @@ std::optional<json> in_place_manifest(const Shot& shot, const StageOptions& opti
         return std::nullopt;
     }
     if (manifest_slice_hash(previous) == shot.slice_hash(Stage::Surface) &&
-        previous.value("mode", "") == surface_mode_name(params.mode) && previous.value("format", "") == params.format)
+        previous.value("mode", "") == surface_mode_name(params.mode) &&
+        previous.value("format", "") == params.format)
         return previous;
     return std::nullopt;
 }
@@ -282,23 +293,28 @@ struct Breaks {
 // written into `dir`; the plates mode's fracture, decided once from the shot's last frame
 // (surfacing/shot_fracture.h)
 Breaks plan_breaks(const SurfaceInputs& in, const SurfaceParams& params, const CoreTopology& topo,
-                   const fs::path& surface_dir, const std::optional<json>& previous, const fs::path& dir) {
+                   const fs::path& surface_dir, const std::optional<json>& previous,
+                   const fs::path& dir) {
     WallTimer timer;
     const uint64_t source_hash = break_source_hash(in.sim_manifest, params, topo);
     std::optional<BreakHistory> history;
     if (previous && is_intact_break_history(surface_dir, *previous))
         history = read_break_history(surface_dir / kBreakHistoryFile, source_hash, topo.n_edges());
     Breaks breaks;
-    breaks.reused = history && history->first_frame <= in.sim_first && history->last_frame >= in.last;
+    breaks.reused =
+        history && history->first_frame <= in.sim_first && history->last_frame >= in.last;
     if (!breaks.reused) {
-        log::info("break history: scanning frames " + std::to_string(in.sim_first) + "-" + std::to_string(in.sim_last));
-        history = scan_breaks(in.sim_dir, in.sim_files, in.sim_first, in.sim_last, topo, params, source_hash);
+        log::info("break history: scanning frames " + std::to_string(in.sim_first) + "-" +
+                  std::to_string(in.sim_last));
+        history = scan_breaks(in.sim_dir, in.sim_files, in.sim_first, in.sim_last, topo, params,
+                              source_hash);
         write_break_history(dir / kBreakHistoryFile, *history);
     }
     breaks.history = std::move(*history);
     if (params.mode == SurfaceMode::Plates) {
-        breaks.fracture = plan_shot_fracture(topo, load_frame(in.sim_dir, in.sim_files, in.sim_last, topo),
-                                             breaks.history.first_break, params);
+        breaks.fracture =
+            plan_shot_fracture(topo, load_frame(in.sim_dir, in.sim_files, in.sim_last, topo),
+                               breaks.history.first_break, params);
         log::info("plates: the fracture of frame " + std::to_string(in.sim_last) + ": " +
                   std::to_string(breaks.fracture->last.count) + " pieces, " +
                   std::to_string(breaks.fracture->last.debris) + " debris particles, " +
@@ -314,12 +330,14 @@ void record_material(json& record, const fs::path& mesh_file) {
     fs::path material = mesh_file;
     material.replace_extension(".mtl");
     std::error_code ec;
-    if (mesh_file.extension() == ".obj" && fs::is_regular_file(material, ec)) record["material"] = file_record(material);
+    if (mesh_file.extension() == ".obj" && fs::is_regular_file(material, ec))
+        record["material"] = file_record(material);
 }
 
 // frame n's meshes (and debris) written into `dir`, each atomically, and its manifest entry
-FrameResult surface_one_frame(const SurfaceInputs& in, const SurfaceParams& params, const CoreTopology& topo,
-                              const Breaks& breaks, const fs::path& dir, int n) {
+FrameResult surface_one_frame(const SurfaceInputs& in, const SurfaceParams& params,
+                              const CoreTopology& topo, const Breaks& breaks, const fs::path& dir,
+                              int n) {
     FrameResult result;
     const ParticleFrame frame = load_frame(in.sim_dir, in.sim_files, n, topo);
     WallTimer t;
@@ -329,14 +347,16 @@ FrameResult surface_one_frame(const SurfaceInputs& in, const SurfaceParams& para
     result.triangles = int64_t(s.boundary.faces.size() + s.crack.faces.size());
     const fs::path boundary_file = frame_path(dir, "boundary", n, params.format);
     json entry = {{"frame", n},
-                  {"boundary", {{"file", boundary_file.filename().string()},
-                                {"vertices", s.boundary.positions.size()},
-                                {"faces", s.boundary.faces.size()}}},
+                  {"boundary",
+                   {{"file", boundary_file.filename().string()},
+                    {"vertices", s.boundary.positions.size()},
+                    {"faces", s.boundary.faces.size()}}},
                   {"broken_edges", s.broken_edges},
                   {"fragments", s.fragments},
                   {"culled_fragments", s.culled_fragments},
                   {"surfacing_seconds", result.surfacing_seconds}};
-    entry["bounds"] = params.cracks ? bounds_json({&s.boundary, &s.crack}) : bounds_json({&s.boundary});
+    entry["bounds"] =
+        params.cracks ? bounds_json({&s.boundary, &s.crack}) : bounds_json({&s.boundary});
     if (params.mode == SurfaceMode::Plates) {
         entry["pieces"] = s.fragments;
         entry["debris_particles"] = s.debris_particles;
@@ -360,9 +380,10 @@ FrameResult surface_one_frame(const SurfaceInputs& in, const SurfaceParams& para
         const fs::path crack_file = frame_path(dir, "crack", n, params.format);
         std::error_code ec;
         fs::remove(crack_file, ec);  // a stale file of an earlier run
-        entry["crack"] = {{"file", s.crack.faces.empty() ? json(nullptr) : json(crack_file.filename().string())},
-                          {"vertices", s.crack.positions.size()},
-                          {"faces", s.crack.faces.size()}};
+        entry["crack"] = {
+            {"file", s.crack.faces.empty() ? json(nullptr) : json(crack_file.filename().string())},
+            {"vertices", s.crack.positions.size()},
+            {"faces", s.crack.faces.size()}};
         if (!s.crack.faces.empty()) {
             export_meshes(crack_file, take_mesh(s.crack), params.format);
             entry["crack"]["crc32"] = file_crc32(crack_file);
@@ -375,8 +396,9 @@ FrameResult surface_one_frame(const SurfaceInputs& in, const SurfaceParams& para
 
 // the manifest: this run's frames merged with those already there when updating in place
 json surface_manifest(const Shot& shot, const SurfaceInputs& in, const SurfaceParams& params,
-                      const CoreTopology& topo, const Breaks& breaks, const std::optional<json>& previous,
-                      const std::vector<FrameResult>& results, const fs::path& dir, double preprocessing_seconds) {
+                      const CoreTopology& topo, const Breaks& breaks,
+                      const std::optional<json>& previous, const std::vector<FrameResult>& results,
+                      const fs::path& dir, double preprocessing_seconds) {
     std::map<int, json> frames;
     if (previous && previous->contains("per_frame"))
         for (const json& e : (*previous)["per_frame"]) frames[e.value("frame", 0)] = e;
@@ -390,8 +412,11 @@ json surface_manifest(const Shot& shot, const SurfaceInputs& in, const SurfacePa
     json per_frame = json::array();
     for (auto& [n, e] : frames) per_frame.push_back(e);
     json m = make_manifest("surface", shot.path, shot.slice_hash(Stage::Surface));
-    m["inputs"] = {{"init", {{"dir", in.init_dir.string()}, {"slice_hash", manifest_slice_hash(in.init_manifest)}}},
-                   {"sim", {{"dir", in.sim_dir.string()}, {"slice_hash", manifest_slice_hash(in.sim_manifest)}}}};
+    m["inputs"] = {
+        {"init",
+         {{"dir", in.init_dir.string()}, {"slice_hash", manifest_slice_hash(in.init_manifest)}}},
+        {"sim",
+         {{"dir", in.sim_dir.string()}, {"slice_hash", manifest_slice_hash(in.sim_manifest)}}}};
     m["mode"] = surface_mode_name(params.mode);
     m["format"] = params.format;
     m["zeta"] = params.zeta;
@@ -399,13 +424,19 @@ json surface_manifest(const Shot& shot, const SurfaceInputs& in, const SurfacePa
     m["cracks"] = params.cracks;
     m["min_fragment_particles"] = params.min_fragment_particles;
     if (params.mode == SurfaceMode::Plates)
-        m["plates"] = {{"min_piece_size", params.min_piece_size}, {"cell_size", params.cell_size},
-                       {"debris_gap", params.debris_gap}, {"close_gaps", params.close_gaps},
+        m["plates"] = {{"min_piece_size", params.min_piece_size},
+                       {"cell_size", params.cell_size},
+                       {"debris_gap", params.debris_gap},
+                       {"close_gaps", params.close_gaps},
                        {"wall_smoothing", params.wall_smoothing},
                        {"debris", params.debris == DebrisOutput::Points ? "points" : "none"}};
-    // fps: the shot's (/frames/fps), so a DCC importer sets its scene's rate from this manifest alone
-    m["frames"] = {{"first", frames.begin()->first}, {"last", frames.rbegin()->first}, {"count", frames.size()},
-                   {"fps", shot.sim.time.fps}, {"this_run", {{"first", in.first}, {"last", in.last}}}};
+    // fps: the shot's (/frames/fps), so a DCC importer sets its scene's rate from this manifest
+    // alone
+    m["frames"] = {{"first", frames.begin()->first},
+                   {"last", frames.rbegin()->first},
+                   {"count", frames.size()},
+                   {"fps", shot.sim.time.fps},
+                   {"this_run", {{"first", in.first}, {"last", in.last}}}};
     m["particles"] = topo.n_particles;
     m["tets"] = topo.n_tets();
     m["edges"] = topo.n_edges();
@@ -413,13 +444,15 @@ json surface_manifest(const Shot& shot, const SurfaceInputs& in, const SurfacePa
     m["preprocessing_seconds"] = preprocessing_seconds;
     m["topology_bytes"] = topo.memory_bytes();
     m["topology_bytes_per_tet"] = double(topo.memory_bytes()) / topo.n_tets();
-    m["break_history"] = {{"file", kBreakHistoryFile}, {"crc32", file_crc32(dir / kBreakHistoryFile)},
+    m["break_history"] = {{"file", kBreakHistoryFile},
+                          {"crc32", file_crc32(dir / kBreakHistoryFile)},
                           {"reused", breaks.reused},
                           {"frames_scanned", breaks.reused ? 0 : in.sim_last - in.sim_first + 1},
                           {"seconds", breaks.seconds}};
     const int n_frames = in.last - in.first + 1;
     m["surfacing_seconds"] = surfacing_seconds;
-    m["tets_per_second"] = surfacing_seconds > 0 ? double(topo.n_tets()) * n_frames / surfacing_seconds : 0.0;
+    m["tets_per_second"] =
+        surfacing_seconds > 0 ? double(topo.n_tets()) * n_frames / surfacing_seconds : 0.0;
     m["triangles_per_second"] = surfacing_seconds > 0 ? double(triangles) / surfacing_seconds : 0.0;
     m["threads"] = thread_count();
     m["per_frame"] = per_frame;
@@ -427,16 +460,19 @@ json surface_manifest(const Shot& shot, const SurfaceInputs& in, const SurfacePa
 }
 
 // the results table on stdout
-void print_surface_results(const std::vector<FrameResult>& results, const json& manifest, double wall_seconds) {
+void print_surface_results(const std::vector<FrameResult>& results, const json& manifest,
+                           double wall_seconds) {
     std::printf("frame  boundary_faces  crack_faces  broken_edges  fragments\n");
     for (const FrameResult& r : results)
-        std::printf("%5d  %14lld  %11lld  %12lld  %9d\n", r.entry["frame"].get<int>(),
-                    (long long)r.entry["boundary"]["faces"].get<int64_t>(),
-                    (long long)(r.entry.contains("crack") ? r.entry["crack"]["faces"].get<int64_t>() : 0),
-                    (long long)r.entry["broken_edges"].get<int64_t>(), r.entry["fragments"].get<int>());
-    std::printf("surfaced %d frames: %.3g tets/s, %.3g triangles/s per frame compute; wall %.2f s\n",
-                int(results.size()), manifest["tets_per_second"].get<double>(),
-                manifest["triangles_per_second"].get<double>(), wall_seconds);
+        std::printf(
+            "%5d  %14lld  %11lld  %12lld  %9d\n", r.entry["frame"].get<int>(),
+            (long long)r.entry["boundary"]["faces"].get<int64_t>(),
+            (long long)(r.entry.contains("crack") ? r.entry["crack"]["faces"].get<int64_t>() : 0),
+            (long long)r.entry["broken_edges"].get<int64_t>(), r.entry["fragments"].get<int>());
+    std::printf(
+        "surfaced %d frames: %.3g tets/s, %.3g triangles/s per frame compute; wall %.2f s\n",
+        int(results.size()), manifest["tets_per_second"].get<double>(),
+        manifest["triangles_per_second"].get<double>(), wall_seconds);
 }
 
 }  // namespace
@@ -463,11 +499,13 @@ int run_surface_stage(const StageOptions& options, const SurfaceStageOptions& su
 
     // frames, in parallel; each writes its own files atomically
     std::vector<FrameResult> results(in.last - in.first + 1);
-    for_each_item(int(results.size()),
-                  [&](int i) { results[i] = surface_one_frame(in, params, topo, breaks, dir, in.first + i); });
+    for_each_item(int(results.size()), [&](int i) {
+        results[i] = surface_one_frame(in, params, topo, breaks, dir, in.first + i);
+    });
 
     // the manifest, last
-    json m = surface_manifest(shot, in, params, topo, breaks, previous, results, dir, preprocessing_seconds);
+    json m = surface_manifest(shot, in, params, topo, breaks, previous, results, dir,
+                              preprocessing_seconds);
     m["wall_seconds"] = wall.seconds();
     m["peak_memory_bytes"] = peak_rss_bytes();
     write_manifest(dir, m);
