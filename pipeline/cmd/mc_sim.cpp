@@ -7,6 +7,7 @@
 int main(int argc, char** argv) {
     using namespace mudcrack;
     SimStageOptions sim_options;
+    std::string inject_text;
     return run_stage(
         "mc-sim", "MPM simulation of drying soil: writes per-frame particle caches to OUT/sim/",
         argc, argv,
@@ -14,12 +15,16 @@ int main(int argc, char** argv) {
             app.add_flag("--resume", sim_options.resume,
                          "continue from the last valid checkpoint in OUT/sim/ (bitwise identical "
                          "caches at the same thread count)");
-            // a testing aid, hidden from --help (an empty group)
-            app.add_option("--inject-nan-at-frame", sim_options.inject_nan_at_frame,
+            // a testing aid, hidden from --help (an empty group); read as text, since CLI11's
+            // own conversion error would not name a hidden flag
+            app.add_option("--inject-nan-at-frame", inject_text,
                            "testing: particle 0's velocity becomes NaN at the start of this frame")
                 ->group("");
         },
         [&](const StageOptions& options) {
+            if (!inject_text.empty())
+                sim_options.inject_nan_at_frame =
+                    parse_frame_number("--inject-nan-at-frame", inject_text);
             const Shot shot = load_shot(options.shot);
             return run_sim_stage(shot, options, sim_options);
         });

@@ -156,12 +156,23 @@ int run_locked_body(const StageOptions& opt, const std::function<int(const Stage
 
 }  // namespace
 
+namespace {
+
+// CLI11 names a hidden option (an empty group) "": such a flag is named by its long name
+std::string flag_name(const CLI::Option& option) {
+    const std::string name = option.get_name();
+    if (!name.empty() || option.get_lnames().empty()) return name;
+    return "--" + option.get_lnames().front();
+}
+
+}  // namespace
+
 void refuse_empty_values(const CLI::App& app) {
     for (const CLI::Option* option : app.get_options()) {
         // not given, or a switch
         if (option->count() == 0 || option->get_expected_min() == 0) continue;
         for (const std::string& value : option->results())
-            if (value.empty()) throw UsageError(option->get_name() + " = \"\": expected a value");
+            if (value.empty()) throw UsageError(flag_name(*option) + " = \"\": expected a value");
     }
     for (const CLI::App* command : app.get_subcommands()) refuse_empty_values(*command);
 }
@@ -178,6 +189,14 @@ FrameRange parse_frame_range(const std::string& text) {
     if (r.first < 1 || r.last < r.first)
         throw UsageError("--frames = \"" + text + "\": expected 1 <= A <= B");
     return r;
+}
+
+int parse_frame_number(const std::string& flag, const std::string& text) {
+    static const std::regex number(R"(^\s*(-?\d{1,9})\s*$)");
+    std::smatch m;
+    if (!std::regex_match(text, m, number))
+        throw UsageError(flag + " = \"" + text + "\": expected a frame number");
+    return std::stoi(m[1]);
 }
 
 int max_thread_count() {

@@ -24,6 +24,10 @@ constexpr int kMaxThreadsPerHardwareThread = 4;
 /// Parses "A-B" or "N" (1-based, A <= B). Throws UsageError naming the flag otherwise.
 FrameRange parse_frame_range(const std::string& text);
 
+/// Parses a flag's frame number ("N", "-N": a sign and at most 9 digits, so it fits an int; the
+/// stage checks it against its frames). Throws UsageError naming `flag` and `text` otherwise.
+int parse_frame_number(const std::string& flag, const std::string& text);
+
 /// The largest --threads: kMaxThreadsPerHardwareThread x the hardware threads.
 int max_thread_count();
 

@@ -159,8 +159,14 @@ void RecordedChecksums::verify(const fs::path& file) const {
         throw InputError(file.string() + ": damaged: its CRC-32 is " + found + ", but " +
                          it->second.manifest_file.string() + " records " + it->second.crc32 +
                          rerun);
-    const std::lock_guard<std::mutex> lock(m_verified->mutex);
-    m_verified->files.insert(file);
+    {
+        const std::lock_guard<std::mutex> lock(m_verified->mutex);
+        m_verified->files.insert(file);
+    }
+    // an obj mesh's readers load its material file too: checked with it where it is recorded
+    fs::path material = file;
+    material.replace_extension(".mtl");
+    if (file.extension() == ".obj" && has(material.filename().string())) verify(material);
 }
 
 void RecordedChecksums::verify_all(const fs::path& dir) const {

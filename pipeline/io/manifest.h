@@ -71,7 +71,9 @@ public:
     /// Stops the reader unless `file` is the file its record vouches for. Throws InputError
     /// naming the file: "damaged" when its CRC-32 differs from the record, or no record / missing,
     /// each with the stage to re-run. A file verified once is not read again by this object (a
-    /// stage that reads a file twice pays for one check). Thread-safe.
+    /// stage that reads a file twice pays for one check). An obj mesh's material file
+    /// (<stem>.mtl), which its readers load with it, is verified with it when it is recorded.
+    /// Thread-safe.
     void verify(const std::filesystem::path& file) const;
     /// Verifies every recorded file, each found in `dir` (mc-shot verify, for the farm's scripts).
     void verify_all(const std::filesystem::path& dir) const;

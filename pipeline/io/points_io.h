@@ -57,6 +57,11 @@ PointCloud frame_to_points(const ParticleFrame& frame);
 /// Inverse of frame_to_points. Throws InputError (naming `source`) if ids are not 0..n-1.
 ParticleFrame points_to_frame(const PointCloud& cloud, const std::string& source);
 
+/// The last frame a four-digit frame name holds (name.9999.ext): frame 10000 would get five
+/// digits, sort before frame 2 and miss the "####" pattern DCCs read sequences with. The shot
+/// loader refuses /frames past it.
+constexpr int kMaxFrame = 9999;
+
 /// "dir/particles.0042.vdb" style frame file names: 1-based, zero-padded to 4 digits.
 std::filesystem::path frame_path(const std::filesystem::path& dir, const std::string& stem,
                                  int frame, const std::string& ext);

@@ -29,6 +29,8 @@ constexpr double kGiB = 1024.0 * 1024.0 * 1024.0;
 constexpr double kMaxRenderBufferBytes = kGiB;
 // a film frame [s]: a step too small for it is the step's fault, not the frame rate's
 constexpr Real kUsualFrameLength = 1.0 / 24;
+// how far below a particle its quadratic B-spline stencil reaches the grid's nodes [cells]
+constexpr Real kStencilReach = 1.5;
 
 std::string g(double v) {
     char buf[32];
@@ -98,32 +100,130 @@ void check_time_step(const json& tree, const SimModel& sim, Issues& issues) {
         "gives a stable time step of " + g(b.dt) + " s (" + b.why + "), below " + floor_text);
 }
 
-// what the sim grid spans: the explicit domain, else the source's extent (a mesh's is unknown here)
+// the body a source fills, as far as the loader knows it before mc-init: a box's and a
+// heightfield's bounds (a heightfield's top at most base + amplitude, or image_height); a mesh's
+// lowest point only, and only when /source/mesh/fit_to_ground puts it at y = 0
+struct BodyBounds {
+    bool has_extent = false;  // extent and top known
+    bool has_bottom = false;
+    Vec3 extent = Vec3::Zero();  // [m]
+    Real bottom = 0, top = 0;    // lowest and highest y [m]
+    std::string where;           // what the bounds come from, for messages
+};
+
+BodyBounds body_bounds(const InitParams& init) {
+    BodyBounds b;
+    if (init.type == SourceType::Box) {
+        b = {true,         true, init.box.max - init.box.min, init.box.min.y(), init.box.max.y(),
+             "/source/box"};
+    } else if (init.type == SourceType::Heightfield) {
+        const HeightfieldSource& hf = init.heightfield;
+        const Real top = hf.image.empty() ? hf.base + hf.amplitude : hf.image_height;
+        b = {true, true, Vec3(hf.size.x(), top, hf.size.z()), 0, top, "/source/heightfield"};
+    } else if (init.type == SourceType::Mesh && init.mesh.fit_to_ground) {
+        b.has_bottom = true;
+        b.where = "/source/mesh/fit_to_ground";
+    }
+    return b;
+}
+
+std::string sides_text(const Vec3& v) {
+    return g(v.x()) + " x " + g(v.y()) + " x " + g(v.z()) + " m";
+}
+
+// what the sim grid spans: the explicit domain, else the body's extent, down to a ground below it
+// (the derived domain reaches the ground; a mesh's extent is unknown here)
 bool grid_extent(const InitParams& init, const SimModel& sim, Vec3& extent) {
     if (!sim.domain.is_auto) {
         extent = sim.domain.max - sim.domain.min;
         return true;
     }
-    if (init.type == SourceType::Box) {
-        extent = init.box.max - init.box.min;
-        return true;
+    const BodyBounds body = body_bounds(init);
+    if (!body.has_extent) return false;
+    extent = body.extent;
+    if (sim.ground) extent.y() = body.top - std::min(body.bottom, sim.ground->height);
+    return true;
+}
+
+// the ground plane against the body, where the loader knows the body: a ground at or above its top
+// buries every particle; one further below its bottom than the body falls in the whole shot, plus
+// the 1.5 cells a particle's quadratic B-spline stencil reaches below it, never acts (and, with a
+// derived domain, stretches the grid down to it: -1e300 used to hang mc-sim)
+void check_ground(const json& tree, const InitParams& init, const SimModel& sim, Issues& issues) {
+    if (!sim.ground || issues.has("/colliders/ground") || issues.has("/source") ||
+        issues.has("/sim") || issues.has("/frames"))
+        return;
+    const BodyBounds body = body_bounds(init);
+    const Real height = sim.ground->height;
+    const std::string value = issues.value_of(tree, "/colliders/ground/height");
+    if (body.has_extent && !(height < body.top)) {
+        issues.add("/colliders/ground/height", value,
+                   "is at or above the top of the body, y = " + g(body.top) + " (" + body.where +
+                       "): every particle would start inside the ground; expected a height below " +
+                       g(body.top) + ", usually the body's bottom y = " + g(body.bottom),
+                   "m");
+        return;
     }
-    if (init.type == SourceType::Heightfield) {
-        const HeightfieldSource& hf = init.heightfield;
-        extent = Vec3(hf.size.x(), hf.base + hf.amplitude + hf.image_height, hf.size.z());
-        return true;
-    }
-    return false;
+    if (!body.has_bottom) return;
+    const Real t = sim.time.frame_end / sim.time.fps;
+    const Real fall = sim.initial_velocity.norm() * t + 0.5 * sim.gravity.norm() * t * t;
+    const Real lowest = body.bottom - fall - kStencilReach * sim.h;
+    if (height >= lowest) return;
+    issues.add(
+        "/colliders/ground/height", value,
+        "is " + g(body.bottom - height) + " m below the body's bottom y = " + g(body.bottom) +
+            " (" + body.where + "), which moves at most " + g(fall) + " m down in the shot's " +
+            g(t) +
+            " s (|/source/initial_velocity| t + |/sim/gravity| t^2 / 2): the ground would never act; "
+            "expected a height >= " +
+            g(lowest) +
+            " (that fall and the 1.5 cells a particle reaches "
+            "below it), or no /colliders/ground",
+        "m");
 }
 
 void check_cell_size(const json& tree, const InitParams& init, const SimModel& sim,
                      Issues& issues) {
-    if (issues.has("/sim/h") || issues.has("/source") || issues.has("/colliders/domain")) return;
+    if (issues.has("/sim/h") || issues.has("/source") || issues.has("/colliders")) return;
     if (sim.h < kMinCellSize) {
         issues.add("/sim/h", issues.value_of(tree, "/sim/h"),
                    "must be >= " + g(kMinCellSize) +
                        " (OpenVDB, which holds the caches, refuses voxels this small)",
                    "m");
+        return;
+    }
+    // a given domain: at least a cell on every axis, and a free cell between its walls
+    if (!sim.domain.is_auto) {
+        const Vec3 sides = sim.domain.max - sim.domain.min;
+        const Real thinnest = sides.minCoeff();
+        if (sim.h > thinnest) {
+            issues.add("/sim/h", issues.value_of(tree, "/sim/h"),
+                       "is larger than the domain (/colliders/domain: " + sides_text(sides) +
+                           "): expected at most its thinnest side, " + g(thinnest),
+                       "m");
+            return;
+        }
+        const int padding = sim.domain.padding;
+        if (2.0 * padding + 1 > thinnest / sim.h) {
+            issues.add(
+                "/colliders/domain/padding", issues.value_of(tree, "/colliders/domain/padding"),
+                "walls of " + std::to_string(padding) + " cells on both sides (at /sim/h = " +
+                    g(sim.h) + " m) leave no free cell across the domain's " + g(thinnest) +
+                    " m: expected at most " + g(std::floor((thinnest / sim.h - 1) / 2)),
+                "cells");
+            return;
+        }
+    }
+    // a body less than a cell across on a side has no node inside it: its particles share every
+    // node with the air around them
+    const BodyBounds body = body_bounds(init);
+    if (body.has_extent && sim.h > body.extent.minCoeff()) {
+        issues.add(
+            "/sim/h", issues.value_of(tree, "/sim/h"),
+            "is larger than the body (" + body.where + ": " + sides_text(body.extent) +
+                "), which would be less than one cell across: expected at most its thinnest side, " +
+                g(body.extent.minCoeff()),
+            "m");
         return;
     }
     Vec3 extent;
@@ -215,7 +315,8 @@ void check_camera(const json& tree, const std::optional<RenderParams>& render, I
 
 void check_plausible(const json& tree, const InitParams& init, const SimModel& sim,
                      const std::optional<RenderParams>& render, Issues& issues) {
-    check_cell_size(tree, init, sim, issues);  // first: a time step with a bad h blames h
+    check_ground(tree, init, sim, issues);     // first: the grid reaches down to the ground
+    check_cell_size(tree, init, sim, issues);  // then: a time step with a bad h blames h
     check_time_step(tree, sim, issues);
     check_particle_memory(tree, init, issues);
     check_render_buffer(tree, render, issues);

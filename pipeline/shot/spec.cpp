@@ -9,6 +9,7 @@
 #include <string>
 
 #include "pipeline/io/mesh_io.h"
+#include "pipeline/io/points_io.h"
 #include "render/render_params.h"
 #include "sim/core/particle_attributes.h"
 #include "surfacing/surface_params.h"
@@ -192,8 +193,9 @@ std::vector<KeySpec> build_fixed_table() {
 
     // --- frames
     Key("/frames", T::Section).def(json::object()).doc("frame range and rate"),
-    Key("/frames/start", T::Integer).def(1).ge(1).units("").doc("first frame (1-based)"),
-    Key("/frames/end", T::Integer).def(24).ge(1).units("").doc("last frame, inclusive; >= start"),
+    Key("/frames/start", T::Integer).def(1).ge(1).le(kMaxFrame).units("").doc("first frame (1-based)"),
+    Key("/frames/end", T::Integer).def(24).ge(1).le(kMaxFrame).units("")
+        .doc("last frame, inclusive; >= start; at most 9999, the last frame a four-digit name.####.ext holds"),
     Key("/frames/fps", T::Number).def(24.0).gt(0).units("1/s").doc("frames per second of simulated time"),
 
     // --- colliders

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
+#include <limits>
 #include <optional>
 
 #include "pipeline/shot/spec.h"
@@ -63,6 +64,13 @@ std::optional<json> check_number(const KeySpec& key, const json& v, bool is_inte
     const double d = v.get<double>();
     if (!in_range(key, d)) {
         issues.add(pointer, value_text(&v), range_expectation(key), key.units);
+        return std::nullopt;
+    }
+    // the stages hold integers in an int: a larger one would wrap into another value
+    constexpr double kMaxInt = std::numeric_limits<int>::max();
+    if (is_integer && !key.max && !(std::fabs(d) <= kMaxInt)) {
+        issues.add(pointer, value_text(&v),
+                   "must be <= " + std::to_string(int(kMaxInt)) + " (the largest int)", key.units);
         return std::nullopt;
     }
     if (is_integer) return json(static_cast<std::int64_t>(d));

@@ -13,7 +13,9 @@
 //   left by a dead writer is recovered; farm chunks share one.
 // - A stage folder that is a symbolic link: refused by every stage, the link and its target kept.
 // - Damaged files: a flipped byte anywhere in a sim cache, an init file, a mesh or an image stops
-//   its reader naming the file and "damaged"; mc-sim --resume simulates a damaged frame again.
+//   its reader naming the file and "damaged" (FlippedByte: 26 offsets across the whole of every
+//   kind of file, each export format, obj's material files and the debris points included);
+//   mc-sim --resume simulates a damaged frame again.
 // - SIGTERM and SIGINT: the stage removes what it was writing and exits 128 + the signal.
 // Shots are tiny edits of shots/fig8_a.json (75 particles, 3 frames; longer or finer where a run
 // must be stopped midway).
@@ -339,6 +341,36 @@ TEST_P(FramesPastTheShot, RefusedAsAUsageError) {
 
 INSTANTIATE_TEST_SUITE_P(EveryStage, FramesPastTheShot, ::testing::ValuesIn(kStages));
 
+// mc-sim's hidden testing flag is checked like --frames: a frame the run does not simulate is a
+// usage error, not a run that never fails
+TEST_F(HostileInput, InjectedNanFrameOutsideTheRunIsAUsageError) {
+    const fs::path shot = write_shot(tiny_shot());
+    run_before("sim", shot);
+    const std::vector<std::pair<std::vector<std::string>, std::string>> cases = {
+        {{"--inject-nan-at-frame", "4"},
+         "--inject-nan-at-frame 4: outside the frames 1-3 this run simulates (" + shot.string() +
+             " (/frames/start, /frames/end))"},
+        {{"--inject-nan-at-frame", "999999999"},
+         "--inject-nan-at-frame 999999999: outside the frames 1-3"},
+        {{"--inject-nan-at-frame", "-1"}, "--inject-nan-at-frame -1: outside the frames 1-3"},
+        {{"--frames", "1-2", "--inject-nan-at-frame", "3"},
+         "--inject-nan-at-frame 3: outside the frames 1-2 this run simulates (--frames 1-2 of " +
+             shot.string()},
+        {{"--inject-nan-at-frame", "99999999999"},
+         "--inject-nan-at-frame = \"99999999999\": expected a frame number"},
+        {{"--inject-nan-at-frame", "3x"},
+         "--inject-nan-at-frame = \"3x\": expected a frame number"},
+        {{"--inject-nan-at-frame", ""}, "--inject-nan-at-frame = \"\": expected a value"},
+    };
+    for (const auto& [args, names] : cases) {
+        const Result r = run("sim", shot, args);
+        EXPECT_EQ(r.code, 2) << r.err;
+        expect_error(r, "sim", {names});
+        EXPECT_FALSE(fs::exists(out() / "sim")) << "nothing written";
+        expect_no_debris(out());
+    }
+}
+
 // the bounds are not the whole story: 0 (all cores) and the cap itself are accepted
 TEST_F(HostileInput, ThreadsZeroAndTheCapAreAccepted) {
     const fs::path shot = write_shot(tiny_shot());
@@ -420,6 +452,58 @@ const ShotCase kShotCases[] = {
      "/render/camera/fov"},
     {"render_fps_1e_300", [](json& s) { s["render"]["fps"] = 1e-300; }, "/render/fps"},
     {"render_fps_1e300", [](json& s) { s["render"]["fps"] = 1e300; }, "/render/fps"},
+    // h against the body (0.2 x 0.1 x 0.2 m) and a given domain, and the domain's walls
+    {"h_5_wider_than_the_body", [](json& s) { s["sim"]["h"] = 5; },
+     "/sim/h = 5: is larger than the body (/source/box: 0.2 x 0.1 x 0.2 m)"},
+    {"h_larger_than_the_domain",
+     [](json& s) {
+         s["colliders"]["domain"] = {{"min", {-0.15, -0.05, -0.15}}, {"max", {0.15, 0.15, 0.15}}};
+         s["sim"]["h"] = 0.25;
+     },
+     "/sim/h = 0.25: is larger than the domain"},
+    {"padding_fills_the_domain",
+     [](json& s) {
+         s["colliders"]["domain"] = {
+             {"min", {-0.15, -0.05, -0.15}}, {"max", {0.15, 0.15, 0.15}}, {"padding", 2}};
+     },
+     "/colliders/domain/padding = 2: walls of 2 cells"},
+    // a lattice whose count overflows on one axis only needs the others thinner than any cell
+    // (h >= 1e-4 m): refused at load by h against the body, before mc-init counts it
+    {"box_overflowing_one_axis",
+     [](json& s) {
+         s["source"]["box"] = {
+             {"min", {0, 0, 0}}, {"max", {1e-299, 1e-299, 1}}, {"spacing", 1e-300}};
+     },
+     "/sim/h = 0.05: is larger than the body (/source/box: 1e-299 x 1e-299 x 1 m)"},
+    {"heightfield_overflowing_layers",
+     [](json& s) {
+         s["source"] = {{"type", "heightfield"},
+                        {"heightfield",
+                         {{"size", {1e-299, 1e-299}}, {"channel_depth", 0}, {"spacing", 1e-300}}}};
+     },
+     "/sim/h = 0.05: is larger than the body (/source/heightfield: 1e-299 x 0.35 x 1e-299 m)"},
+    // a ground far above or below the body (bottom y = 0, top 0.1, 3 frames of falling)
+    {"ground_1e300", [](json& s) { s["colliders"]["ground"]["height"] = 1e300; },
+     "/colliders/ground/height = 1e+300: is at or above the top of the body, y = 0.1"},
+    {"ground_on_the_top", [](json& s) { s["colliders"]["ground"]["height"] = 0.1; },
+     "/colliders/ground/height = 0.1: is at or above the top of the body"},
+    {"ground_minus_1e300", [](json& s) { s["colliders"]["ground"]["height"] = -1e300; },
+     "/colliders/ground/height = -1e+300: is 1e+300 m below the body's bottom y = 0"},
+    {"ground_out_of_reach", [](json& s) { s["colliders"]["ground"]["height"] = -10; },
+     "/colliders/ground/height = -10: is 10 m below the body's bottom y = 0 (/source/box), which moves at most"},
+    // frame names hold four digits (name.####.ext); an int holds the rest of the integers
+    {"frames_end_1e9", [](json& s) { s["frames"]["end"] = 1000000000; },
+     "/frames/end = 1000000000: must be in [1, 9999]"},
+    {"frames_end_10000", [](json& s) { s["frames"]["end"] = 10000; },
+     "/frames/end = 10000: must be in [1, 9999]"},
+    {"frames_end_beyond_int", [](json& s) { s["frames"]["end"] = 100000000000LL; },
+     "/frames/end = 100000000000"},
+    {"padding_beyond_int",
+     [](json& s) {
+         s["colliders"]["domain"] = {
+             {"min", {-1, -1, -1}}, {"max", {1, 1, 1}}, {"padding", 1000000000000LL}};
+     },
+     "/colliders/domain/padding = 1000000000000: must be <= 2147483647"},
 };
 
 // a number too large for a double, written into the shot's text
@@ -486,24 +570,11 @@ struct SpacingCase {
 const SpacingCase kSpacingCases[] = {
     {"box", [](json& s) { s["source"]["box"]["spacing"] = 1e-300; },
      "/source/box/spacing = 1e-300: gives inf"},
-    {"box_one_axis",
-     [](json& s) {
-         s["source"]["box"] = {
-             {"min", {0, 0, 0}}, {"max", {1e-299, 1e-299, 1}}, {"spacing", 1e-300}};
-     },
-     "/source/box/spacing = 1e-300: gives"},
     {"heightfield_columns",
      [](json& s) {
          s["source"] = {{"type", "heightfield"}, {"heightfield", {{"spacing", 1e-300}}}};
      },
      "/source/heightfield/spacing = 1e-300: gives inf columns"},
-    {"heightfield_layers",
-     [](json& s) {
-         s["source"] = {{"type", "heightfield"},
-                        {"heightfield",
-                         {{"size", {1e-299, 1e-299}}, {"channel_depth", 0}, {"spacing", 1e-300}}}};
-     },
-     "/source/heightfield/spacing = 1e-300: gives"},
 };
 
 class LatticeSpacing : public HostileInput, public ::testing::WithParamInterface<int> {};
@@ -759,14 +830,29 @@ fs::path file_starting(const fs::path& dir, const std::string& prefix) {
     return {};
 }
 
+// offsets across the whole of a file of `size` bytes: each of its first 8 (magic numbers and
+// versions), 16 more evenly spaced through the rest, and its last two
+std::vector<size_t> sweep_offsets(size_t size) {
+    std::vector<size_t> offsets;
+    for (size_t i = 0; i < std::min<size_t>(8, size); ++i) offsets.push_back(i);
+    for (size_t k = 1; k <= 16; ++k) offsets.push_back(8 + (size - 8) * k / 17);
+    offsets.push_back(size - 2);
+    offsets.push_back(size - 1);
+    std::sort(offsets.begin(), offsets.end());
+    offsets.erase(std::unique(offsets.begin(), offsets.end()), offsets.end());
+    while (!offsets.empty() && offsets.back() >= size) offsets.pop_back();
+    return offsets;
+}
+
 // each offset of `file` damaged in turn (the file restored after each), `read` run on it: it must
 // exit 1 naming the file and "damaged", and leave no output behind
-void expect_damage_refused(const fs::path& file, const std::string& stage,
-                           const std::function<Result()>& read,
-                           const std::function<void()>& expect_nothing_written) {
+void expect_damage_refused(
+    const fs::path& file, const std::string& stage, const std::function<Result()>& read,
+    const std::function<void()>& expect_nothing_written,
+    const std::function<std::vector<size_t>(size_t)>& offsets = damage_offsets) {
     ASSERT_TRUE(fs::is_regular_file(file)) << file;
     const std::string clean = read_text(file);
-    for (const size_t offset : damage_offsets(clean.size())) {
+    for (const size_t offset : offsets(clean.size())) {
         SCOPED_TRACE(file.string() + " byte " + std::to_string(offset));
         flip_byte(file, offset);
         const Result r = read();
@@ -853,6 +939,139 @@ TEST_F(HostileInput, DamagedImageIsRefusedByTheAssembly) {
     EXPECT_EQ(v.code, 1) << v.err;
     expect_error(v, "shot", {(out() / "render" / "turntable.0001.png").string() + ": damaged"});
 }
+
+// every kind of file a later stage reads, a byte flipped at offsets across the whole file (its
+// header and last byte included), each read by a stage that uses it: caught before it is used
+struct FlipCase {
+    std::string name;
+    std::function<void(json&)> edit;               // the shot
+    std::vector<std::vector<std::string>> before;  // stage runs that make the files
+    std::vector<std::string> files;                // the files, under OUT
+    std::string reader;  // its stage; "shot": mc-shot verify of its folder
+    std::vector<std::string> reader_args;
+};
+void PrintTo(const FlipCase& c, std::ostream* os) { *os << c.name; }
+
+// ours with a threshold that breaks edges at rest: crack meshes in 3 frames
+std::function<void(json&)> surfaced_as(const std::string& format) {
+    return [format](json& s) {
+        s["surfacing"] = {{"mode", "ours"}, {"zeta", 0.9}, {"format", format}};
+    };
+}
+const std::vector<std::vector<std::string>> kUpToSurface = {{"init"}, {"sim"}, {"surface"}};
+
+const FlipCase kFlipCases[] = {
+    {"sim_cache_by_surface",
+     [](json&) {},
+     {{"init"}, {"sim"}},
+     {"sim/particles.0002.vdb"},
+     "surface",
+     {}},
+    {"sim_cache_by_measure", [](json&) {}, kUpToSurface, {"sim/particles.0002.vdb"}, "measure", {}},
+    {"init_particles_by_sim", [](json&) {}, {{"init"}}, {"init/particles.vdb"}, "sim", {}},
+    {"init_tets_by_surface", [](json&) {}, {{"init"}, {"sim"}}, {"init/tets.vtu"}, "surface", {}},
+    {"glb_by_render",
+     surfaced_as("glb"),
+     kUpToSurface,
+     {"surface/boundary.0002.glb", "surface/crack.0002.glb"},
+     "render",
+     {"--frames", "2-2"}},
+    {"obj_by_render",
+     surfaced_as("obj"),
+     kUpToSurface,
+     {"surface/boundary.0002.obj", "surface/crack.0002.obj"},
+     "render",
+     {"--frames", "2-2"}},
+    // an obj's material file, which the mesh's readers load with it
+    {"obj_material_by_render",
+     surfaced_as("obj"),
+     kUpToSurface,
+     {"surface/boundary.0002.mtl", "surface/crack.0002.mtl"},
+     "render",
+     {"--frames", "2-2"}},
+    {"obj_material_by_verify",
+     surfaced_as("obj"),
+     kUpToSurface,
+     {"surface/crack.0002.mtl"},
+     "shot",
+     {}},
+    {"glb_by_measure",
+     surfaced_as("glb"),
+     kUpToSurface,
+     {"surface/boundary.0002.glb"},
+     "measure",
+     {}},
+    {"obj_by_measure", surfaced_as("obj"), kUpToSurface, {"surface/crack.0002.obj"}, "measure", {}},
+    {"ply_by_measure",
+     surfaced_as("ply"),
+     kUpToSurface,
+     {"surface/boundary.0002.ply", "surface/crack.0002.ply"},
+     "measure",
+     {}},
+    {"dae_by_measure",
+     surfaced_as("dae"),
+     kUpToSurface,
+     {"surface/boundary.0002.dae", "surface/crack.0002.dae"},
+     "measure",
+     {}},
+    // plates breaking everything at rest: every particle is debris; no stage reads the points, the
+    // farm's merge and the Blender add-on verify them
+    {"debris_points_by_verify",
+     [](json& s) {
+         s["surfacing"] = {
+             {"mode", "plates"}, {"zeta", 0.9}, {"min_piece_size", 1}, {"debris", "points"}};
+     },
+     kUpToSurface,
+     {"surface/debris.0002.ply"},
+     "shot",
+     {}},
+    {"image_by_assembly",
+     [](json&) {},
+     {{"init"}, {"sim"}, {"surface"}, {"render", "--frames", "1-3"}},
+     {"render/frame.0002.png"},
+     "render",
+     {"--assemble"}},
+};
+
+class FlippedByte : public HostileInput, public ::testing::WithParamInterface<FlipCase> {};
+
+TEST_P(FlippedByte, AtAnyOffsetIsCaughtBeforeUse) {
+    const FlipCase& c = GetParam();
+    json s = tiny_shot();
+    c.edit(s);
+    const fs::path shot = write_shot(s);
+    for (const std::vector<std::string>& step : c.before) {
+        const Result r = run(step[0], shot, std::vector<std::string>(step.begin() + 1, step.end()));
+        ASSERT_EQ(r.code, 0) << step[0] << ": " << r.err;
+    }
+    // what the reader would have written: nothing, its stage folder (or a finished render) absent
+    const bool is_assembly =
+        std::count(c.reader_args.begin(), c.reader_args.end(), "--assemble") > 0;
+    const fs::path written = is_assembly ? out() / "render" / "manifest.json" : out() / c.reader;
+    const auto read = [&] {
+        if (c.reader != "shot") return run(c.reader, shot, c.reader_args);
+        const fs::path manifest = out() / fs::path(c.files.front()).parent_path() / "manifest.json";
+        return Process("mc-shot", {"verify", manifest.string()}, m_dir / "verify.txt").wait();
+    };
+    for (const std::string& name : c.files) {
+        const fs::path file = out() / name;
+        expect_damage_refused(
+            file, c.reader, read,
+            [&] {
+                if (c.reader != "shot" && c.reader != "measure") {
+                    EXPECT_FALSE(fs::exists(written)) << written;
+                }
+                expect_no_debris(out());
+            },
+            sweep_offsets);
+    }
+    // the files restored, the reader runs
+    const Result clean = read();
+    EXPECT_EQ(clean.code, 0) << clean.err;
+}
+
+INSTANTIATE_TEST_SUITE_P(EveryFileKind, FlippedByte, ::testing::ValuesIn(kFlipCases),
+                         [](const auto& info) { return info.param.name; });
 
 TEST_F(HostileInput, ResumeSimulatesADamagedFrameAgain) {
     json s = tiny_shot();

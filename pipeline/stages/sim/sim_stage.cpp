@@ -433,6 +433,13 @@ int run_sim_stage(const Shot& shot, const StageOptions& options,
     // the frames to write, the rest state, the starting state
     const std::pair<int, int> frames = frames_to_write(shot, options);
     const int first = frames.first, last = frames.second;
+    // the testing aid's frame, like --frames: one this run simulates, else it would never fire
+    if (const int k = sim_options.inject_nan_at_frame; k != 0 && (k < first || k > last))
+        throw UsageError(
+            "--inject-nan-at-frame " + std::to_string(k) + ": outside the frames " +
+            std::to_string(first) + "-" + std::to_string(last) + " this run simulates (" +
+            (options.frame_range.is_set() ? "--frames " + options.frames + " of " : std::string()) +
+            shot.path + " (/frames/start, /frames/end))");
     const InitParticles init = read_init(out / "init", shot);
     SimRun run = start_run(shot, sim_options, init, sim_dir, first, last);
 

@@ -12,7 +12,8 @@ struct SimStageOptions {
     bool resume = false;  // --resume: continue from the last valid checkpoint
     /// Testing aid (hidden flag --inject-nan-at-frame K): particle 0's velocity becomes NaN at the
     /// start of frame K, so tests can exercise the failure path (stop, keep earlier frames, no
-    /// manifest, exit 1) at a chosen frame. 0: off.
+    /// manifest, exit 1) at a chosen frame. 0: off; a frame outside the ones the run simulates is
+    /// a usage error (exit 2), as --frames is.
     int inject_nan_at_frame = 0;
 };
 

@@ -324,6 +324,16 @@ Breaks plan_breaks(const SurfaceInputs& in, const SurfaceParams& params, const C
     return breaks;
 }
 
+// an obj mesh's material file (<stem>.mtl, which its readers load with it) recorded in the
+// mesh's record, so it is verified as the mesh is
+void record_material(json& record, const fs::path& mesh_file) {
+    fs::path material = mesh_file;
+    material.replace_extension(".mtl");
+    std::error_code ec;
+    if (mesh_file.extension() == ".obj" && fs::is_regular_file(material, ec))
+        record["material"] = file_record(material);
+}
+
 // frame n's meshes (and debris) written into `dir`, each atomically, and its manifest entry
 FrameResult surface_one_frame(const SurfaceInputs& in, const SurfaceParams& params,
                               const CoreTopology& topo, const Breaks& breaks, const fs::path& dir,
@@ -362,6 +372,7 @@ FrameResult surface_one_frame(const SurfaceInputs& in, const SurfaceParams& para
     // copy of its meshes
     export_meshes(boundary_file, take_mesh(s.boundary), params.format);
     entry["boundary"]["crc32"] = file_crc32(boundary_file);
+    record_material(entry["boundary"], boundary_file);
     if (params.cracks) {
         // a frame without cracks gets no crack file: a glTF mesh cannot be empty, and assimp
         // writes an empty mesh that no reader (assimp included) accepts; the manifest records
@@ -376,6 +387,7 @@ FrameResult surface_one_frame(const SurfaceInputs& in, const SurfaceParams& para
         if (!s.crack.faces.empty()) {
             export_meshes(crack_file, take_mesh(s.crack), params.format);
             entry["crack"]["crc32"] = file_crc32(crack_file);
+            record_material(entry["crack"], crack_file);
         }
     }
     result.entry = std::move(entry);
