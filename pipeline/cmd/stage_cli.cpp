@@ -154,10 +154,6 @@ int run_locked_body(const StageOptions& opt, const std::function<int(const Stage
     return code;
 }
 
-}  // namespace
-
-namespace {
-
 // CLI11 names a hidden option (an empty group) "": such a flag is named by its long name
 std::string flag_name(const CLI::Option& option) {
     const std::string name = option.get_name();

@@ -9,6 +9,7 @@
 
 #include "pipeline/io/atomic_output.h"
 #include "pipeline/io/checksum.h"
+#include "pipeline/io/mesh_io.h"
 #include "sim/core/error.h"
 #include "sim/core/parallel.h"
 
@@ -164,9 +165,8 @@ void RecordedChecksums::verify(const fs::path& file) const {
         m_verified->files.insert(file);
     }
     // an obj mesh's readers load its material file too: checked with it where it is recorded
-    fs::path material = file;
-    material.replace_extension(".mtl");
-    if (file.extension() == ".obj" && has(material.filename().string())) verify(material);
+    const fs::path material = mesh_material_file(file);
+    if (!material.empty() && has(material.filename().string())) verify(material);
 }
 
 void RecordedChecksums::verify_all(const fs::path& dir) const {

@@ -566,6 +566,13 @@ void export_meshes(const fs::path& path, const std::vector<TriMesh>& meshes,
     write_text_atomically(path, main_text);
 }
 
+fs::path mesh_material_file(const fs::path& mesh_file) {
+    if (mesh_file.extension() != ".obj") return {};
+    fs::path material = mesh_file;
+    material.replace_extension(".mtl");
+    return material;
+}
+
 std::vector<TriMesh> import_meshes(const fs::path& path) {
     std::error_code ec;
     if (!fs::is_regular_file(path, ec)) throw InputError(path.string() + ": mesh file not found");

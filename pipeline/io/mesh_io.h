@@ -49,6 +49,10 @@ std::string mesh_format_refusal(const std::string& format);
 void export_meshes(const std::filesystem::path& path, const std::vector<TriMesh>& meshes,
                    const std::string& format);
 
+/// The material file an obj mesh comes with, <stem>.mtl beside it (export_meshes writes it, and
+/// every obj reader loads it with the mesh); an empty path for the other formats.
+std::filesystem::path mesh_material_file(const std::filesystem::path& mesh_file);
+
 /// Reads a file written by export_meshes back (tests, the renderer): one TriMesh per mesh in
 /// the file, with positions, normals, UVs and faces as stored (plus saturation/alpha from the
 /// colours and face_fragment from UV channel 1 when present). Throws InputError naming the file.

@@ -327,10 +327,9 @@ Breaks plan_breaks(const SurfaceInputs& in, const SurfaceParams& params, const C
 // an obj mesh's material file (<stem>.mtl, which its readers load with it) recorded in the
 // mesh's record, so it is verified as the mesh is
 void record_material(json& record, const fs::path& mesh_file) {
-    fs::path material = mesh_file;
-    material.replace_extension(".mtl");
+    const fs::path material = mesh_material_file(mesh_file);
     std::error_code ec;
-    if (mesh_file.extension() == ".obj" && fs::is_regular_file(material, ec))
+    if (!material.empty() && fs::is_regular_file(material, ec))
         record["material"] = file_record(material);
 }
 
