@@ -323,6 +323,12 @@ void check_polygon_flags(const fs::path& path, const aiScene& scene) {
     }
 }
 
+// an importer that reads a file's meshes only: assimp's COLLADA reader otherwise makes a scene
+// without meshes (an empty dae) one of pyramids drawing its node tree, which would read as soil
+void read_meshes_only(Assimp::Importer& importer) {
+    importer.SetPropertyBool(AI_CONFIG_IMPORT_NO_SKELETON_MESHES, true);
+}
+
 }  // namespace
 
 InputSurface load_input_surface(const fs::path& path) {
@@ -337,6 +343,7 @@ InputSurface load_input_surface(const fs::path& path) {
     check_obj_vertices_finite(path);
     check_off_header(path);
     Assimp::Importer importer;
+    read_meshes_only(importer);
     // ValidateDataStructure runs before the other steps: assimp 5.2.5's readers can leave faces
     // whose indices leave the mesh or whose sizes contradict the mesh's primitive types, and its
     // triangulation then reads out of bounds or aborts (found by tests/fuzz); validated, such a
@@ -500,6 +507,37 @@ std::string post_process(const std::string& format, std::string bytes) {
     return bytes;
 }
 
+bool has_faces(const std::vector<TriMesh>& meshes) {
+    return std::any_of(meshes.begin(), meshes.end(),
+                       [](const TriMesh& m) { return !m.faces.empty(); });
+}
+
+// PLY with no vertex and no face, in the binary layout assimp writes: assimp 5.2.5's PLY exporter
+// refuses a scene without faces (with no reason given), where glb and obj write an empty file
+std::string empty_ply_text() {
+    return "ply\nformat binary_little_endian 1.0\ncomment mudcrack: no faces\n"
+           "element vertex 0\nproperty float x\nproperty float y\nproperty float z\n"
+           "element face 0\nproperty list uchar int vertex_index\nend_header\n";
+}
+
+// a PLY file whose header declares every element with a count of 0 (empty_ply_text, or another
+// writer's empty mesh): assimp 5.2.5's reader refuses it ("Unable to extract mesh data")
+bool is_empty_ply(const fs::path& path) {
+    std::ifstream is(path, std::ios::binary);
+    std::string line;
+    if (!std::getline(is, line) || line != "ply") return false;
+    constexpr int kMaxHeaderLines = 1000;  // a header is a few dozen lines; a damaged one any
+    for (int n = 0; n < kMaxHeaderLines && std::getline(is, line); ++n) {
+        if (!line.empty() && line.back() == '\r') line.pop_back();
+        if (line == "end_header") return true;
+        std::istringstream words(line);
+        std::string key, name, count;
+        words >> key >> name >> count;
+        if (key == "element" && count != "0") return false;
+    }
+    return false;
+}
+
 }  // namespace
 
 bool is_supported_mesh_format(const std::string& format) { return find_format(format) != nullptr; }
@@ -521,6 +559,7 @@ void export_meshes(const fs::path& path, const std::vector<TriMesh>& meshes,
     const MeshFormat* f = find_format(format);
     if (f == nullptr) throw InputError(path.string() + ": " + mesh_format_refusal(format));
     if (f->assimp_id == nullptr) return write_glb(path, meshes);
+    if (format == "ply" && !has_faces(meshes)) return write_text_atomically(path, empty_ply_text());
     // assimp 5.2.5's PLY exporter declares vertex colours as uchar but writes four floats, which
     // corrupts every face after them (no reader, assimp included, gets the faces back): PLY files
     // carry no colours
@@ -581,8 +620,11 @@ std::vector<TriMesh> import_meshes(const fs::path& path) {
     // position, normal and UV 0, which would merge vertices told apart by colour or fragment).
     // glTF stores indexed vertices, which assimp keeps: a glb comes back vertex for vertex.
     const std::string ext = lowercase_extension(path);
+    // no mesh, as an empty glb gives
+    if (ext == ".ply" && is_empty_ply(path)) return {};
     const bool join_corners = ext != ".glb" && ext != ".gltf";
     Assimp::Importer importer;
+    read_meshes_only(importer);
     const aiScene* scene = importer.ReadFile(path.string(), aiProcess_Triangulate);
     if (scene == nullptr || scene->mRootNode == nullptr) {
         throw InputError(path.string() + ": cannot read the mesh: " + importer.GetErrorString());

@@ -360,6 +360,31 @@ TEST_F(McSurfaceCli, PlatesFramesInAnyOrderGiveByteIdenticalClosedPiecesAndDebri
     EXPECT_GT(m["per_frame"][kFrames - 1]["crack"]["faces"].get<int64_t>(), 0);
 }
 
+// a piece size just under the soil's width (0.2 m) leaves every piece too narrow once the slab
+// cracks: frames whose soil is all debris have an empty boundary mesh, which every format writes as
+// a file of its kind with no faces (assimp's PLY exporter refused it: "could not export ply")
+TEST_F(McSurfaceCli, PlatesFramesOfOnlyDebrisWriteEmptyMeshesInEveryFormat) {
+    for (const std::string format : {"ply", "obj", "dae", "glb"}) {
+        std::ofstream(m_shot_path) << shot_with_surfacing(
+            R"({ "mode": "plates", "zeta": 1.5, "min_piece_size": 3.9, "format": ")" + format +
+            "\" }");
+        const fs::path out = m_dir / format;
+        write_inputs(out);
+        const CliRun r = mc_surface(out);
+        ASSERT_EQ(r.code, 0) << format << ": " << r.err;
+        int empty_frames = 0;
+        const nlohmann::json manifest = read_manifest(out / "surface");
+        for (const nlohmann::json& entry : manifest["per_frame"]) {
+            const fs::path file = out / "surface" / entry["boundary"]["file"].get<std::string>();
+            size_t faces = 0;
+            for (const TriMesh& mesh : import_meshes(file)) faces += mesh.faces.size();
+            EXPECT_EQ(faces, entry["boundary"]["faces"].get<size_t>()) << file;
+            empty_frames += faces == 0 ? 1 : 0;
+        }
+        EXPECT_GT(empty_frames, 0) << format << ": no frame of only debris to test";
+    }
+}
+
 TEST_F(McSurfaceCli, PlatesBadInputNamesTheKeyAndWritesNothing) {
     const fs::path out = m_dir / "out";
     write_inputs(out);
