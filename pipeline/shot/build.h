@@ -53,12 +53,13 @@ void check_across(const nlohmann::json& tree, const InitParams& init, const SimM
 /// Physical plausibility, naming the key each refusal blames (pipeline/shot/plausibility.cpp):
 /// the time step the shot starts with (the fixed or largest step, the elastic bound, the
 /// velocity bound with the initial velocity and one frame of gravity) against mc-sim's floor
-/// of kCollapsedDtFraction frame lengths; /sim/h against OpenVDB's smallest voxel, against the
-/// body (at least one cell across its thinnest side), against a given domain (at least a cell,
-/// with /colliders/domain/padding leaving a free cell between its walls) and against the domain
-/// (the grid's block count); /colliders/ground/height below the body's top and, where the body's
-/// bottom is known, within what the body falls in the shot; a lattice source's particle count
-/// against the machine's memory; /render/resolution x /render/samples against what OSMesa
+/// of kCollapsedDtFraction frame lengths and against kMaxSubstepsPerFrame substeps a frame, naming
+/// the Poisson ratio too where it sets the wave speed; /sim/h against OpenVDB's smallest voxel,
+/// against the body (at least one cell across its thinnest side), against a given domain (at least
+/// a cell, with /colliders/domain/padding leaving a free cell between its walls) and against the
+/// domain (the grid's block count); /colliders/ground/height below the body's top and, where the
+/// body's bottom is known, within what the body falls in the shot; a lattice source's particle
+/// count against the machine's memory; /render/resolution x /render/samples against what OSMesa
 /// allocates; a camera placed by hand: finite in the renderer's single precision and away from its
 /// target.
 void check_plausible(const nlohmann::json& tree, const InitParams& init, const SimModel& sim,

@@ -5,7 +5,9 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <iterator>
 #include <string>
+#include <utility>
 
 #include "pipeline/init/lattice.h"
 #include "pipeline/shot/build.h"
@@ -31,6 +33,13 @@ constexpr double kMaxRenderBufferBytes = kGiB;
 constexpr Real kUsualFrameLength = 1.0 / 24;
 // how far below a particle its quadratic B-spline stencil reaches the grid's nodes [cells]
 constexpr Real kStencilReach = 1.5;
+// the most substeps a frame may start with. The shipped shots start with 42 to 405; 10^4 is 25
+// times the most, and still lets a real clay through (E = 1e8 Pa, 2000 kg/m^3, h = 0.01 m: about
+// 2,300). Past it a step is seldom what the artist meant (nu = 0.4999999999 makes the demo take
+// 6.5 million a frame: months), and the demo's 45,000 particles would take over a minute a frame
+constexpr double kMaxSubstepsPerFrame = 1e4;
+// a soil's elastic constants, for telling which of the shot's puts its wave speed furthest off
+constexpr Real kSoilDensity = 1e3, kSoilYoungsModulus = 1e6, kSoilPoissonRatio = 0.35;  // [SI]
 
 std::string g(double v) {
     char buf[32];
@@ -44,6 +53,35 @@ struct StepBound {
     std::string pointer, why;
 };
 
+// how much stiffer than lambda + 2 mu = E the Poisson ratio makes the soil: without bound toward
+// 0.5 (incompressible) and toward -1
+Real poisson_stiffening(Real nu) { return (1 - nu) / ((1 + nu) * (1 - 2 * nu)); }
+
+// the material key whose value puts the wave speed furthest from a soil's, by its factor in c_p^2
+std::string furthest_material_key(const ElasticParams& e) {
+    const std::pair<Real, const char*> factors[] = {
+        {std::abs(std::log10(e.density / kSoilDensity)), "/material/density"},
+        {std::abs(std::log10(e.youngs_modulus / kSoilYoungsModulus)), "/material/youngs_modulus"},
+        {std::abs(std::log10(poisson_stiffening(e.poisson_ratio) /
+                             poisson_stiffening(kSoilPoissonRatio))),
+         "/material/poisson_ratio"}};
+    return std::max_element(std::begin(factors), std::end(factors))->second;
+}
+
+// the elastic bound's term of a message: c_p, and the material keys other than `blamed`
+std::string elastic_why(const json& tree, const ElasticParams& dry, const std::string& blamed,
+                        const Issues& issues) {
+    std::string others;
+    for (const char* key :
+         {"/material/youngs_modulus", "/material/poisson_ratio", "/material/density"}) {
+        if (key == blamed) continue;
+        others +=
+            (others.empty() ? "" : " and ") + std::string(key) + " = " + issues.value_of(tree, key);
+    }
+    return "the elastic bound C_E h / c_p (c_p = " + g(dry.wave_speed()) + " m/s, with " + others +
+           ")";
+}
+
 StepBound smallest_step(const json& tree, const SimModel& sim, const Issues& issues) {
     const TimeParams& t = sim.time;
     if (t.dt_fixed > 0) return {t.dt_fixed, "/sim/dt", "the fixed step /sim/dt"};
@@ -53,13 +91,8 @@ StepBound smallest_step(const json& tree, const SimModel& sim, const Issues& iss
     if (sim.moisture) dry.density = std::min(dry.density, dry.density * (1 - sim.moisture->eta));
     const Real elastic = t.cfl_elastic * sim.h / dry.wave_speed();
     if (!(elastic >= b.dt)) {
-        // the value further from a soil's (about 1000 kg/m^3, 1 MPa) leads the message
-        const bool is_density = std::abs(std::log10(sim.elastic.density / 1e3)) >
-                                std::abs(std::log10(sim.elastic.youngs_modulus / 1e6));
-        const std::string other = is_density ? "/material/youngs_modulus" : "/material/density";
-        b = {elastic, is_density ? "/material/density" : "/material/youngs_modulus",
-             "the elastic bound C_E h / c_p (c_p = " + g(dry.wave_speed()) + " m/s, with " + other +
-                 " = " + issues.value_of(tree, other) + ")"};
+        const std::string blamed = furthest_material_key(sim.elastic);
+        b = {elastic, blamed, elastic_why(tree, dry, blamed, issues)};
     }
     // the speed it starts with, plus what gravity adds over one frame
     const Real v0 = sim.initial_velocity.norm(), fall = sim.gravity.norm() / t.fps;
@@ -73,7 +106,32 @@ StepBound smallest_step(const json& tree, const SimModel& sim, const Issues& iss
     return b;
 }
 
-// a step below the floor would never finish a frame (mc-sim would stop on its first substep)
+// a step mc-sim survives but that makes each frame take more than kMaxSubstepsPerFrame substeps:
+// hours of simulation with no word (nu = 0.4999999999 gave 1e-8 s steps)
+void check_substeps(const json& tree, const SimModel& sim, const StepBound& b, Issues& issues) {
+    const Real frame = 1 / sim.time.fps;
+    const double substeps = std::ceil(frame / b.dt);
+    if (substeps <= kMaxSubstepsPerFrame) return;
+    const std::string step = "a stable time step of " + g(b.dt) + " s (" + b.why + ")";
+    const std::string bound = "expected at most " + g(kMaxSubstepsPerFrame);
+    // the step, with gravity over a frame of a usual length, would do for such frames: the
+    // frames are too long
+    SimModel usual = sim;
+    usual.time.fps = 1 / kUsualFrameLength;
+    const StepBound usual_step = smallest_step(tree, usual, issues);
+    if (kUsualFrameLength / usual_step.dt <= kMaxSubstepsPerFrame) {
+        issues.add("/frames/fps", issues.value_of(tree, "/frames/fps"),
+                   "frames of " + g(frame) + " s take " + g(substeps) + " substeps each at " +
+                       step + "; " + bound + ": frames per second of simulated time (e.g. 24)");
+        return;
+    }
+    issues.add(b.pointer, issues.value_of(tree, b.pointer),
+               "gives " + step + ": " + g(substeps) +
+                   " substeps per frame of 1 / fps = " + g(frame) + " s; " + bound);
+}
+
+// a step below the floor would never finish a frame (mc-sim would stop on its first substep); one
+// above it may still need more substeps a frame than a run should take (check_substeps)
 void check_time_step(const json& tree, const SimModel& sim, Issues& issues) {
     if (issues.has("/material") || issues.has("/sim") || issues.has("/frames") ||
         issues.has("/source/initial_velocity"))
@@ -81,7 +139,7 @@ void check_time_step(const json& tree, const SimModel& sim, Issues& issues) {
     const Real frame = 1 / sim.time.fps;
     const Real floor = kCollapsedDtFraction * frame;
     const StepBound b = smallest_step(tree, sim, issues);
-    if (b.dt >= floor && std::isfinite(b.dt)) return;
+    if (b.dt >= floor && std::isfinite(b.dt)) return check_substeps(tree, sim, b, issues);
     const std::string floor_text =
         "the floor " + g(kCollapsedDtFraction) + " x the frame length 1 / fps = " + g(floor) +
         " s: a frame would take more than " + g(1 / kCollapsedDtFraction) + " substeps";

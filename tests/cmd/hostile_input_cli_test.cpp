@@ -407,6 +407,10 @@ const ShotCase kShotCases[] = {
          s["sim"]["gravity"] = {0, -1e30, 0};
      },
      "/sim/gravity"},
+    // a step mc-sim survives, but 3 million of them a frame
+    {"poisson_ratio_just_under_half",
+     [](json& s) { s["material"]["poisson_ratio"] = 0.4999999999; },
+     "/material/poisson_ratio = 0.4999999999: gives a stable time step"},
     {"h_1e_5", [](json& s) { s["sim"]["h"] = 1e-5; }, "/sim/h"},
     {"h_1e_300", [](json& s) { s["sim"]["h"] = 1e-300; }, "/sim/h"},
     {"domain_too_large_for_h",

@@ -375,6 +375,36 @@ TEST_F(ShotTest, FixedDtAboveTheElasticBoundIsRefused) {
                 tol::kRoundoff);
 }
 
+// a step mc-sim survives but that takes more than 10^4 substeps a frame is refused, naming the
+// key that sets it, its value and the substeps (a Poisson ratio just under 0.5 gave 1e-8 s steps,
+// hours of simulation with no word); the shipped shots take at most 405
+TEST_F(ShotTest, StepsPastTenThousandSubstepsAFrameAreRefused) {
+    const auto shot_with = [](const std::string& material, const std::string& more) {
+        return R"({"mudcrack": 1, "source": {"type": "box"}, "material": {)" + material + "}" +
+               more + "}";
+    };
+    // c_p = 56.7 m/s at nu = 0.35: 94 substeps a frame; at 0.4999999999, 3.0e6
+    expect_contains(
+        error_of(shot_with(R"("poisson_ratio": 0.4999999999)", "")),
+        {"/material/poisson_ratio = 0.4999999999: gives a stable time step of 1.369e-08 s (the "
+         "elastic bound C_E h / c_p (c_p = 1.826e+06 m/s, with /material/youngs_modulus = 2000.0 "
+         "and /material/density = 1.0)): 3.043e+06 substeps per frame of 1 / fps = 0.04167 s; "
+         "expected at most 1e+04"});
+    expect_contains(error_of(shot_with(R"("youngs_modulus": 1e10)", "")),
+                    {"/material/youngs_modulus = 10000000000.0: gives a stable time step",
+                     "/material/poisson_ratio = 0.35 and /material/density = 1.0", "substeps"});
+    expect_contains(error_of(shot_with("", R"(, "sim": {"dt_max": 1e-7})")),
+                    {"/sim/dt_max = 1e-07: gives a stable time step of 1e-07 s (the largest step "
+                     "/sim/dt_max): 4.167e+05 substeps per frame"});
+    // frames of 1000 s (gravity over one of them sets the step): the step for frames of 1/24 s
+    // would do
+    expect_contains(error_of(shot_with("", R"(, "frames": {"fps": 0.001})")),
+                    {"/frames/fps = 0.001: frames of 1000 s take 3.27e+08 substeps each",
+                     "expected at most 1e+04: frames per second of simulated time"});
+    // nu = 0.4999 (about 3,000) and every shipped shot pass
+    EXPECT_NO_THROW(parse_shot(shot_with(R"("poisson_ratio": 0.4999)", ""), "t.json"));
+}
+
 TEST_F(ShotTest, CrossKeyChecks) {
     const std::string msg = error_of(R"({"mudcrack": 1,
         "source": {"type": "box", "box": {"min": [0, 0, 0], "max": [1, -0.1, 1]}},
