@@ -65,7 +65,8 @@ InitResult finish_tet_mesh(TetMesh mesh, const InputSurface* uv_source) {
     return r;
 }
 
-InitResult build_init(const InitParams& params, const MesherOptions& mesher) {
+InitResult build_init(const InitParams& params, const MesherOptions& mesher,
+                      const SurfaceBoundsCheck& check_bounds) {
     WallTimer timer;
     InitResult r;
     switch (params.type) {
@@ -83,6 +84,9 @@ InitResult build_init(const InitParams& params, const MesherOptions& mesher) {
             const Real surface_volume = check_input_surface(surface, params.mesh.path);
             Vec3 lo = surface.positions[0], hi = lo;
             for (const Vec3& x : surface.positions) lo = lo.cwiseMin(x), hi = hi.cwiseMax(x);
+            // before the edge length's checks: a /sim/h too large for the body is h's fault, not
+            // the edge length's it derives
+            if (check_bounds) check_bounds(lo, hi);
             if (mesher.edge_length > (hi - lo).maxCoeff())
                 throw ShotValueError("/init/edge_length = " + num(mesher.edge_length) +
                                      " m: larger than " + params.mesh.path +

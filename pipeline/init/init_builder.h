@@ -1,6 +1,7 @@
 #pragma once
 /// mc-init's work without the files: from InitParams to the particle tet mesh (every tet vertex
 /// is a particle), its rest volumes, boundary UVs and quality figures.
+#include <functional>
 #include <string>
 #include <vector>
 
@@ -43,11 +44,18 @@ struct InitResult {
     std::vector<Real> strength;  // p0 multipliers (params.strength_field), else empty
 };
 
+/// Called with a mesh source's bounds (lowest, highest corner [m]) once its surface is read,
+/// placed and checked, before it is tetrahedralized: the shot's keys that depend on the body's
+/// size are checked against them there (mc-init), as the loader checks a box's.
+using SurfaceBoundsCheck = std::function<void(const Vec3& lo, const Vec3& hi)>;
+
 /// Builds the source of `params`: a box lattice, a heightfield lattice, or a checked and
-/// tetrahedralized surface (Mesh_3 with `mesher`). Then drops unused vertices, extracts the
-/// boundary, assigns UVs, computes rest volumes and quality. Throws InputError for a bad source
-/// (bad mesh: what is wrong and where), RuntimeError if the mesh comes out inverted.
-InitResult build_init(const InitParams& params, const MesherOptions& mesher);
+/// tetrahedralized surface (Mesh_3 with `mesher`; `check_bounds`, when given, sees its bounds
+/// first). Then drops unused vertices, extracts the boundary, assigns UVs, computes rest volumes
+/// and quality. Throws InputError for a bad source (bad mesh: what is wrong and where),
+/// RuntimeError if the mesh comes out inverted.
+InitResult build_init(const InitParams& params, const MesherOptions& mesher,
+                      const SurfaceBoundsCheck& check_bounds = {});
 
 /// build_init with mesher_options(params, h). @param h the simulation grid spacing [m]; > 0
 InitResult build_init(const InitParams& params, Real h);

@@ -3,14 +3,17 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <charconv>
 #include <cmath>
 #include <cstdio>
 #include <iterator>
+#include <optional>
 #include <string>
 #include <utility>
 
 #include "pipeline/init/lattice.h"
 #include "pipeline/shot/build.h"
+#include "pipeline/shot/measured_body.h"
 
 namespace mudcrack::spec {
 namespace {
@@ -160,7 +163,8 @@ void check_time_step(const json& tree, const SimModel& sim, Issues& issues) {
 
 // the body a source fills, as far as the loader knows it before mc-init: a box's and a
 // heightfield's bounds (a heightfield's top at most base + amplitude, or image_height); a mesh's
-// lowest point only, and only when /source/mesh/fit_to_ground puts it at y = 0
+// lowest point only, and only when /source/mesh/fit_to_ground puts it at y = 0 (mc-init and mc-sim
+// check the rest against the mesh once read: check_measured_body)
 struct BodyBounds {
     bool has_extent = false;  // extent and top known
     bool has_bottom = false;
@@ -203,32 +207,31 @@ bool grid_extent(const InitParams& init, const SimModel& sim, Vec3& extent) {
     return true;
 }
 
-// the ground plane against the body, where the loader knows the body: a ground at or above its top
+// a key's value refused, before the file and the value as written are put in front of it
+struct Refusal {
+    std::string pointer, expectation, units;
+};
+
+// the ground plane against the body, where its bounds are known: a ground at or above its top
 // buries every particle; one further below its bottom than the body falls in the whole shot, plus
 // the 1.5 cells a particle's quadratic B-spline stencil reaches below it, never acts (and, with a
 // derived domain, stretches the grid down to it: -1e300 used to hang mc-sim)
-void check_ground(const json& tree, const InitParams& init, const SimModel& sim, Issues& issues) {
-    if (!sim.ground || issues.has("/colliders/ground") || issues.has("/source") ||
-        issues.has("/sim") || issues.has("/frames"))
-        return;
-    const BodyBounds body = body_bounds(init);
+std::optional<Refusal> ground_refusal(const BodyBounds& body, const SimModel& sim) {
     const Real height = sim.ground->height;
-    const std::string value = issues.value_of(tree, "/colliders/ground/height");
-    if (body.has_extent && !(height < body.top)) {
-        issues.add("/colliders/ground/height", value,
-                   "is at or above the top of the body, y = " + g(body.top) + " (" + body.where +
-                       "): every particle would start inside the ground; expected a height below " +
-                       g(body.top) + ", usually the body's bottom y = " + g(body.bottom),
-                   "m");
-        return;
-    }
-    if (!body.has_bottom) return;
+    if (body.has_extent && !(height < body.top))
+        return Refusal{
+            "/colliders/ground/height",
+            "is at or above the top of the body, y = " + g(body.top) + " (" + body.where +
+                "): every particle would start inside the ground; expected a height below " +
+                g(body.top) + ", usually the body's bottom y = " + g(body.bottom),
+            "m"};
+    if (!body.has_bottom) return std::nullopt;
     const Real t = sim.time.frame_end / sim.time.fps;
     const Real fall = sim.initial_velocity.norm() * t + 0.5 * sim.gravity.norm() * t * t;
     const Real lowest = body.bottom - fall - kStencilReach * sim.h;
-    if (height >= lowest) return;
-    issues.add(
-        "/colliders/ground/height", value,
+    if (height >= lowest) return std::nullopt;
+    return Refusal{
+        "/colliders/ground/height",
         "is " + g(body.bottom - height) + " m below the body's bottom y = " + g(body.bottom) +
             " (" + body.where + "), which moves at most " + g(fall) + " m down in the shot's " +
             g(t) +
@@ -237,7 +240,31 @@ void check_ground(const json& tree, const InitParams& init, const SimModel& sim,
             g(lowest) +
             " (that fall and the 1.5 cells a particle reaches "
             "below it), or no /colliders/ground",
-        "m");
+        "m"};
+}
+
+// a body less than a cell across on a side has no node inside it: its particles share every
+// node with the air around them
+std::optional<Refusal> cell_size_refusal(const BodyBounds& body, const SimModel& sim) {
+    if (!body.has_extent || !(sim.h > body.extent.minCoeff())) return std::nullopt;
+    return Refusal{
+        "/sim/h",
+        "is larger than the body (" + body.where + ": " + sides_text(body.extent) +
+            "), which would be less than one cell across: expected at most its thinnest side, " +
+            g(body.extent.minCoeff()),
+        "m"};
+}
+
+void add(const json& tree, const Refusal& r, Issues& issues) {
+    issues.add(r.pointer, issues.value_of(tree, r.pointer), r.expectation, r.units);
+}
+
+void check_ground(const json& tree, const InitParams& init, const SimModel& sim, Issues& issues) {
+    if (!sim.ground || issues.has("/colliders/ground") || issues.has("/source") ||
+        issues.has("/sim") || issues.has("/frames"))
+        return;
+    if (const std::optional<Refusal> r = ground_refusal(body_bounds(init), sim))
+        add(tree, *r, issues);
 }
 
 void check_cell_size(const json& tree, const InitParams& init, const SimModel& sim,
@@ -272,16 +299,8 @@ void check_cell_size(const json& tree, const InitParams& init, const SimModel& s
             return;
         }
     }
-    // a body less than a cell across on a side has no node inside it: its particles share every
-    // node with the air around them
-    const BodyBounds body = body_bounds(init);
-    if (body.has_extent && sim.h > body.extent.minCoeff()) {
-        issues.add(
-            "/sim/h", issues.value_of(tree, "/sim/h"),
-            "is larger than the body (" + body.where + ": " + sides_text(body.extent) +
-                "), which would be less than one cell across: expected at most its thinnest side, " +
-                g(body.extent.minCoeff()),
-            "m");
+    if (const std::optional<Refusal> r = cell_size_refusal(body_bounds(init), sim)) {
+        add(tree, *r, issues);
         return;
     }
     Vec3 extent;
@@ -382,3 +401,36 @@ void check_plausible(const json& tree, const InitParams& init, const SimModel& s
 }
 
 }  // namespace mudcrack::spec
+
+namespace mudcrack {
+
+namespace {
+
+// a shot's number as its JSON text would show it: the shortest digits that read back the same
+std::string number_text(double v) {
+    char buf[32];
+    const std::to_chars_result r = std::to_chars(buf, buf + sizeof buf, v);
+    return std::string(buf, r.ptr);
+}
+
+std::string value_text(const Shot& shot, const std::string& pointer) {
+    if (pointer == "/sim/h") return number_text(shot.sim.h);
+    return number_text(shot.sim.ground->height);
+}
+
+}  // namespace
+
+void check_measured_body(const Shot& shot, const MeasuredBody& body) {
+    const spec::BodyBounds bounds{true,        true,        body.hi - body.lo,
+                                  body.lo.y(), body.hi.y(), body.what};
+    spec::Issues issues(shot.path);
+    const auto add = [&](const std::optional<spec::Refusal>& r) {
+        if (r) issues.add(r->pointer, value_text(shot, r->pointer), r->expectation, r->units);
+    };
+    // in the loader's order, all at once
+    if (shot.sim.ground) add(spec::ground_refusal(bounds, shot.sim));
+    add(spec::cell_size_refusal(bounds, shot.sim));
+    issues.throw_if_any();
+}
+
+}  // namespace mudcrack

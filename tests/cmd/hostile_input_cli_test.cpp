@@ -9,6 +9,8 @@
 //   renderer cannot place, a movie rate ffmpeg cannot write, a number overflow):
 //   exit 1 at load, naming the file and the key, before any output folder exists.
 // - Non-finite input mesh vertices, named with their index.
+// - A mesh body too thin for /sim/h, or a ground at its top or out of its reach: refused by mc-init
+//   once it reads the mesh (and a ground edited since, by mc-sim), naming the mesh's extent.
 // - One writer per folder: a lock held elsewhere refuses the stage, naming its holder; a lock
 //   left by a dead writer is recovered; farm chunks share one.
 // - A stage folder that is a symbolic link: refused by every stage, the link and its target kept.
@@ -661,6 +663,99 @@ TEST_P(MeshVertices, NonFiniteVertexNamed) {
 
 INSTANTIATE_TEST_SUITE_P(Init, MeshVertices, ::testing::Range(0, int(std::size(kMeshCases))),
                          [](const auto& info) { return kMeshCases[info.param].name; });
+
+// ---- a mesh body against /sim/h and the ground: refused once its file is read -------------------
+
+// a closed box mesh of 0.2 x 0.1 x 0.2 m, its bottom at y = 0 as the tiny shot's box: the loader
+// cannot see into a mesh file, so mc-init checks what the loader checks for a box
+const char* const kBoxMesh =
+    "v -0.1 0 -0.1\nv 0.1 0 -0.1\nv -0.1 0.1 -0.1\nv 0.1 0.1 -0.1\n"
+    "v -0.1 0 0.1\nv 0.1 0 0.1\nv -0.1 0.1 0.1\nv 0.1 0.1 0.1\n"
+    "f 1 3 4 2\nf 5 6 8 7\nf 1 2 6 5\nf 3 7 8 4\nf 1 5 7 3\nf 2 4 8 6\n";
+
+struct MeshBodyCase {
+    std::string name;
+    std::function<void(json&)> edit;
+    std::string message;  // after "<shot>: "; <mesh> stands for the mesh file's path
+};
+const MeshBodyCase kMeshBodyCases[] = {
+    {"h_5_wider_than_the_mesh", [](json& s) { s["sim"]["h"] = 5; },
+     "/sim/h = 5: is larger than the body (<mesh> as placed by /source/mesh: 0.2 x 0.1 x 0.2 m)"},
+    {"h_wider_than_the_scaled_mesh", [](json& s) { s["source"]["mesh"]["scale"] = 0.25; },
+     "/sim/h = 0.05: is larger than the body (<mesh> as placed by /source/mesh: 0.05 x 0.025 x "
+     "0.05 m), which would be less than one cell across: expected at most its thinnest side, "
+     "0.025 [m]"},
+    // above the top (the mesh's 0.1 is a float, a hair above the double 0.1)
+    {"ground_above_the_mesh_top", [](json& s) { s["colliders"]["ground"]["height"] = 0.15; },
+     "/colliders/ground/height = 0.15: is at or above the top of the body, y = 0.1 (<mesh> as "
+     "placed by /source/mesh)"},
+    {"ground_1e300", [](json& s) { s["colliders"]["ground"]["height"] = 1e300; },
+     "/colliders/ground/height = 1e+300: is at or above the top of the body, y = 0.1"},
+    // fit_to_ground is off: the loader knows no bottom, mc-init does
+    {"mesh_far_above_the_ground",
+     [](json& s) {
+         s["source"]["mesh"]["translate"] = {0, 5, 0};
+     },
+     "/colliders/ground/height = 0: is 5 m below the body's bottom y = 5 (<mesh> as placed by "
+     "/source/mesh), which moves at most"},
+};
+
+class MeshBody : public HostileInput, public ::testing::WithParamInterface<int> {
+protected:
+    // the tiny shot with the box mesh as its source, placed where it is written
+    json mesh_shot() {
+        std::ofstream(m_dir / "box.obj") << kBoxMesh;
+        json shot = tiny_shot();
+        shot["source"] = {{"type", "mesh"},
+                          {"mesh", {{"path", "box.obj"}, {"fit_to_ground", false}}}};
+        return shot;
+    }
+    std::string mesh_path() const { return (m_dir / "box.obj").string(); }
+    static std::string with_mesh(std::string text, const std::string& mesh) {
+        const size_t at = text.find("<mesh>");
+        return at == std::string::npos ? text : text.replace(at, 6, mesh);
+    }
+};
+
+TEST_P(MeshBody, RefusedByInitNamingTheKeyAndTheMeshExtent) {
+    const MeshBodyCase& c = kMeshBodyCases[GetParam()];
+    json shot = mesh_shot();
+    c.edit(shot);
+    const fs::path path = write_shot(shot);
+    const Result r = run("init", path);
+    EXPECT_EQ(r.code, 1) << r.err;
+    expect_error(r, "init", {path.string() + ": " + with_mesh(c.message, mesh_path())});
+    EXPECT_FALSE(fs::exists(out() / "init"));
+    expect_no_debris(out());
+}
+
+INSTANTIATE_TEST_SUITE_P(Init, MeshBody, ::testing::Range(0, int(std::size(kMeshBodyCases))),
+                         [](const auto& info) { return kMeshBodyCases[info.param].name; });
+
+// the ground is not in the init slice: one edited after mc-init is checked by mc-sim against the
+// mesh's bounds mc-init recorded
+TEST_F(MeshBody, GroundEditedAfterInitIsRefusedBySim) {
+    json shot = mesh_shot();
+    const fs::path path = write_shot(shot);
+    ASSERT_EQ(run("init", path).code, 0);
+    shot["colliders"]["ground"]["height"] = 0.2;
+    write_shot(shot);
+    const Result r = run("sim", path);
+    EXPECT_EQ(r.code, 1) << r.err;
+    const std::string manifest = (out() / "init" / "manifest.json").string();
+    expect_error(
+        r, "sim",
+        {path.string() +
+         ": /colliders/ground/height = 0.2: is at or above the top of the body, y = 0.1 (" +
+         mesh_path() + " as placed by /source/mesh (" + manifest + "))"});
+    EXPECT_FALSE(fs::exists(out() / "sim"));
+    expect_no_debris(out());
+    // the ground the shot had runs
+    shot["colliders"]["ground"]["height"] = 0;
+    write_shot(shot);
+    const Result ok = run("sim", path, {"--frames", "1-1"});
+    EXPECT_EQ(ok.code, 0) << ok.err;
+}
 
 // ---- one writer per folder ----------------------------------------------------------------------
 

@@ -2,6 +2,7 @@
 
 #include <cstdio>
 #include <filesystem>
+#include <optional>
 #include <string>
 
 #include <nlohmann/json.hpp>
@@ -11,6 +12,7 @@
 #include "pipeline/io/manifest.h"
 #include "pipeline/io/points_io.h"
 #include "pipeline/io/tet_mesh_io.h"
+#include "pipeline/shot/measured_body.h"
 #include "pipeline/shot/shot.h"
 #include "sim/core/error.h"
 #include "sim/core/log.h"
@@ -72,6 +74,11 @@ void add_init_fields(json& m, const InitParams& params, bool parallel_mesh, cons
                   {"particles_per_s", q.particles / build_seconds}};
 }
 
+/// A mesh source's body as mc-init measured it: the surface's bounds once scaled and placed.
+MeasuredBody placed_mesh_body(const InitParams& params, const Vec3& lo, const Vec3& hi) {
+    return {lo, hi, params.mesh.path + " as placed by /source/mesh"};
+}
+
 void print_summary(const InitParams& params, const InitResult& r, double build_seconds,
                    double wall_seconds, const fs::path& dir) {
     const MeshQuality& q = r.quality;
@@ -107,9 +114,13 @@ int run_init_stage(const StageOptions& opt, bool parallel_mesh) {
 
     // build everything in memory first: a bad source fails before any folder exists
     WallTimer build_timer;
+    std::optional<MeasuredBody> mesh_body;
     const InitResult r = [&] {
         try {
-            return build_init(params, mesher);
+            return build_init(params, mesher, [&](const Vec3& lo, const Vec3& hi) {
+                mesh_body = placed_mesh_body(params, lo, hi);
+                check_measured_body(shot, *mesh_body);
+            });
         } catch (const ShotValueError& e) {
             // the builders name the key, not the file
             throw InputError(opt.shot + ": " + e.what());
@@ -122,6 +133,10 @@ int run_init_stage(const StageOptions& opt, bool parallel_mesh) {
     write_tet_mesh_vtu(staging.path() / "tets.vtu", r.mesh);
     json manifest = make_manifest("init", opt.shot, shot.slice_hash(Stage::Init));
     add_init_fields(manifest, params, mesher.parallel, r, build_seconds);
+    // mc-sim checks a ground edited after this run against them (it is not in the init slice)
+    if (mesh_body)
+        manifest["mesh_bounds"] = {{"min", vec_json(mesh_body->lo)},
+                                   {"max", vec_json(mesh_body->hi)}};
     // what the later stages read, with the checksums they verify
     manifest["outputs"] = json::array(
         {file_record(staging.path() / "particles.vdb"), file_record(staging.path() / "tets.vtu")});
