@@ -59,10 +59,19 @@ void p2g_impl(const SimState& state, const SymMat3* kirchhoff, SparseGrid& grid,
             // (mass, momentum) at node (a,b,c): w (m, m v + A h ((a,b,c) - fx)), as 4-vectors
             // (mass first, with a zero affine part) so each node update is one SIMD add
             const Vec3 q0 = m * v[p] - Ah * Vec3(ax.fx, ay.fx, az.fx);
+#if defined(__AVX__) && defined(__FMA__)
+            // assembled in registers: written to memory entry by entry and read back as one
+            // vector, they stalled store-to-load forwarding for each particle
+            const __m256d base = _mm256_set_pd(q0.z(), q0.y(), q0.x(), m);
+            const __m256d da = _mm256_set_pd(Ah(2, 0), Ah(1, 0), Ah(0, 0), 0);
+            const __m256d db = _mm256_set_pd(Ah(2, 1), Ah(1, 1), Ah(0, 1), 0);
+            const __m256d dc = _mm256_set_pd(Ah(2, 2), Ah(1, 2), Ah(0, 2), 0);
+#else
             const Real base[4] = {m, q0.x(), q0.y(), q0.z()};
             const Real da[4] = {0, Ah(0, 0), Ah(1, 0), Ah(2, 0)};
             const Real db[4] = {0, Ah(0, 1), Ah(1, 1), Ah(2, 1)};
             const Real dc[4] = {0, Ah(0, 2), Ah(1, 2), Ah(2, 2)};
+#endif
             // the moisture rows' z profiles, scaled once per particle: V wz, V theta wz, V wz^2
             // and V dwz^2 (each row then takes one multiply-add per field)
             Lanes V_wz = Lanes::Zero(), Vtheta_wz = Lanes::Zero(), V_wz2 = Lanes::Zero(),
@@ -86,14 +95,12 @@ void p2g_impl(const SimState& state, const SymMat3* kirchhoff, SparseGrid& grid,
                     // the loop below as 4-lane vectors with each product fused into its sum, as
                     // the compiler contracts the scalar loop (a da, b db and c dc are exact for
                     // 0, 1, 2, so fused or not those sums round alike): the same window bits
-                    const __m256d q = _mm256_fmadd_pd(
-                        _mm256_set1_pd(Real(b)), _mm256_loadu_pd(db),
-                        _mm256_fmadd_pd(_mm256_set1_pd(Real(a)), _mm256_loadu_pd(da),
-                                        _mm256_loadu_pd(base)));
-                    const __m256d dc4 = _mm256_loadu_pd(dc);
+                    const __m256d q =
+                        _mm256_fmadd_pd(_mm256_set1_pd(Real(b)), db,
+                                        _mm256_fmadd_pd(_mm256_set1_pd(Real(a)), da, base));
                     for (int c = 0; c < 3; ++c) {
                         Real* node = row + c * kStride;
-                        const __m256d t = _mm256_fmadd_pd(_mm256_set1_pd(Real(c)), dc4, q);
+                        const __m256d t = _mm256_fmadd_pd(_mm256_set1_pd(Real(c)), dc, q);
                         _mm256_storeu_pd(node, _mm256_fmadd_pd(_mm256_set1_pd(wab * az.w[c]), t,
                                                                _mm256_loadu_pd(node)));
                     }
