@@ -320,6 +320,13 @@ private:
     std::map<std::pair<int64_t, int64_t>, std::vector<int32_t>> m_cells;
 };
 
+// the bin of `bins` bins of 15 degrees, each centred on a multiple of 15, that holds an angle in
+// [0, 15 bins) degrees (the last half bin wraps to bin 0)
+int angle_bin(Real angle_deg, int bins) {
+    const int k = static_cast<int>(std::floor(angle_deg / 15 + Real(0.5)));
+    return ((k % bins) + bins) % bins;
+}
+
 // angle of a direction in the x-z plane, folded to [0, 180) degrees (a line has no sign)
 Real line_angle_deg(const Vec2& d) {
     Real a = std::atan2(d.y(), d.x()) * 180 / kPi;
@@ -374,10 +381,33 @@ void measure_crack_directions(const std::vector<Vec2>& point, const PointGrid& g
         const Real angle = line_angle_deg(eig.eigenvectors().col(1));  // the larger eigenvalue's
         const Real off_axis = std::min({angle, std::abs(angle - 90), 180 - angle});
         aligned += off_axis <= 15;
+        ++net.direction_histogram[angle_bin(angle, kCrackDirectionBins)];
     }
     net.oriented_points = oriented;
     if (oriented > 0) net.axis_aligned_fraction = Real(aligned) / oriented;
 }
+
+// The crack points of one polygon pair near a junction, as offsets from its centre. Its
+// direction is the line through them (their principal axis), pointed away from the centre: the
+// mean offset alone leans toward wherever the centre sits off the crack line.
+struct Branch {
+    Vec2 sum = Vec2::Zero();
+    Eigen::Matrix2d moment = Eigen::Matrix2d::Zero();
+    int count = 0;
+
+    void add(const Vec2& offset) { sum += offset, moment += offset * offset.transpose(), ++count; }
+    Vec2 mean() const { return sum / count; }
+    Vec2 direction() const {
+        const Vec2 m = mean();
+        const Eigen::Matrix2d cov = moment / count - m * m.transpose();
+        const Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d> eig(cov);
+        // too few points, or a blob rather than a line: the mean's direction
+        if (count < 3 || !(eig.eigenvalues()(1) >= kLineAnisotropy * eig.eigenvalues()(0)))
+            return m;
+        const Vec2 axis = eig.eigenvectors().col(1);
+        return axis.dot(m) >= 0 ? axis : Vec2(-axis);
+    }
+};
 
 // junctions: clusters of crack points with three or more polygons among their neighbours'
 // pairs, each a T or a Y by its branches' widest gap; sets junctions, t_fraction and y_fraction
@@ -398,7 +428,7 @@ void classify_junctions(const std::vector<Vec2>& point,
     }
     // a junction: a connected cluster of candidates (neighbours within the junction radius)
     std::vector<uint8_t> is_taken(point.size(), 0);
-    int32_t t_count = 0, y_count = 0, branched = 0;
+    int32_t t_count = 0, y_count = 0, branched = 0, right_angles = 0, gap_count = 0;
     for (size_t i = 0; i < point.size(); ++i) {
         if (!is_candidate[i] || is_taken[i]) continue;
         std::vector<int32_t> cluster = {static_cast<int32_t>(i)};
@@ -414,27 +444,31 @@ void classify_junctions(const std::vector<Vec2>& point,
         center /= static_cast<Real>(cluster.size());
         ++net.junctions;
         // a branch per polygon pair near the junction: towards the mean of its crack points
-        std::map<std::pair<int32_t, int32_t>, std::pair<Vec2, int>> branches;
+        std::map<std::pair<int32_t, int32_t>, Branch> branches;
         grid.near(center, branch_radius, [&](int32_t j) {
             // inside a polygon: not a branch between two
             if (pair[j].first == pair[j].second) return;
-            auto& [sum, count] = branches[pair[j]];
-            if (count == 0) sum = Vec2::Zero();
-            sum += point[j] - center, ++count;
+            branches[pair[j]].add(point[j] - center);
         });
         std::vector<Real> angles;
         for (const auto& [key, branch] : branches) {
-            const Vec2 d = branch.first / branch.second;
             // a pair whose points sit on the junction: no direction
-            if (d.norm() < w / 2) continue;
+            if (branch.mean().norm() < w / 2) continue;
+            const Vec2 d = branch.direction();
             angles.push_back(std::atan2(d.y(), d.x()) * 180 / kPi);
         }
         if (angles.size() < 3) continue;
         ++branched;
         std::sort(angles.begin(), angles.end());
-        Real widest = angles.front() + 360 - angles.back();
-        for (size_t k = 1; k < angles.size(); ++k)
-            widest = std::max(widest, angles[k] - angles[k - 1]);
+        // the angles between neighbouring branches, the last one across the cut at +-180
+        std::vector<Real> gaps = {angles.front() + 360 - angles.back()};
+        for (size_t k = 1; k < angles.size(); ++k) gaps.push_back(angles[k] - angles[k - 1]);
+        for (Real gap : gaps) {
+            ++net.junction_angle_histogram[angle_bin(gap, kJunctionAngleBins)];
+            right_angles += std::abs(gap - 90) <= 15;
+        }
+        gap_count += static_cast<int32_t>(gaps.size());
+        const Real widest = *std::max_element(gaps.begin(), gaps.end());
         if (widest >= 150)
             ++t_count;
         else if (angles.size() == 3)
@@ -443,6 +477,7 @@ void classify_junctions(const std::vector<Vec2>& point,
     if (branched > 0) {
         net.t_fraction = Real(t_count) / branched;
         net.y_fraction = Real(y_count) / branched;
+        net.junction_right_angle_fraction = Real(right_angles) / gap_count;
     }
 }
 
@@ -476,6 +511,33 @@ CrackNetwork measure_crack_network(const CoreTopology& topo, const std::vector<u
                              net);
     classify_junctions(point, pair, grid, junction_radius, branch_radius, w, net);
     return net;
+}
+
+CrackPace measure_crack_pace(const std::vector<int32_t>& first_break, int frame_start,
+                             int frame_end, int last) {
+    // broken edges by the frame they first broke in, frames start..last
+    const int frames = last - frame_start + 1;
+    CrackPace pace;
+    if (frames <= 0) return pace;
+    std::vector<int64_t> new_breaks(frames, 0);
+    for (int32_t f : first_break)
+        if (f <= last) ++new_breaks[std::max(f, frame_start) - frame_start];
+    const int64_t total = std::accumulate(new_breaks.begin(), new_breaks.end(), int64_t(0));
+    if (total == 0) return pace;
+    int64_t so_far = 0;
+    for (int k = 0; k < frames; ++k) {
+        if (new_breaks[k] > 0 && pace.first_crack_frame < 0)
+            pace.first_crack_frame = frame_start + k;
+        so_far += new_breaks[k];
+        if (2 * so_far >= total) {
+            pace.half_broken_frame = frame_start + k;
+            break;
+        }
+    }
+    if (frame_end > frame_start)
+        pace.half_broken_range_fraction =
+            Real(pace.half_broken_frame - frame_start) / Real(frame_end - frame_start);
+    return pace;
 }
 
 HardeningHalves measure_hardening_halves(const std::vector<int32_t>& surface,

@@ -10,6 +10,7 @@
 /// Vertical cracks separate columns sideways and leave each column's stack intact, while a
 /// horizontal crack opens a gap inside a column: that is what tells the two apart, with no need
 /// for crack-face normals (which on a jittered tet mesh point every way).
+#include <array>
 #include <cstdint>
 #include <limits>
 #include <vector>
@@ -109,6 +110,11 @@ std::vector<int32_t> top_polygon_labels(const CoreTopology& topo,
                                         const std::vector<uint8_t>& is_broken,
                                         const RestColumns& columns, int min_particles);
 
+/// Bins of CrackNetwork's histograms: 15 degrees each, over a line's directions and around a
+/// junction.
+constexpr int kCrackDirectionBins = 12;
+constexpr int kJunctionAngleBins = 24;
+
 /// The look of the crack network on the top surface, seen from above (in rest positions: the
 /// pattern as it is drawn, not as it opened). A crack point is the rest midpoint of a broken edge
 /// between two particles of top-layer polygons (the same polygon's, for a crack that has not cut
@@ -131,11 +137,37 @@ struct CrackNetwork {
     int32_t junctions = 0;
     Real t_fraction = 0;  // of the junctions with three or more branches
     Real y_fraction = 0;  // of the junctions with exactly three branches, and the widest < 150 deg
+    /// The oriented crack points by direction: bin k counts the directions within 7.5 degrees of
+    /// 15 k degrees from the x axis toward z (bin 0 takes both 0 and 180). Crack points sit about
+    /// a particle spacing apart along a crack, so this is crack length by direction. Bins 0 and 6
+    /// are the grid's axes; a network with no preferred direction fills the bins alike.
+    std::array<int32_t, kCrackDirectionBins> direction_histogram{};
+    /// The angles between neighbouring branches, around each junction with three or more: bin k
+    /// counts the angles within 7.5 degrees of 15 k degrees. A T is 90, 90 and 180; a Y of
+    /// cracks that split evenly, 120 three times.
+    std::array<int32_t, kJunctionAngleBins> junction_angle_histogram{};
+    /// Share of those angles within 15 degrees of a right angle: where a later crack meets an
+    /// earlier one, drying mud makes about 90 degrees (Bohn, Douady and Couder 2005).
+    Real junction_right_angle_fraction = 0;
 };
 
 /// The crack network of the top layer at the frame `is_broken` describes.
 CrackNetwork measure_crack_network(const CoreTopology& topo, const std::vector<uint8_t>& is_broken,
                                    const RestColumns& columns, int min_particles);
+
+/// When the cracks appear, from the frame each edge first broke (BreakHistory::first_break, never
+/// broken edges past any frame): frames up to `last` count.
+struct CrackPace {
+    int first_crack_frame = -1;  // the first frame with a broken edge; -1 if none by `last`
+    /// The first frame by which half of frame `last`'s broken edges exist; -1 if none
+    int half_broken_frame = -1;
+    /// Where half_broken_frame falls in the shot's frame range: 0 at its start, 1 at its end
+    Real half_broken_range_fraction = 0;
+};
+
+/// The pace of a shot whose frames run from `frame_start` to `frame_end`, measured up to `last`.
+CrackPace measure_crack_pace(const std::vector<int32_t>& first_break, int frame_start,
+                             int frame_end, int last);
 
 /// How deep cracks that open the top surface reach down (in rest positions). A column is cracked
 /// at the top when its top particle has a broken edge; its crack depth is the rest height of the

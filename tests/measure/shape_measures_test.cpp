@@ -1,11 +1,14 @@
 // The shape measures on layers moved by hand, where the answer is known exactly.
 #include <gtest/gtest.h>
 
+#include <array>
+#include <numeric>
 #include <vector>
 
 #include "pipeline/measure/shape_measures.h"
 #include "sim/core/error.h"
 #include "surfacing/core_topology.h"
+#include "surfacing/edge_breaks.h"
 #include "surfacing/lattice_mesh.h"
 #include "tolerance.h"
 
@@ -345,6 +348,13 @@ TEST_F(CrackNetworkTest, CracksAlongTheGridAreAxisAlignedOnesAcrossItAreNot) {
     EXPECT_GT(a.axis_aligned_fraction, 0.95);
     EXPECT_LT(b.axis_aligned_fraction, 0.1);
     EXPECT_EQ(a.junctions, 0);
+    // the direction histogram holds every oriented point, in the bin of the line's direction:
+    // x = const runs along z (90 degrees, bin 6), the other at 30 degrees (bin 2)
+    const auto sum = [](const auto& h) { return std::accumulate(h.begin(), h.end(), 0); };
+    EXPECT_EQ(sum(a.direction_histogram), a.oriented_points);
+    EXPECT_EQ(sum(b.direction_histogram), b.oriented_points);
+    EXPECT_GT(a.direction_histogram[6], 0.95 * a.oriented_points);
+    EXPECT_GT(b.direction_histogram[2], 0.9 * b.oriented_points);
 }
 
 TEST_F(CrackNetworkTest, ACrackEndingOnAnotherIsATJunctionThreeFromAPointAreAY) {
@@ -364,6 +374,32 @@ TEST_F(CrackNetworkTest, ACrackEndingOnAnotherIsATJunctionThreeFromAPointAreAY) 
     ASSERT_EQ(ny.junctions, 1);
     EXPECT_EQ(ny.y_fraction, 1);
     EXPECT_EQ(ny.t_fraction, 0);
+    // the angles between the branches: a T's 90, 90 and 180 degrees (bins 6 and 12), a Y's
+    // three of 120 (bin 8), give or take a bin where the lattice's edges draw the cut lines
+    std::array<int32_t, kJunctionAngleBins> t_angles{};
+    t_angles[6] = 2, t_angles[12] = 1;
+    EXPECT_EQ(nt.junction_angle_histogram, t_angles);
+    const auto& y_angles = ny.junction_angle_histogram;
+    EXPECT_EQ(y_angles[7] + y_angles[8] + y_angles[9], 3);
+    EXPECT_NEAR(nt.junction_right_angle_fraction, 2.0 / 3, tol::kRoundoff);
+    EXPECT_EQ(ny.junction_right_angle_fraction, 0);
+}
+
+TEST(CrackPace, FirstCrackAndTheFrameByWhichHalfOfTheLastFramesBreaksExist) {
+    // a shot of frames 1-41: 1 edge breaks in frame 5, 3 in frame 10, 4 in frame 20 and 2 in
+    // frame 30; one never breaks
+    std::vector<int32_t> first_break = {kNeverBroken, 10, 20, 5, 20, 10, 30, 20, 10, 20, 30};
+    const CrackPace at_41 = measure_crack_pace(first_break, 1, 41, 41);
+    EXPECT_EQ(at_41.first_crack_frame, 5);
+    EXPECT_EQ(at_41.half_broken_frame, 20);  // 4 by frame 10 of 10, 8 by frame 20
+    EXPECT_NEAR(at_41.half_broken_range_fraction, 19.0 / 40, tol::kRoundoff);
+    // measured up to frame 15: half of the 4 edges broken by then exist by frame 10
+    const CrackPace at_15 = measure_crack_pace(first_break, 1, 41, 15);
+    EXPECT_EQ(at_15.first_crack_frame, 5);
+    EXPECT_EQ(at_15.half_broken_frame, 10);
+    // before any crack, and an edge broken before the range starts counts at its start
+    EXPECT_EQ(measure_crack_pace(first_break, 1, 41, 4).first_crack_frame, -1);
+    EXPECT_EQ(measure_crack_pace({0, kNeverBroken}, 1, 41, 41).half_broken_frame, 1);
 }
 
 }  // namespace

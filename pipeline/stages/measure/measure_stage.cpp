@@ -44,6 +44,14 @@ std::vector<uint8_t> broken_at(const BreakHistory& history, int n) {
     return is_broken;
 }
 
+/// The typical polygon's side, the square root of its area weighted by area, over the cracked
+/// layer's thickness: the ratio that desiccation experiments find about constant as a layer
+/// gets thicker (Groisman and Kaplan 1994). 0 where either is unknown.
+double polygon_size_over_thickness(const SurfacePolygons& polygons, const CrackDepth& depth) {
+    if (!(polygons.weighted_mean_area > 0 && depth.thickness_median > 0)) return 0;
+    return std::sqrt(polygons.weighted_mean_area) / depth.thickness_median;
+}
+
 /// A frame's fragment, surface polygon, crack network and crack depth figures, as the table's JSON
 /// fields.
 json crack_fields(const FragmentSizes& sizes, const SurfacePolygons& polygons,
@@ -61,12 +69,24 @@ json crack_fields(const FragmentSizes& sizes, const SurfacePolygons& polygons,
             {"junctions", network.junctions},
             {"t_junction_fraction", network.t_fraction},
             {"y_junction_fraction", network.y_fraction},
+            {"crack_direction_histogram", network.direction_histogram},
+            {"junction_angle_histogram", network.junction_angle_histogram},
+            {"junction_right_angle_fraction", network.junction_right_angle_fraction},
             {"cracked_top_fraction", depth.cracked_fraction},
             {"crack_depth_median", depth.depth_median},
             {"crack_depth_p90", depth.depth_p90},
             {"crack_depth_max", depth.depth_max},
             {"cracked_column_thickness_median", depth.thickness_median},
-            {"crack_through_fraction", depth.through_fraction}};
+            {"crack_through_fraction", depth.through_fraction},
+            {"polygon_size_over_thickness", polygon_size_over_thickness(polygons, depth)}};
+}
+
+/// The pace fields of the document: when the first crack appears and when half of the last
+/// measured frame's broken edges exist, in frames and as a share of the shot's range.
+json pace_fields(const CrackPace& pace) {
+    return {{"first_crack_frame", pace.first_crack_frame},
+            {"half_broken_frame", pace.half_broken_frame},
+            {"half_broken_range_fraction", pace.half_broken_range_fraction}};
 }
 
 /// The first mesh of a frame's surfacing file named by the surface manifest's entry `which`
@@ -342,6 +362,18 @@ void print_frame_row(int n, const FrameMeasures& f, bool has_surfacing) {
         std::printf(" %8s %8s\n", "-", "-");
 }
 
+void print_pace(const CrackPace& pace, int last) {
+    if (pace.first_crack_frame < 0) {
+        std::printf("\npace: no crack by frame %d\n", last);
+        return;
+    }
+    std::printf(
+        "\npace: first crack in frame %d; half of frame %d's broken edges by frame %d (%.0f %% "
+        "of the shot's frame range)\n",
+        pace.first_crack_frame, last, pace.half_broken_frame,
+        100 * pace.half_broken_range_fraction);
+}
+
 using MeshRow = std::pair<std::optional<MeshPieces>, std::optional<SurfaceMotion>>;
 
 void print_mesh_table(const json& surface_manifest, bool has_motion, int first,
@@ -395,12 +427,20 @@ int run_measure_stage(const StageOptions& options, const MeasureStageOptions& me
     }
     if (!options.quiet && !mesh_rows.empty())
         print_mesh_table(surfacing.manifest, motion_tracker.has_value(), first, mesh_rows);
+    // the pace, from the break history: every frame up to the last measured, measured or not
+    std::optional<CrackPace> pace;
+    if (surfacing.history) {
+        pace = measure_crack_pace(surfacing.history->first_break, shot.sim.time.frame_start,
+                                  shot.sim.time.frame_end, last);
+        if (!options.quiet) print_pace(*pace, last);
+    }
     if (!measure_options.json_file.empty()) {
-        const json doc = {{"shot", shot.name},
-                          {"particles", rest.mesh.X.size()},
-                          {"column_width", rest.spacing},
-                          {"columns", rest.columns.n_columns()},
-                          {"frames", std::move(table)}};
+        json doc = {{"shot", shot.name},
+                    {"particles", rest.mesh.X.size()},
+                    {"column_width", rest.spacing},
+                    {"columns", rest.columns.n_columns()},
+                    {"frames", std::move(table)}};
+        if (pace) doc["pace"] = pace_fields(*pace);
         write_text_atomically(measure_options.json_file, doc.dump(2) + "\n");
     }
     return 0;
