@@ -137,6 +137,8 @@ protected:
         return path;
     }
     fs::path out() const { return m_dir / "out"; }
+    // where write_shot writes by default
+    fs::path shot_path() const { return m_dir / "shot.json"; }
 
     // --shot SHOT --out OUT, one thread unless `extra` says otherwise, then `extra`
     std::vector<std::string> stage_args(const fs::path& shot,
@@ -182,6 +184,17 @@ protected:
         EXPECT_NE(r.err.find("mc-" + stage + ": error: "), std::string::npos) << r.err;
         for (const std::string& n : needles)
             EXPECT_NE(r.err.find(n), std::string::npos) << "no \"" << n << "\" in\n" << r.err;
+    }
+
+    // mc-init refuses `shot` with exit 1, naming every needle, and leaves no init folder or
+    // partial output; the result, for checks of the case's own
+    Result expect_init_refused(const json& shot, const std::vector<std::string>& needles) {
+        const Result r = run("init", write_shot(shot));
+        EXPECT_EQ(r.code, 1) << r.err;
+        expect_error(r, "init", needles);
+        EXPECT_FALSE(fs::exists(out() / "init"));
+        expect_no_debris(out());
+        return r;
     }
 
     // a lock file an exclusive writer has recorded itself in
@@ -589,12 +602,7 @@ TEST_P(LatticeSpacing, BeyondAnIntIsRefusedByItsCount) {
     const SpacingCase& c = kSpacingCases[GetParam()];
     json shot = tiny_shot();
     c.edit(shot);
-    const fs::path path = write_shot(shot);
-    const Result r = run("init", path);
-    EXPECT_EQ(r.code, 1) << r.err;
-    expect_error(r, "init", {path.string() + ": " + c.key, "expected at most 50000000"});
-    EXPECT_FALSE(fs::exists(out() / "init"));
-    expect_no_debris(out());
+    expect_init_refused(shot, {shot_path().string() + ": " + c.key, "expected at most 50000000"});
 }
 
 INSTANTIATE_TEST_SUITE_P(Init, LatticeSpacing, ::testing::Range(0, int(std::size(kSpacingCases))),
@@ -651,14 +659,9 @@ TEST_P(MeshVertices, NonFiniteVertexNamed) {
     std::ofstream(m_dir / c.file) << c.text;
     json shot = tiny_shot();
     shot["source"] = {{"type", "mesh"}, {"mesh", {{"path", c.file}}}};
-    const fs::path path = write_shot(shot);
-    const Result r = run("init", path);
-    EXPECT_EQ(r.code, 1) << r.err;
-    expect_error(r, "init", {(m_dir / c.file).string(), c.needle, "not finite"});
+    const Result r = expect_init_refused(shot, {(m_dir / c.file).string(), c.needle, "not finite"});
     EXPECT_EQ(r.err.find("degenerate"), std::string::npos) << r.err;
     EXPECT_EQ(r.err.find("self-intersect"), std::string::npos) << r.err;
-    EXPECT_FALSE(fs::exists(out() / "init"));
-    expect_no_debris(out());
 }
 
 INSTANTIATE_TEST_SUITE_P(Init, MeshVertices, ::testing::Range(0, int(std::size(kMeshCases))),
@@ -721,12 +724,7 @@ TEST_P(MeshBody, RefusedByInitNamingTheKeyAndTheMeshExtent) {
     const MeshBodyCase& c = kMeshBodyCases[GetParam()];
     json shot = mesh_shot();
     c.edit(shot);
-    const fs::path path = write_shot(shot);
-    const Result r = run("init", path);
-    EXPECT_EQ(r.code, 1) << r.err;
-    expect_error(r, "init", {path.string() + ": " + with_mesh(c.message, mesh_path())});
-    EXPECT_FALSE(fs::exists(out() / "init"));
-    expect_no_debris(out());
+    expect_init_refused(shot, {shot_path().string() + ": " + with_mesh(c.message, mesh_path())});
 }
 
 INSTANTIATE_TEST_SUITE_P(Init, MeshBody, ::testing::Range(0, int(std::size(kMeshBodyCases))),
