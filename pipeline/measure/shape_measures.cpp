@@ -513,6 +513,68 @@ CrackNetwork measure_crack_network(const CoreTopology& topo, const std::vector<u
     return net;
 }
 
+PolygonSides measure_polygon_sides(const CoreTopology& topo, const std::vector<uint8_t>& is_broken,
+                                   const RestColumns& columns, int min_particles) {
+    constexpr Real kPlateShare = 0.01;
+    constexpr int32_t kMinSideColumns = 3;
+    const std::vector<int32_t> label = top_polygon_labels(topo, is_broken, columns, min_particles);
+    const Real w = columns.width;
+    // each column's cell and the polygon of its top particle (-1: a crumb's, or none)
+    using Cell = std::pair<int64_t, int64_t>;
+    std::map<Cell, int32_t> region;
+    std::map<int32_t, int32_t> columns_of;
+    int32_t labelled = 0;
+    for (int32_t c = 0; c < columns.n_columns(); ++c) {
+        const Vec3& r = topo.X[columns.particle[columns.begin[c]]];
+        const int32_t top = label[columns.particle[columns.begin[c + 1] - 1]];
+        region[{static_cast<int64_t>(std::floor(r.x() / w)),
+                static_cast<int64_t>(std::floor(r.z() / w))}] = top;
+        if (top >= 0) ++columns_of[top], ++labelled;
+    }
+    // plates seed a breadth-first fill of the other columns, in cell order (deterministic)
+    std::vector<Cell> queue;
+    for (auto& [cell, r] : region) {
+        if (r >= 0 && columns_of[r] < kPlateShare * labelled) r = -1;
+        if (r >= 0) queue.push_back(cell);
+    }
+    const Cell steps[4] = {{1, 0}, {-1, 0}, {0, 1}, {0, -1}};
+    for (size_t i = 0; i < queue.size(); ++i)
+        for (const Cell& d : steps) {
+            const auto it = region.find({queue[i].first + d.first, queue[i].second + d.second});
+            if (it == region.end() || it->second >= 0) continue;
+            it->second = region[queue[i]];
+            queue.push_back(it->first);
+        }
+    // the columns two plates share a border along, and the plates whose columns reach the
+    // footprint's edge (a column with a side open to the air)
+    std::map<std::pair<int32_t, int32_t>, int32_t> border;
+    std::set<int32_t> on_rim, plates;
+    for (const auto& [cell, r] : region) {
+        if (r < 0) continue;
+        plates.insert(r);
+        for (const Cell& d : steps)
+            if (!region.count({cell.first + d.first, cell.second + d.second})) on_rim.insert(r);
+        for (const Cell& d : {Cell{1, 0}, Cell{0, 1}}) {
+            const auto it = region.find({cell.first + d.first, cell.second + d.second});
+            if (it != region.end() && it->second >= 0 && it->second != r)
+                ++border[{std::min(r, it->second), std::max(r, it->second)}];
+        }
+    }
+    std::map<int32_t, int32_t> sides;
+    for (const auto& [pair, length] : border)
+        if (length >= kMinSideColumns) ++sides[pair.first], ++sides[pair.second];
+    PolygonSides result;
+    int64_t total = 0;
+    for (int32_t plate : plates) {
+        if (on_rim.count(plate)) continue;
+        const int32_t n = sides[plate];
+        ++result.inland_plates, total += n;
+        ++result.histogram[std::min(n, kPolygonSidesBins - 1)];
+    }
+    if (result.inland_plates > 0) result.mean_sides = Real(total) / result.inland_plates;
+    return result;
+}
+
 CrackPace measure_crack_pace(const std::vector<int32_t>& first_break, int frame_start,
                              int frame_end, int last) {
     // broken edges by the frame they first broke in, frames start..last

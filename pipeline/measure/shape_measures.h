@@ -155,6 +155,26 @@ struct CrackNetwork {
 CrackNetwork measure_crack_network(const CoreTopology& topo, const std::vector<uint8_t>& is_broken,
                                    const RestColumns& columns, int min_particles);
 
+/// Bins of PolygonSides' histogram: bin k counts plates of k sides, the last that many or more.
+constexpr int kPolygonSidesBins = 10;
+
+/// How many sides the top's plates have, as drying mud's polygons are counted (Bohn, Douady and
+/// Couder 2005: mostly four-sided, 4 to 5 on average). A plate is a top polygon holding at least
+/// 1 % of the top's labelled columns (chips and crumbs are not polygons of the network). Every
+/// other column of the footprint goes to the nearest plate across the top (a wide band of crumbs
+/// is split down its middle), and a plate's sides are the other plates it borders along at least
+/// 3 columns (a corner where four meet is no side). Only plates whose columns do not reach the
+/// footprint's edge count: the others have the slab's outline for a side.
+struct PolygonSides {
+    int32_t inland_plates = 0;
+    Real mean_sides = 0;  // over the inland plates
+    std::array<int32_t, kPolygonSidesBins> histogram{};
+};
+
+/// The sides of the top's plates at the frame `is_broken` describes.
+PolygonSides measure_polygon_sides(const CoreTopology& topo, const std::vector<uint8_t>& is_broken,
+                                   const RestColumns& columns, int min_particles);
+
 /// When the cracks appear, from the frame each edge first broke (BreakHistory::first_break, never
 /// broken edges past any frame): frames up to `last` count.
 struct CrackPace {

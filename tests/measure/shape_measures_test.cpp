@@ -385,6 +385,22 @@ TEST_F(CrackNetworkTest, ACrackEndingOnAnotherIsATJunctionThreeFromAPointAreAY) 
     EXPECT_EQ(ny.junction_right_angle_fraction, 0);
 }
 
+TEST_F(CrackNetworkTest, AGridOfCracksCutsFourSidedPlatesAndOnlyInlandOnesCount) {
+    // two cracks along x and two along z cut the 3 m square into 3 x 3 plates; only the middle
+    // one stays off the rim, and it borders four plates along a side (the corner ones at a point)
+    std::vector<uint8_t> broken = none();
+    for (double at : {1.03, 2.03}) {
+        cut(Vec2(at, -1), Vec2(at, 4), broken);
+        cut(Vec2(-1, at), Vec2(4, at), broken);
+    }
+    const PolygonSides sides = measure_polygon_sides(m_topo, broken, m_columns, 1);
+    EXPECT_EQ(sides.inland_plates, 1);
+    EXPECT_EQ(sides.mean_sides, 4);
+    EXPECT_EQ(sides.histogram[4], 1);
+    // uncut, the top is one plate on the rim: none inland
+    EXPECT_EQ(measure_polygon_sides(m_topo, none(), m_columns, 1).inland_plates, 0);
+}
+
 TEST(CrackPace, FirstCrackAndTheFrameByWhichHalfOfTheLastFramesBreaksExist) {
     // a shot of frames 1-41: 1 edge breaks in frame 5, 3 in frame 10, 4 in frame 20 and 2 in
     // frame 30; one never breaks

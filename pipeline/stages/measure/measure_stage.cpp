@@ -323,7 +323,12 @@ FrameMeasures measure_frame(const Shot& shot, const RestSetup& rest,
                                      rest.rest_volume);
     f.polygons = measure_surface_polygons(topo, is_broken, rest.columns, surfacing.min_particles);
     f.network = measure_crack_network(topo, is_broken, rest.columns, surfacing.min_particles);
+    const PolygonSides sides =
+        measure_polygon_sides(topo, is_broken, rest.columns, surfacing.min_particles);
     f.row["broken_edges"] = f.broken;
+    f.row["inland_plates"] = sides.inland_plates;
+    f.row["polygon_sides_mean"] = sides.mean_sides;
+    f.row["polygon_sides_histogram"] = sides.histogram;
     f.row.update(crack_fields(f.sizes, f.polygons, f.network,
                               measure_crack_depth(topo, is_broken, rest.columns)));
     f.meshes =
