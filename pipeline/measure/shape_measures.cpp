@@ -443,7 +443,7 @@ void classify_junctions(const std::vector<Vec2>& point,
         for (int32_t j : cluster) center += point[j];
         center /= static_cast<Real>(cluster.size());
         ++net.junctions;
-        // a branch per polygon pair near the junction: towards the mean of its crack points
+        // a branch per polygon pair near the junction, along its crack points (Branch)
         std::map<std::pair<int32_t, int32_t>, Branch> branches;
         grid.near(center, branch_radius, [&](int32_t j) {
             // inside a polygon: not a branch between two
