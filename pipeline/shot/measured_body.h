@@ -15,6 +15,9 @@ struct MeasuredBody {
     std::string what;  // what was measured, for messages: "<mesh file> as placed by /source/mesh"
 };
 
+/// A mesh source's body: the bounds of its surface as /source/mesh scales and places it.
+MeasuredBody placed_mesh_body(const std::string& mesh_path, const Vec3& lo, const Vec3& hi);
+
 /// The refusals the loader makes against a box or a heightfield, made against `body`: /sim/h
 /// larger than its thinnest side; /colliders/ground/height at or above its top, or further below
 /// its bottom than the body moves in the shot. Throws InputError as "<shot file>: <key> = <value>:

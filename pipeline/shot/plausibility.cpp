@@ -420,6 +420,10 @@ std::string value_text(const Shot& shot, const std::string& pointer) {
 
 }  // namespace
 
+MeasuredBody placed_mesh_body(const std::string& mesh_path, const Vec3& lo, const Vec3& hi) {
+    return {lo, hi, mesh_path + " as placed by /source/mesh"};
+}
+
 void check_measured_body(const Shot& shot, const MeasuredBody& body) {
     const spec::BodyBounds bounds{true,        true,        body.hi - body.lo,
                                   body.lo.y(), body.hi.y(), body.what};

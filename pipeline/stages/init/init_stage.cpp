@@ -74,11 +74,6 @@ void add_init_fields(json& m, const InitParams& params, bool parallel_mesh, cons
                   {"particles_per_s", q.particles / build_seconds}};
 }
 
-/// A mesh source's body as mc-init measured it: the surface's bounds once scaled and placed.
-MeasuredBody placed_mesh_body(const InitParams& params, const Vec3& lo, const Vec3& hi) {
-    return {lo, hi, params.mesh.path + " as placed by /source/mesh"};
-}
-
 void print_summary(const InitParams& params, const InitResult& r, double build_seconds,
                    double wall_seconds, const fs::path& dir) {
     const MeshQuality& q = r.quality;
@@ -118,7 +113,7 @@ int run_init_stage(const StageOptions& opt, bool parallel_mesh) {
     const InitResult r = [&] {
         try {
             return build_init(params, mesher, [&](const Vec3& lo, const Vec3& hi) {
-                mesh_body = placed_mesh_body(params, lo, hi);
+                mesh_body = placed_mesh_body(params.mesh.path, lo, hi);
                 check_measured_body(shot, *mesh_body);
             });
         } catch (const ShotValueError& e) {

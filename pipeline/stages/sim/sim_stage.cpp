@@ -112,9 +112,9 @@ void check_mesh_body(const Shot& shot, const fs::path& init_dir, const json& ini
     if (!lo || !hi)
         throw InputError(manifest.string() + ": damaged: /mesh_bounds = " + bounds.dump() +
                          ": expected {\"min\": [x, y, z], \"max\": [x, y, z]}: re-run mc-init");
-    check_measured_body(
-        shot,
-        {*lo, *hi, shot.init.mesh.path + " as placed by /source/mesh (" + manifest.string() + ")"});
+    MeasuredBody body = placed_mesh_body(shot.init.mesh.path, *lo, *hi);
+    body.what += " (" + manifest.string() + ")";
+    check_measured_body(shot, body);
 }
 
 // the frame number in a file name "<stem>.<digits>.<ext>", or -1
