@@ -107,6 +107,9 @@ struct SimModel {
     DomainParams domain;
     TimeParams time;
     int checkpoint_every = 10;  // frames between full-precision checkpoints (0: off)
+    // every this many steps the background grid moves by a fraction of a cell (0: a fixed grid;
+    // sim/mpm/simulation.cpp, docs/physics.md §6.4)
+    int grid_shift_interval = 0;
     CacheAttributes cache;
 };
 

@@ -376,7 +376,8 @@ SimModel build_sim(json& tree, Issues& issues) {
     read_fields<SimModel>(tree, "/sim", model,
                           {{"h", &SimModel::h},
                            {"gravity", &SimModel::gravity},
-                           {"checkpoint_every", &SimModel::checkpoint_every}});
+                           {"checkpoint_every", &SimModel::checkpoint_every},
+                           {"grid_shift", &SimModel::grid_shift_interval}});
     model.initial_velocity = vec3(tree, "/source/initial_velocity");
     read_fields<ElasticParams>(tree, "/material", model.elastic,
                                {{"density", &ElasticParams::density},

@@ -189,6 +189,9 @@ std::vector<KeySpec> build_fixed_table() {
     Key("/sim/cfl_velocity", T::Number).def(0.6).gt(0).le(1).units("-").doc("C_v: dt <= C_v h / max|v|"),
     Key("/sim/cfl_elastic", T::Number).def(0.5).gt(0).le(1).units("-").doc("C_E: dt <= C_E h / c_p, c_p = sqrt((lambda + 2 mu) / rho)"),
     Key("/sim/gravity", T::Vec3).def(vec(0, -9.81, 0)).units("m/s^2").doc("gravitational acceleration (y is up)"),
+    Key("/sim/grid_shift", T::Integer).def(0).ge(0).units("steps")
+        .doc("every k steps the grid moves by a random fraction of a cell on each axis, so no crack or "
+             "plastic band stays locked to its axes; 0 = a fixed grid (docs/physics.md §6.4)"),
     Key("/sim/checkpoint_every", T::Integer).def(10).ge(0).units("frames").doc("frames between full-precision checkpoints; 0 = off"),
 
     // --- frames

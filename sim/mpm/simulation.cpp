@@ -64,10 +64,37 @@ bool is_identity(const std::vector<int32_t>& order) {
     return true;
 }
 
+// The grid's offset in cells, each axis in [0, 1), for the steps from shift_index * interval on
+// (splitmix64 of the index: a pure function of the step count, so a resumed run moves its grid
+// as the uninterrupted run did).
+Vec3 grid_shift_cells(uint64_t shift_index) {
+    Vec3 u;
+    uint64_t z = shift_index * 3;
+    for (int d = 0; d < 3; ++d) {
+        uint64_t x = (z += 0x9E3779B97F4A7C15ull);
+        x = (x ^ (x >> 30)) * 0xBF58476D1CE4E5B9ull;
+        x = (x ^ (x >> 27)) * 0x94D049BB133111EBull;
+        x ^= x >> 31;
+        u[d] = static_cast<Real>(x >> 11) * 0x1.0p-53;
+    }
+    return u;
+}
+
+// The grid for the state's next step. A moving grid (/sim/grid_shift) starts u h below the domain
+// and ends (1 - u) h above it, one cell more per axis: it covers the domain whatever u is, and
+// its wall band only moves outward.
 SimWorkspace& ensure_workspace(const SimModel& model, SimState& state) {
     SimWorkspace& ws = state.workspace.get_or_create();
-    ws.grid.geo =
-        mpm::make_grid_geometry(state.domain_min, state.domain_max, model.h, model.domain.padding);
+    if (model.grid_shift_interval > 0) {
+        const Vec3 u = grid_shift_cells(static_cast<uint64_t>(state.step_count) /
+                                        static_cast<uint64_t>(model.grid_shift_interval));
+        ws.grid.geo = mpm::make_grid_geometry(state.domain_min - model.h * u,
+                                              state.domain_max + model.h * (Vec3::Ones() - u),
+                                              model.h, model.domain.padding);
+    } else {
+        ws.grid.geo = mpm::make_grid_geometry(state.domain_min, state.domain_max, model.h,
+                                              model.domain.padding);
+    }
     const int nt = std::max(1, thread_count());
     ws.windows.resize(nt);
     for (auto& w : ws.windows) w.resize(mpm::kWindowNodes * 8);
@@ -292,6 +319,10 @@ StepStats step(const SimModel& model, SimState& state, Real dt) {
     }
     SimWorkspace& ws = ensure_workspace(model, state);
     StepStats stats;
+    // the moisture CG's warm start extrapolates fluxes at fixed nodes: none survive a move
+    if (model.grid_shift_interval > 0 && state.step_count > 0 &&
+        state.step_count % model.grid_shift_interval == 0)
+        state.moisture_flux.clear();
 
     // the stress cache is the last step's (and so Fe's) only if that step was this state's last;
     // it stays marked stale until this step has succeeded

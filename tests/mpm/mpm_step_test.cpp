@@ -145,6 +145,80 @@ TEST(MpmStep, ResultDoesNotDependOnSlotOrder) {
     }
 }
 
+// /sim/grid_shift: the grid moves by a fraction of a cell at the start of every period, covers
+// the domain wherever it is, and a run resumed from a copy of the state (moisture flux history
+// included, workspace not) moves it alike, so the two give the same bits
+TEST(MpmStep, AMovingGridMovesEveryPeriodAndAResumedRunMovesItAlike) {
+    SimModel model = plain_model(0.1);
+    model.gravity = Vec3(0, -9.81, 0);
+    model.ground = GroundParams{};
+    model.ground->height = -0.05;
+    model.nacc = NaccParams{};
+    model.moisture = MoistureParams{};
+    model.moisture->lambda = 0.5;
+    model.grid_shift_interval = 3;
+    SimState a = block_state(model);
+    randomize(a, 5);
+    std::vector<Vec3> origins;
+    SimState resumed;
+    for (int i = 0; i < 12; ++i) {
+        if (i == 5) {
+            resumed = a;
+            resumed.workspace.reset();
+        }
+        step(model, a, stable_dt(model, a));
+        const mpm::GridGeometry& geo = a.workspace->grid.geo;
+        origins.push_back(geo.origin);
+        for (int d = 0; d < 3; ++d) {
+            EXPECT_LE(geo.origin[d], a.domain_min[d]);
+            EXPECT_GT(geo.origin[d], a.domain_min[d] - model.h);
+            EXPECT_GE(geo.origin[d] + geo.cells[d] * model.h, a.domain_max[d]);
+        }
+    }
+    for (int i = 1; i < 12; ++i) {
+        // origins[i] is the grid of step i + 1, which starts at step count i
+        const bool moved = origins[i] != origins[i - 1];
+        EXPECT_EQ(moved, i % 3 == 0) << "step " << i;
+    }
+    for (int i = 5; i < 12; ++i) step(model, resumed, stable_dt(model, resumed));
+    const std::vector<size_t> sa = test::slot_of_id(a), sr = test::slot_of_id(resumed);
+    for (size_t id = 0; id < a.size(); ++id) {
+        ASSERT_EQ(std::memcmp(a.x[sa[id]].data(), resumed.x[sr[id]].data(), sizeof(Vec3)), 0)
+            << "id " << id;
+        ASSERT_EQ(std::memcmp(a.Fe[sa[id]].data(), resumed.Fe[sr[id]].data(), sizeof(Mat3)), 0)
+            << "id " << id;
+        ASSERT_EQ(a.theta[sa[id]], resumed.theta[sr[id]]) << "id " << id;
+    }
+}
+
+// a grid that moves every step transfers mass and momentum as a fixed one does, and a free block
+// falls exactly as it does on a fixed grid
+TEST(MpmStep, AMovingGridConservesAndFallsFreely) {
+    SimModel model = plain_model(0.1);
+    model.grid_shift_interval = 1;
+    SimState s = block_state(model);
+    randomize(s, 1);
+    const Vec3 p_before = test::total_momentum(s);
+    const Real m_before = test::total_mass(s);
+    for (int i = 0; i < 3; ++i) step(model, s, 1e-4);
+    EXPECT_LT((test::total_momentum(s) - p_before).norm(), tol::kRoundoffLoose * m_before);
+
+    model.gravity = Vec3(0, -9.81, 0);
+    SimModel fixed = model;
+    fixed.grid_shift_interval = 0;
+    SimState moving_block = block_state(model, Vec3(0, 2, 0)),
+             fixed_block = block_state(fixed, Vec3(0, 2, 0));
+    for (int i = 0; i < 50; ++i) {
+        step(model, moving_block, 1e-3);
+        step(fixed, fixed_block, 1e-3);
+    }
+    const std::vector<size_t> sm = test::slot_of_id(moving_block),
+                              sf = test::slot_of_id(fixed_block);
+    for (size_t id = 0; id < moving_block.size(); ++id)
+        ASSERT_LT((moving_block.x[sm[id]] - fixed_block.x[sf[id]]).norm(), tol::kRoundoffLoose)
+            << "id " << id;
+}
+
 TEST(MpmStep, FreeBlockFallsWithGravity) {
     SimModel model = plain_model(0.1);
     model.gravity = Vec3(0, -9.81, 0);
@@ -347,9 +421,10 @@ TEST(Heterogeneity, WeakSoilYieldsWhereStrongSoilHolds) {
         // damage never decreases (slots are reordered by the step: compare by id)
         std::vector<Real> by_id(weak.size());
         for (size_t p = 0; p < weak.size(); ++p) by_id[weak.id[p]] = weak.damage[p];
-        if (i > 0)
+        if (i > 0) {
             for (size_t q = 0; q < by_id.size(); ++q)
                 ASSERT_GE(by_id[q], last_damage[q]) << "particle " << q << " step " << i;
+        }
         last_damage = by_id;
     }
     Real weak_max = 0, strong_max = 0;

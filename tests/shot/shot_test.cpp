@@ -93,6 +93,7 @@ TEST_F(ShotTest, DefaultsFillEveryKeyOfPresentSections) {
     EXPECT_EQ(shot.sim.time.frame_end, 24);
     EXPECT_EQ(shot.sim.gravity, Vec3(0, -9.81, 0));
     EXPECT_EQ(shot.sim.checkpoint_every, 10);
+    EXPECT_EQ(shot.sim.grid_shift_interval, 0);  // a fixed grid
     // the slice records the defaults it ran with
     expect_contains(shot.slice(Stage::Sim), {"\"youngs_modulus\": 2000.0", "\"dt_max\": 0.001"});
 }
@@ -314,6 +315,13 @@ TEST_F(ShotTest, OutOfRangeNamesPointerValueAndUnits) {
         "render": {"resolution": [960, 16385]}})",
                              "shots/huge.json"),
                     {"shots/huge.json: /render/resolution/1 = 16385: must be in [16, 16384] [px]"});
+    expect_contains(error_of(R"({"mudcrack": 1, "source": {"type": "box"}, "material": {},
+        "sim": {"grid_shift": -200}})"),
+                    {"/sim/grid_shift = -200: must be >= 0 [steps]"});
+    const Shot moving = parse_shot(R"({"mudcrack": 1, "source": {"type": "box"}, "material": {},
+        "sim": {"grid_shift": 200}})",
+                                   "t.json");
+    EXPECT_EQ(moving.sim.grid_shift_interval, 200);
 }
 
 TEST_F(ShotTest, EnumTypoSuggestsTheChoice) {
