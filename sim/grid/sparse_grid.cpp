@@ -74,11 +74,11 @@ int64_t SparseGrid::memory_bytes() const {
 
 namespace {
 
-// one stable counting-sort pass of the slots in `idx` by bits [shift, shift + 11) of key[slot]
-void radix_pass(const uint32_t* key, int shift, std::vector<int32_t>& idx,
+// one stable counting-sort pass of the slots in `idx` by bits [shift, shift + digit_bits) of
+// key[slot]
+void radix_pass(const uint32_t* key, int shift, int digit_bits, std::vector<int32_t>& idx,
                 std::vector<int32_t>& idx_tmp, std::vector<uint32_t>& count) {
-    constexpr int kDigitBits = 11;
-    constexpr uint32_t kBuckets = 1u << kDigitBits;
+    const uint32_t kBuckets = 1u << digit_bits;
     const size_t n = idx.size();
     idx_tmp.resize(n);
     count.assign(kBuckets, 0u);
@@ -125,15 +125,18 @@ void bin_particles(SparseGrid& grid, const std::vector<Vec3>& x, const std::vect
         sorted = grid.particle_key[p - 1] < grid.particle_key[p] ||
                  (grid.particle_key[p - 1] == grid.particle_key[p] && id[p - 1] < id[p]);
     if (!sorted) {
-        const uint32_t* id_key = reinterpret_cast<const uint32_t*>(id.data());
-        const int id_bits = bits_for(static_cast<uint64_t>(n));
+        // the slots in id order (the ids are a permutation of 0..n-1: one scatter, where sorting
+        // by id took a radix pass per 11 bits), then stable passes by block
+        for (int64_t p = 0; p < n; ++p) grid.order[id[p]] = static_cast<int32_t>(p);
+        // as few passes as digits of at most 16 bits allow (a 2^16 count array stays in L2:
+        // one pass over the slots for up to 65,536 blocks)
         const int block_bits =
             bits_for(static_cast<uint64_t>(geo.blocks.x()) * geo.blocks.y() * geo.blocks.z());
-        for (int shift = 0; shift < id_bits; shift += 11)
-            radix_pass(id_key, shift, grid.order, grid.sort_idx_tmp, grid.radix_count);
-        for (int shift = 0; shift < block_bits; shift += 11)
-            radix_pass(grid.particle_key.data(), shift, grid.order, grid.sort_idx_tmp,
-                       grid.radix_count);
+        const int passes = (block_bits + 15) / 16;
+        const int digit_bits = (block_bits + passes - 1) / passes;
+        for (int k = 0; k < passes; ++k)
+            radix_pass(grid.particle_key.data(), k * digit_bits, digit_bits, grid.order,
+                       grid.sort_idx_tmp, grid.radix_count);
     }
     std::vector<uint32_t>& sorted_key = grid.sort_key_tmp;
     sorted_key.resize(n);
