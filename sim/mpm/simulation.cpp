@@ -86,8 +86,13 @@ Vec3 grid_shift_cells(uint64_t shift_index) {
 SimWorkspace& ensure_workspace(const SimModel& model, SimState& state) {
     SimWorkspace& ws = state.workspace.get_or_create();
     if (model.grid_shift_interval > 0) {
-        const Vec3 u = grid_shift_cells(static_cast<uint64_t>(state.step_count) /
-                                        static_cast<uint64_t>(model.grid_shift_interval));
+        Vec3 u = grid_shift_cells(static_cast<uint64_t>(state.step_count) /
+                                  static_cast<uint64_t>(model.grid_shift_interval));
+        // over a ground, the grid keeps its height: the nodes at and below the ground plane are
+        // what holds the soil (a sticky ground glues the cells they reach), and a grid moved up
+        // and down lets go of the bottom layer and takes it again, period after period (the
+        // demo lifted 10 % of its footprint off a sticky ground, against 0.8 % on a fixed grid)
+        if (model.ground) u.y() = 0;
         ws.grid.geo = mpm::make_grid_geometry(state.domain_min - model.h * u,
                                               state.domain_max + model.h * (Vec3::Ones() - u),
                                               model.h, model.domain.padding);

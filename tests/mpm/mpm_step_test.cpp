@@ -145,9 +145,10 @@ TEST(MpmStep, ResultDoesNotDependOnSlotOrder) {
     }
 }
 
-// /sim/grid_shift: the grid moves by a fraction of a cell at the start of every period, covers
-// the domain wherever it is, and a run resumed from a copy of the state (moisture flux history
-// included, workspace not) moves it alike, so the two give the same bits
+// /sim/grid_shift: the grid moves by a fraction of a cell at the start of every period (over a
+// ground, sideways only), covers the domain wherever it is, and a run resumed from a copy of the
+// state (moisture flux history included, workspace not) moves it alike, so the two give the
+// same bits
 TEST(MpmStep, AMovingGridMovesEveryPeriodAndAResumedRunMovesItAlike) {
     SimModel model = plain_model(0.1);
     model.gravity = Vec3(0, -9.81, 0);
@@ -174,6 +175,8 @@ TEST(MpmStep, AMovingGridMovesEveryPeriodAndAResumedRunMovesItAlike) {
             EXPECT_GT(geo.origin[d], a.domain_min[d] - model.h);
             EXPECT_GE(geo.origin[d] + geo.cells[d] * model.h, a.domain_max[d]);
         }
+        // over a ground it moves sideways only: its nodes keep their heights above the ground
+        EXPECT_EQ(geo.origin.y(), a.domain_min.y());
     }
     for (int i = 1; i < 12; ++i) {
         // origins[i] is the grid of step i + 1, which starts at step count i
