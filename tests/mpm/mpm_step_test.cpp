@@ -43,6 +43,31 @@ void randomize(SimState& s, unsigned seed) {
     }
 }
 
+// a drying NACC soil with moisture on a ground just below the block
+SimModel drying_on_ground_model() {
+    SimModel model = plain_model(0.1);
+    model.gravity = Vec3(0, -9.81, 0);
+    model.ground = GroundParams{};
+    model.ground->height = -0.05;
+    model.nacc = NaccParams{};
+    model.moisture = MoistureParams{};
+    model.moisture->lambda = 0.5;
+    return model;
+}
+
+// a and b hold the same particles, in whatever slot order, with the same bits
+void expect_same_bits_by_id(const SimState& a, const SimState& b) {
+    ASSERT_EQ(a.size(), b.size());
+    const std::vector<size_t> sa = test::slot_of_id(a), sb = test::slot_of_id(b);
+    for (size_t id = 0; id < a.size(); ++id) {
+        ASSERT_EQ(std::memcmp(a.x[sa[id]].data(), b.x[sb[id]].data(), sizeof(Vec3)), 0)
+            << "id " << id;
+        ASSERT_EQ(std::memcmp(a.Fe[sa[id]].data(), b.Fe[sb[id]].data(), sizeof(Mat3)), 0)
+            << "id " << id;
+        ASSERT_EQ(a.theta[sa[id]], b.theta[sb[id]]) << "id " << id;
+    }
+}
+
 TEST(MpmStep, TransfersConserveMassAndMomentum) {
     SimModel model = plain_model(0.1);
     SimState s = block_state(model);
@@ -64,14 +89,8 @@ TEST(MpmStep, TransfersConserveMassAndMomentum) {
 }
 
 TEST(MpmStep, SameThreadCountIsBitwiseIdenticalAndThreadCountsAgree) {
-    SimModel model = plain_model(0.1);
-    model.gravity = Vec3(0, -9.81, 0);
-    model.ground = GroundParams{};
-    model.ground->height = -0.05;
-    model.nacc = NaccParams{};
+    SimModel model = drying_on_ground_model();
     model.nacc->alpha0 = std::log(0.99);
-    model.moisture = MoistureParams{};
-    model.moisture->lambda = 0.5;
     auto run = [&](int threads) {
         set_thread_count(threads);
         SimState s = block_state(model);
@@ -103,13 +122,7 @@ TEST(MpmStep, SameThreadCountIsBitwiseIdenticalAndThreadCountsAgree) {
 // a resumed state may come back with its slots in another order (say, by id): the result must not
 // change by a single bit
 TEST(MpmStep, ResultDoesNotDependOnSlotOrder) {
-    SimModel model = plain_model(0.1);
-    model.gravity = Vec3(0, -9.81, 0);
-    model.ground = GroundParams{};
-    model.ground->height = -0.05;
-    model.nacc = NaccParams{};
-    model.moisture = MoistureParams{};
-    model.moisture->lambda = 0.5;
+    const SimModel model = drying_on_ground_model();
     SimState a = block_state(model);
     randomize(a, 9);
     for (int i = 0; i < 5; ++i) step(model, a, stable_dt(model, a));
@@ -135,14 +148,7 @@ TEST(MpmStep, ResultDoesNotDependOnSlotOrder) {
         step(model, a, stable_dt(model, a));
         step(model, b, stable_dt(model, b));
     }
-    const std::vector<size_t> sa = test::slot_of_id(a), sb = test::slot_of_id(b);
-    for (size_t id = 0; id < a.size(); ++id) {
-        ASSERT_EQ(std::memcmp(a.x[sa[id]].data(), b.x[sb[id]].data(), sizeof(Vec3)), 0)
-            << "id " << id;
-        ASSERT_EQ(std::memcmp(a.Fe[sa[id]].data(), b.Fe[sb[id]].data(), sizeof(Mat3)), 0)
-            << "id " << id;
-        ASSERT_EQ(a.theta[sa[id]], b.theta[sb[id]]) << "id " << id;
-    }
+    expect_same_bits_by_id(a, b);
 }
 
 // /sim/grid_shift: the grid moves by a fraction of a cell at the start of every period (over a
@@ -150,13 +156,7 @@ TEST(MpmStep, ResultDoesNotDependOnSlotOrder) {
 // state (moisture flux history included, workspace not) moves it alike, so the two give the
 // same bits
 TEST(MpmStep, AMovingGridMovesEveryPeriodAndAResumedRunMovesItAlike) {
-    SimModel model = plain_model(0.1);
-    model.gravity = Vec3(0, -9.81, 0);
-    model.ground = GroundParams{};
-    model.ground->height = -0.05;
-    model.nacc = NaccParams{};
-    model.moisture = MoistureParams{};
-    model.moisture->lambda = 0.5;
+    SimModel model = drying_on_ground_model();
     model.grid_shift_interval = 3;
     SimState a = block_state(model);
     randomize(a, 5);
@@ -184,14 +184,7 @@ TEST(MpmStep, AMovingGridMovesEveryPeriodAndAResumedRunMovesItAlike) {
         EXPECT_EQ(moved, i % 3 == 0) << "step " << i;
     }
     for (int i = 5; i < 12; ++i) step(model, resumed, stable_dt(model, resumed));
-    const std::vector<size_t> sa = test::slot_of_id(a), sr = test::slot_of_id(resumed);
-    for (size_t id = 0; id < a.size(); ++id) {
-        ASSERT_EQ(std::memcmp(a.x[sa[id]].data(), resumed.x[sr[id]].data(), sizeof(Vec3)), 0)
-            << "id " << id;
-        ASSERT_EQ(std::memcmp(a.Fe[sa[id]].data(), resumed.Fe[sr[id]].data(), sizeof(Mat3)), 0)
-            << "id " << id;
-        ASSERT_EQ(a.theta[sa[id]], resumed.theta[sr[id]]) << "id " << id;
-    }
+    expect_same_bits_by_id(a, resumed);
 }
 
 // a grid that moves every step transfers mass and momentum as a fixed one does, and a free block
