@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <sstream>
+#include <string>
 
 #include "sim/core/error.h"
 #include "sim/core/stats.h"
@@ -78,11 +79,11 @@ namespace {
 // key[slot]
 void radix_pass(const uint32_t* key, int shift, int digit_bits, std::vector<int32_t>& idx,
                 std::vector<int32_t>& idx_tmp, std::vector<uint32_t>& count) {
-    const uint32_t kBuckets = 1u << digit_bits;
+    const uint32_t buckets = 1u << digit_bits;
     const size_t n = idx.size();
     idx_tmp.resize(n);
-    count.assign(kBuckets, 0u);
-    for (size_t i = 0; i < n; ++i) ++count[(key[idx[i]] >> shift) & (kBuckets - 1)];
+    count.assign(buckets, 0u);
+    for (size_t i = 0; i < n; ++i) ++count[(key[idx[i]] >> shift) & (buckets - 1)];
     uint32_t sum = 0;
     for (uint32_t& c : count) {
         const uint32_t here = c;
@@ -90,7 +91,7 @@ void radix_pass(const uint32_t* key, int shift, int digit_bits, std::vector<int3
         sum += here;
     }
     for (size_t i = 0; i < n; ++i)
-        idx_tmp[count[(key[idx[i]] >> shift) & (kBuckets - 1)]++] = idx[i];
+        idx_tmp[count[(key[idx[i]] >> shift) & (buckets - 1)]++] = idx[i];
     idx.swap(idx_tmp);
 }
 
@@ -127,7 +128,15 @@ void bin_particles(SparseGrid& grid, const std::vector<Vec3>& x, const std::vect
     if (!sorted) {
         // the slots in id order (the ids are a permutation of 0..n-1: one scatter, where sorting
         // by id took a radix pass per 11 bits), then stable passes by block
-        for (int64_t p = 0; p < n; ++p) grid.order[id[p]] = static_cast<int32_t>(p);
+        std::fill(grid.order.begin(), grid.order.end(), -1);
+        for (int64_t p = 0; p < n; ++p) {
+            const int32_t i = id[p];
+            if (i < 0 || i >= n || grid.order[i] >= 0)
+                throw RuntimeError("particle binning: slot " + std::to_string(p) + " has id " +
+                                   std::to_string(i) + ", which is out of [0, " +
+                                   std::to_string(n) + ") or another slot's: a damaged state");
+            grid.order[i] = static_cast<int32_t>(p);
+        }
         // as few passes as digits of at most 16 bits allow (a 2^16 count array stays in L2:
         // one pass over the slots for up to 65,536 blocks)
         const int block_bits =

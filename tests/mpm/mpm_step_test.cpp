@@ -215,6 +215,42 @@ TEST(MpmStep, AMovingGridConservesAndFallsFreely) {
             << "id " << id;
 }
 
+// the binning's canonical order: slots by grid block, then by particle id, whatever order the
+// slots and ids are in; ids that are not a permutation of the slots are a damaged state
+TEST(MpmStep, BinningOrdersSlotsByBlockThenIdAndRefusesDamagedIds) {
+    std::mt19937 rng(4);
+    std::uniform_real_distribution<Real> u(-0.9, 0.9);
+    std::vector<Vec3> x(3000);
+    for (Vec3& p : x) p = Vec3(u(rng), u(rng), u(rng));
+    std::vector<int32_t> id(x.size());
+    for (size_t i = 0; i < id.size(); ++i) id[i] = static_cast<int32_t>(i);
+    std::shuffle(id.begin(), id.end(), rng);
+    mpm::SparseGrid grid;
+    // 27^3 blocks, sorted in one counting pass, and 102^3, in two
+    for (const Real h : {0.02, 0.005}) {
+        grid.geo = mpm::make_grid_geometry(Vec3::Constant(-1), Vec3::Constant(1), h, 3);
+        mpm::bin_particles(grid, x, id);
+        ASSERT_EQ(grid.order.size(), x.size());
+        std::vector<int> seen(x.size(), 0);
+        for (size_t i = 0; i < grid.order.size(); ++i) {
+            const int32_t slot = grid.order[i];
+            ++seen[slot];
+            if (i == 0) continue;
+            const int32_t prev = grid.order[i - 1];
+            const uint32_t k0 = grid.particle_key[prev], k1 = grid.particle_key[slot];
+            ASSERT_TRUE(k0 < k1 || (k0 == k1 && id[prev] < id[slot])) << "h " << h << ", " << i;
+        }
+        EXPECT_EQ(std::count(seen.begin(), seen.end(), 1), static_cast<long>(x.size()));
+    }
+
+    std::vector<int32_t> duplicated = id;
+    duplicated[7] = duplicated[8];
+    EXPECT_THROW(mpm::bin_particles(grid, x, duplicated), RuntimeError);
+    std::vector<int32_t> out_of_range = id;
+    out_of_range[0] = static_cast<int32_t>(x.size());
+    EXPECT_THROW(mpm::bin_particles(grid, x, out_of_range), RuntimeError);
+}
+
 TEST(MpmStep, FreeBlockFallsWithGravity) {
     SimModel model = plain_model(0.1);
     model.gravity = Vec3(0, -9.81, 0);
