@@ -110,6 +110,10 @@ struct SimModel {
     // every this many steps the background grid moves by a fraction of a cell (0: a fixed grid;
     // sim/mpm/simulation.cpp, docs/physics.md §6.4)
     int grid_shift_interval = 0;
+    // every this many steps the background grid turns to a new random angle about the vertical
+    // (0: a grid along the world's axes; sim/mpm/simulation.cpp, docs/physics.md §6.5). Needs an
+    // auto domain and a vertical gravity (the shot loader refuses the others).
+    int grid_turn_interval = 0;
     CacheAttributes cache;
 };
 

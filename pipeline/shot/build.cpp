@@ -377,7 +377,8 @@ SimModel build_sim(json& tree, Issues& issues) {
                           {{"h", &SimModel::h},
                            {"gravity", &SimModel::gravity},
                            {"checkpoint_every", &SimModel::checkpoint_every},
-                           {"grid_shift", &SimModel::grid_shift_interval}});
+                           {"grid_shift", &SimModel::grid_shift_interval},
+                           {"grid_turn", &SimModel::grid_turn_interval}});
     model.initial_velocity = vec3(tree, "/source/initial_velocity");
     read_fields<ElasticParams>(tree, "/material", model.elastic,
                                {{"density", &ElasticParams::density},
@@ -513,6 +514,17 @@ void check_across(const json& tree, const InitParams& init, const SimModel& sim,
         issues.add("/colliders/ground/height", issues.value_of(tree, "/colliders/ground/height"),
                    "must be in [" + g(d.min.y()) + ", " + g(d.max.y()) + ") (the domain's y range)",
                    "m");
+    // a turned grid turns the walls with it about the vertical, and would need gravity turned too
+    if (sim.grid_turn_interval > 0 && !issues.has("/sim/grid_turn")) {
+        if (!d.is_auto)
+            issues.add("/sim/grid_turn", issues.value_of(tree, "/sim/grid_turn"),
+                       "needs the domain derived from the particles (the domain's walls turn "
+                       "with the grid): leave /colliders/domain out");
+        if (sim.gravity.x() != 0 || sim.gravity.z() != 0)
+            issues.add("/sim/grid_turn", issues.value_of(tree, "/sim/grid_turn"),
+                       "needs a vertical /sim/gravity (the grid turns about the vertical), not " +
+                           issues.value_of(tree, "/sim/gravity"));
+    }
     if (render && render->turntable && !issues.has("/render/turntable/frame") &&
         !issues.has("/frames")) {
         const int f = render->turntable_frame;

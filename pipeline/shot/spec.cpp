@@ -192,6 +192,10 @@ std::vector<KeySpec> build_fixed_table() {
     Key("/sim/grid_shift", T::Integer).def(0).ge(0).units("steps")
         .doc("every k steps the grid moves by a random fraction of a cell on each axis, so no crack or "
              "plastic band stays locked to its axes; 0 = a fixed grid (docs/physics.md §6.4)"),
+    Key("/sim/grid_turn", T::Integer).def(0).ge(0).units("steps")
+        .doc("every k steps the grid turns to a new random angle about the vertical, so no crack follows "
+             "its axes; needs an auto domain and a vertical gravity; 0 = a grid along the world's axes "
+             "(docs/physics.md §6.5)"),
     Key("/sim/checkpoint_every", T::Integer).def(10).ge(0).units("frames").doc("frames between full-precision checkpoints; 0 = off"),
 
     // --- frames

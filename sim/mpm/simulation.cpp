@@ -64,20 +64,63 @@ bool is_identity(const std::vector<int32_t>& order) {
     return true;
 }
 
+// splitmix64's output function: a number in [0, 1) from x, every bit of x stirred into it
+Real splitmix64_unit(uint64_t x) {
+    x = (x ^ (x >> 30)) * 0xBF58476D1CE4E5B9ull;
+    x = (x ^ (x >> 27)) * 0x94D049BB133111EBull;
+    x ^= x >> 31;
+    return static_cast<Real>(x >> 11) * 0x1.0p-53;
+}
+
+constexpr uint64_t kGoldenGamma = 0x9E3779B97F4A7C15ull;  // splitmix64's increment
+
 // The grid's offset in cells, each axis in [0, 1), for the steps from shift_index * interval on
 // (splitmix64 of the index: a pure function of the step count, so a resumed run moves its grid
 // as the uninterrupted run did).
 Vec3 grid_shift_cells(uint64_t shift_index) {
     Vec3 u;
     uint64_t z = shift_index * 3;
-    for (int d = 0; d < 3; ++d) {
-        uint64_t x = (z += 0x9E3779B97F4A7C15ull);
-        x = (x ^ (x >> 30)) * 0xBF58476D1CE4E5B9ull;
-        x = (x ^ (x >> 27)) * 0x94D049BB133111EBull;
-        x ^= x >> 31;
-        u[d] = static_cast<Real>(x >> 11) * 0x1.0p-53;
-    }
+    for (int d = 0; d < 3; ++d) u[d] = splitmix64_unit(z += kGoldenGamma);
     return u;
+}
+
+// The turned grid's angle about the vertical for the steps from turn_index * interval on, in
+// [0, 2 pi): splitmix64's sequence from index 8.48e18 on (kTurnStream is that index times the
+// increment), which the shift's indices (3 j, from 0 up) never reach, so a shot that both shifts
+// and turns its grid does not turn it by its shifts.
+Real grid_turn_angle(uint64_t turn_index) {
+    constexpr uint64_t kTurnStream = 0xD1B54A32D192ED03ull;
+    return 2 * kPi * splitmix64_unit(kTurnStream + turn_index * kGoldenGamma);
+}
+
+// the rotation by `angle` about the vertical (y) axis: x toward -z for a positive angle
+Mat3 rotation_about_vertical(Real angle) {
+    const Real c = std::cos(angle), s = std::sin(angle);
+    Mat3 r;
+    r << c, 0, s, 0, 1, 0, -s, 0, c;
+    return r;
+}
+
+// The angle of the grid a state with `step_count` steps is held in: the grid of its last step,
+// and the world's (0) before the first.
+Real state_turn_angle(const SimModel& model, int64_t step_count) {
+    if (model.grid_turn_interval <= 0 || step_count == 0) return 0;
+    return grid_turn_angle(static_cast<uint64_t>(step_count - 1) /
+                           static_cast<uint64_t>(model.grid_turn_interval));
+}
+
+// Carries the state's directional arrays by `turn` about the vertical through `centre`: positions
+// and velocities turn, the APIC matrix as a spatial tensor (R C R^T), Fe on its spatial side
+// (R Fe: the current configuration turns, the rest and plastic ones do not). Every scalar (J,
+// alpha, theta, the damage) is frame-indifferent.
+void turn_state(SimState& s, const Mat3& turn, const Vec3& centre) {
+    const Mat3 turn_t = turn.transpose();
+    parallel_for(static_cast<int64_t>(s.size()), [&](int64_t p) {
+        s.x[p] = turn * (s.x[p] - centre) + centre;
+        s.v[p] = turn * s.v[p];
+        s.C[p] = turn * s.C[p] * turn_t;
+        s.Fe[p] = turn * s.Fe[p];
+    });
 }
 
 // The grid for the state's next step. A moving grid (/sim/grid_shift) starts u h below the domain
@@ -209,6 +252,17 @@ void set_domain(const SimModel& model, const std::vector<Vec3>& X, SimState& s) 
     const Real h = model.h;
     const int pad = model.domain.padding;
     if (model.domain.is_auto) {
+        // a turned grid's domain turns with it about its centre: around the footprint's centre,
+        // it holds the disc the footprint sweeps, a square in x and z whatever the angle
+        if (model.grid_turn_interval > 0) {
+            const Real cx = (lo.x() + hi.x()) / 2, cz = (lo.z() + hi.z()) / 2;
+            Real r2 = 0;
+            for (const Vec3& x : X)
+                r2 = std::max(r2, (x.x() - cx) * (x.x() - cx) + (x.z() - cz) * (x.z() - cz));
+            const Real r = std::sqrt(r2);
+            lo.x() = cx - r, hi.x() = cx + r;
+            lo.z() = cz - r, hi.z() = cz + r;
+        }
         const Vec3 extent = hi - lo;
         for (int d = 0; d < 3; ++d) {
             const Real margin =
@@ -324,9 +378,19 @@ StepStats step(const SimModel& model, SimState& state, Real dt) {
     }
     SimWorkspace& ws = ensure_workspace(model, state);
     StepStats stats;
+    // a turned grid: at the start of each period the state moves into the frame of the period's
+    // grid, and its stress cache (computed in the last grid's frame) is stale
+    const int64_t turn = model.grid_turn_interval;
+    if (turn > 0 && state.step_count % turn == 0) {
+        const GridFrame held = state_grid_frame(model, state);
+        const Mat3 next = rotation_about_vertical(
+            grid_turn_angle(static_cast<uint64_t>(state.step_count / turn)));
+        turn_state(state, next * held.rotation.transpose(), held.centre);
+        ws.tau_step = -1;
+    }
     // the moisture CG's warm start extrapolates fluxes at fixed nodes: none survive a move
-    if (model.grid_shift_interval > 0 && state.step_count > 0 &&
-        state.step_count % model.grid_shift_interval == 0)
+    const int64_t shift = model.grid_shift_interval;
+    if ((shift > 0 && state.step_count % shift == 0) || (turn > 0 && state.step_count % turn == 0))
         state.moisture_flux.clear();
 
     // the stress cache is the last step's (and so Fe's) only if that step was this state's last;
@@ -413,8 +477,17 @@ StepStats step(const SimModel& model, SimState& state, Real dt) {
     return stats;
 }
 
+GridFrame state_grid_frame(const SimModel& model, const SimState& state) {
+    GridFrame frame;
+    frame.rotation = rotation_about_vertical(state_turn_angle(model, state.step_count));
+    frame.centre = (state.domain_min + state.domain_max) / 2;
+    return frame;
+}
+
 ParticleFrame state_to_frame(const SimModel& model, const SimState& state,
                              const CacheAttributes& attrs) {
+    const GridFrame frame = state_grid_frame(model, state);
+    const bool is_turned = frame.rotation != Mat3::Identity();
     const size_t n = state.size();
     ParticleFrame f;
     f.time = state.time;
@@ -431,6 +504,13 @@ ParticleFrame state_to_frame(const SimModel& model, const SimState& state,
     if (attrs.key) f.member[id] = cached_value::member(model, state, p);
         MC_CACHED_ATTRIBUTES(MC_FILL_CACHED)
 #undef MC_FILL_CACHED
+        // a turned grid's state, back in the world's frame: the position, and the cached
+        // attributes with a direction (the velocity, and Fe on its spatial side)
+        if (is_turned) {
+            f.P[id] = frame.world_point(state.x[p]).cast<float>();
+            if (attrs.velocity) f.v[id] = frame.world_vector(state.v[p]).cast<float>();
+            if (attrs.Fe) f.Fe[id] = (frame.rotation.transpose() * state.Fe[p]).cast<float>();
+        }
     }
     return f;
 }

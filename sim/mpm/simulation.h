@@ -81,6 +81,23 @@ struct StepStats {
     Real max_speed = 0;           // max |v_p| after the step [m/s]
 };
 
+/// Where a turned grid (/sim/grid_turn, SimModel::grid_turn_interval = k > 0) holds the state.
+/// Its particles' x, v, C and Fe are in the frame of the grid of the state's last step, which is
+/// the world turned by an angle about the vertical through the domain's centre; a state that has
+/// taken no step is in the world's frame. Everything else (scalars, rest positions, the domain)
+/// is the world's. A state whose model does not turn its grid is always in the world's frame.
+struct GridFrame {
+    Mat3 rotation = Mat3::Identity();  // grid = rotation (world - centre) + centre
+    Vec3 centre = Vec3::Zero();        // on the vertical axis of the turn [m]
+    Vec3 world_point(const Vec3& x) const { return rotation.transpose() * (x - centre) + centre; }
+    Vec3 world_vector(const Vec3& v) const { return rotation.transpose() * v; }
+};
+
+/// The frame `state` is held in (see GridFrame). A pure function of the model, the state's step
+/// count and its domain, so a run resumed from a checkpoint finds the frame its state was saved
+/// in.
+GridFrame state_grid_frame(const SimModel& model, const SimState& state);
+
 /// Initial state: particles at rest positions X with rest volumes V0 (from the tet mesh), moving
 /// at model.initial_velocity, at theta_init when the model has moisture. `strength` (empty, or
 /// one positive p0 multiplier per particle) makes the soil heterogeneous; it needs model.nacc.
@@ -100,7 +117,8 @@ Real stable_dt(const SimModel& model, const SimState& state);
 /// state; a failure throws RuntimeError naming the particle id and its state (theta, J, alpha).
 StepStats step(const SimModel& model, SimState& state, Real dt);
 
-/// The cacheable view of the state in particle-id order, with only the requested attributes.
+/// The cacheable view of the state in particle-id order, with only the requested attributes, in
+/// the world's frame.
 ParticleFrame state_to_frame(const SimModel& model, const SimState& state,
                              const CacheAttributes& attrs);
 

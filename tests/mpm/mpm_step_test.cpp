@@ -215,6 +215,118 @@ TEST(MpmStep, AMovingGridConservesAndFallsFreely) {
             << "id " << id;
 }
 
+// /sim/grid_turn: the state moves into a newly turned grid's frame at the start of every period
+// (the world's frame before the first step, a turn about the vertical after), the frame cache
+// turns it back, and a run resumed from a copy of the state finds its frame from the step count
+// and gives the same bits
+TEST(MpmStep, ATurnedGridTurnsEveryPeriodAndAResumedRunTurnsItAlike) {
+    SimModel model = drying_on_ground_model();
+    model.grid_turn_interval = 3;
+    SimState a = block_state(model);
+    randomize(a, 5);
+    EXPECT_EQ(state_grid_frame(model, a).rotation, Mat3::Identity());
+    std::vector<Mat3> frames;
+    SimState resumed;
+    for (int i = 0; i < 12; ++i) {
+        if (i == 5) {
+            resumed = a;
+            resumed.workspace.reset();
+        }
+        step(model, a, stable_dt(model, a));
+        const GridFrame frame = state_grid_frame(model, a);
+        frames.push_back(frame.rotation);
+        // a turn about the vertical through the domain's centre
+        EXPECT_NEAR((frame.rotation * frame.rotation.transpose() - Mat3::Identity()).norm(), 0,
+                    tol::kRoundoff);
+        EXPECT_EQ(frame.rotation.row(1), Eigen::RowVector3d(0, 1, 0));
+        EXPECT_EQ(frame.centre, (a.domain_min + a.domain_max) / 2);
+        // the cache is the world's: the state turned back
+        const ParticleFrame cached = state_to_frame(model, a, CacheAttributes{});
+        const std::vector<size_t> slot = test::slot_of_id(a);
+        for (size_t id = 0; id < a.size(); ++id) {
+            const Vec3 world = frame.world_point(a.x[slot[id]]);
+            ASSERT_LT((cached.P[id].cast<Real>() - world).norm(), 1e-6 * world.norm())
+                << "id " << id;
+            ASSERT_LT((cached.v[id].cast<Real>() - frame.world_vector(a.v[slot[id]])).norm(),
+                      1e-6 * (1 + a.v[slot[id]].norm()))
+                << "id " << id;
+        }
+    }
+    // the grid of step 1 is turned, and the state with it: the cache is not the state's x
+    EXPECT_GT((frames[0] - Mat3::Identity()).norm(), 1e-3);
+    for (int i = 1; i < 12; ++i) {
+        // frames[i] is the grid of step i + 1, which starts at step count i
+        const bool turned = frames[i] != frames[i - 1];
+        EXPECT_EQ(turned, i % 3 == 0) << "step " << i;
+    }
+    for (int i = 5; i < 12; ++i) step(model, resumed, stable_dt(model, resumed));
+    expect_same_bits_by_id(a, resumed);
+}
+
+// A turned grid is the fixed grid under a turned body: a moving, strained, drying block stepped on
+// a grid turned at step 0 is, to round-off, the same block turned by hand (x and v turned, C as a
+// spatial tensor, Fe on its spatial side) and stepped on the fixed grid. A turn that leaves one
+// of them out, or turns the world's walls or ground, breaks it.
+TEST(MpmStep, ATurnedGridIsTheFixedGridUnderATurnedBody) {
+    SimModel turned = drying_on_ground_model();
+    turned.domain.is_auto = false;
+    turned.domain.min = Vec3(-0.6, -0.6, -0.6);
+    turned.domain.max = Vec3(1.4, 1.4, 1.4);
+    turned.grid_turn_interval = 1000;
+    SimModel fixed = turned;
+    fixed.grid_turn_interval = 0;
+    SimState a = block_state(turned, Vec3(0.1, 0, 0.2));
+    randomize(a, 7);
+    SimState b = a;
+    b.workspace.reset();
+    step(turned, a, 1e-4);
+    const GridFrame frame = state_grid_frame(turned, a);
+    const Mat3& r = frame.rotation;
+    for (size_t p = 0; p < b.size(); ++p) {
+        b.x[p] = r * (b.x[p] - frame.centre) + frame.centre;
+        b.v[p] = r * b.v[p];
+        b.C[p] = r * b.C[p] * r.transpose();
+        b.Fe[p] = r * b.Fe[p];
+    }
+    step(fixed, b, 1e-4);
+    for (int i = 0; i < 5; ++i) {
+        step(turned, a, 1e-4);
+        step(fixed, b, 1e-4);
+    }
+    const std::vector<size_t> sa = test::slot_of_id(a), sb = test::slot_of_id(b);
+    for (size_t id = 0; id < a.size(); ++id) {
+        ASSERT_LT((a.x[sa[id]] - b.x[sb[id]]).norm(), tol::kRoundoffLoose) << "id " << id;
+        ASSERT_LT((a.v[sa[id]] - b.v[sb[id]]).norm(), tol::kRoundoffLoose) << "id " << id;
+        ASSERT_LT((a.C[sa[id]] - b.C[sb[id]]).norm(), 1e3 * tol::kRoundoffLoose) << "id " << id;
+        ASSERT_LT((a.Fe[sa[id]] - b.Fe[sb[id]]).norm(), tol::kRoundoffLoose) << "id " << id;
+        ASSERT_NEAR(a.theta[sa[id]], b.theta[sb[id]], tol::kRoundoffLoose) << "id " << id;
+    }
+}
+
+// a turned grid's auto domain holds the footprint whatever the angle: a square in x and z around
+// the disc it sweeps, centred on it
+TEST(MpmStep, ATurnedGridsDomainHoldsEveryTurnOfTheBody) {
+    SimModel model = drying_on_ground_model();
+    model.grid_turn_interval = 1;
+    // a long, narrow slab
+    const SimState s = block_state(model, Vec3(0.3, 0, -0.2), Vec3i(16, 2, 4));
+    Vec3 lo = s.x[0], hi = s.x[0];
+    for (const Vec3& x : s.x) lo = lo.cwiseMin(x), hi = hi.cwiseMax(x);
+    const Vec3 centre = (lo + hi) / 2;
+    Real radius = 0;
+    for (const Vec3& x : s.x)
+        radius = std::max(radius, std::hypot(x.x() - centre.x(), x.z() - centre.z()));
+    const Vec3 domain_centre = (s.domain_min + s.domain_max) / 2;
+    EXPECT_NEAR(domain_centre.x(), centre.x(), tol::kRoundoff);
+    EXPECT_NEAR(domain_centre.z(), centre.z(), tol::kRoundoff);
+    EXPECT_NEAR(s.domain_max.x() - s.domain_min.x(), s.domain_max.z() - s.domain_min.z(),
+                tol::kRoundoff);
+    // clear of the wall band (padding + 1 cells) for any turn
+    const Real inner = radius + (model.domain.padding + 1) * model.h;
+    EXPECT_GE(s.domain_max.x() - centre.x(), inner);
+    EXPECT_GE(s.domain_max.z() - centre.z(), inner);
+}
+
 // the binning's canonical order: slots by grid block, then by particle id, whatever order the
 // slots and ids are in; ids that are not a permutation of the slots are a damaged state
 TEST(MpmStep, BinningOrdersSlotsByBlockThenIdAndRefusesDamagedIds) {

@@ -94,6 +94,7 @@ TEST_F(ShotTest, DefaultsFillEveryKeyOfPresentSections) {
     EXPECT_EQ(shot.sim.gravity, Vec3(0, -9.81, 0));
     EXPECT_EQ(shot.sim.checkpoint_every, 10);
     EXPECT_EQ(shot.sim.grid_shift_interval, 0);  // a fixed grid
+    EXPECT_EQ(shot.sim.grid_turn_interval, 0);   // along the world's axes
     // the slice records the defaults it ran with
     expect_contains(shot.slice(Stage::Sim), {"\"youngs_modulus\": 2000.0", "\"dt_max\": 0.001"});
 }
@@ -322,6 +323,25 @@ TEST_F(ShotTest, OutOfRangeNamesPointerValueAndUnits) {
         "sim": {"grid_shift": 200}})",
                                    "t.json");
     EXPECT_EQ(moving.sim.grid_shift_interval, 200);
+    // a turned grid: every k steps, an auto domain (its walls turn), a vertical gravity
+    expect_contains(error_of(R"({"mudcrack": 1, "source": {"type": "box"}, "material": {},
+        "sim": {"grid_turn": -20}})"),
+                    {"/sim/grid_turn = -20: must be >= 0 [steps]"});
+    expect_contains(
+        error_of(R"({"mudcrack": 1, "source": {"type": "box"}, "material": {},
+        "sim": {"grid_turn": 20},
+        "colliders": {"domain": {"min": [-2, -2, -2], "max": [2, 2, 2]}}})",
+                 "shots/walled.json"),
+        {"shots/walled.json: /sim/grid_turn = 20: needs the domain derived from the "
+         "particles (the domain's walls turn with the grid): leave /colliders/domain out"});
+    expect_contains(error_of(R"({"mudcrack": 1, "source": {"type": "box"}, "material": {},
+        "sim": {"grid_turn": 20, "gravity": [1, -9.81, 0]}})"),
+                    {"/sim/grid_turn = 20: needs a vertical /sim/gravity (the grid turns about the "
+                     "vertical), not [1,-9.81,0]"});
+    const Shot turned = parse_shot(R"({"mudcrack": 1, "source": {"type": "box"}, "material": {},
+        "sim": {"grid_turn": 20, "gravity": [0, -3.7, 0]}})",
+                                   "t.json");
+    EXPECT_EQ(turned.sim.grid_turn_interval, 20);
 }
 
 TEST_F(ShotTest, EnumTypoSuggestsTheChoice) {
