@@ -151,6 +151,34 @@ TEST(MpmStep, ResultDoesNotDependOnSlotOrder) {
     expect_same_bits_by_id(a, b);
 }
 
+// Steps `a` 12 times on `model`, whose grid moves (shifts or turns) every 3 steps, calling
+// observe(a) after each step. grid_of(a) names the grid the last step used: it must change exactly
+// at the start of each period. A copy of the state at step 5, without its workspace (a checkpoint
+// holds none), stepped on to step 12 must give the same bits.
+template <class GridOf, class Observe>
+void expect_a_grid_moved_every_3_steps_and_a_resumed_run_alike(const SimModel& model, SimState& a,
+                                                               GridOf grid_of, Observe observe) {
+    using Grid = decltype(grid_of(a));
+    std::vector<Grid> grids;
+    SimState resumed;
+    for (int i = 0; i < 12; ++i) {
+        if (i == 5) {
+            resumed = a;
+            resumed.workspace.reset();
+        }
+        step(model, a, stable_dt(model, a));
+        grids.push_back(grid_of(a));
+        observe(a);
+    }
+    for (int i = 1; i < 12; ++i) {
+        // grids[i] is the grid of step i + 1, which starts at step count i
+        const bool moved = grids[i] != grids[i - 1];
+        EXPECT_EQ(moved, i % 3 == 0) << "step " << i;
+    }
+    for (int i = 5; i < 12; ++i) step(model, resumed, stable_dt(model, resumed));
+    expect_same_bits_by_id(a, resumed);
+}
+
 // /sim/grid_shift: the grid moves by a fraction of a cell at the start of every period (over a
 // ground, sideways only), covers the domain wherever it is, and a run resumed from a copy of the
 // state (moisture flux history included, workspace not) moves it alike, so the two give the
@@ -160,31 +188,18 @@ TEST(MpmStep, AMovingGridMovesEveryPeriodAndAResumedRunMovesItAlike) {
     model.grid_shift_interval = 3;
     SimState a = block_state(model);
     randomize(a, 5);
-    std::vector<Vec3> origins;
-    SimState resumed;
-    for (int i = 0; i < 12; ++i) {
-        if (i == 5) {
-            resumed = a;
-            resumed.workspace.reset();
-        }
-        step(model, a, stable_dt(model, a));
-        const mpm::GridGeometry& geo = a.workspace->grid.geo;
-        origins.push_back(geo.origin);
-        for (int d = 0; d < 3; ++d) {
-            EXPECT_LE(geo.origin[d], a.domain_min[d]);
-            EXPECT_GT(geo.origin[d], a.domain_min[d] - model.h);
-            EXPECT_GE(geo.origin[d] + geo.cells[d] * model.h, a.domain_max[d]);
-        }
-        // over a ground it moves sideways only: its nodes keep their heights above the ground
-        EXPECT_EQ(geo.origin.y(), a.domain_min.y());
-    }
-    for (int i = 1; i < 12; ++i) {
-        // origins[i] is the grid of step i + 1, which starts at step count i
-        const bool moved = origins[i] != origins[i - 1];
-        EXPECT_EQ(moved, i % 3 == 0) << "step " << i;
-    }
-    for (int i = 5; i < 12; ++i) step(model, resumed, stable_dt(model, resumed));
-    expect_same_bits_by_id(a, resumed);
+    expect_a_grid_moved_every_3_steps_and_a_resumed_run_alike(
+        model, a, [](const SimState& s) { return Vec3(s.workspace->grid.geo.origin); },
+        [&](const SimState& s) {
+            const mpm::GridGeometry& geo = s.workspace->grid.geo;
+            for (int d = 0; d < 3; ++d) {
+                EXPECT_LE(geo.origin[d], s.domain_min[d]);
+                EXPECT_GT(geo.origin[d], s.domain_min[d] - model.h);
+                EXPECT_GE(geo.origin[d] + geo.cells[d] * model.h, s.domain_max[d]);
+            }
+            // over a ground it moves sideways only: its nodes keep their heights above the ground
+            EXPECT_EQ(geo.origin.y(), s.domain_min.y());
+        });
 }
 
 // a grid that moves every step transfers mass and momentum as a fixed one does, and a free block
@@ -225,42 +240,28 @@ TEST(MpmStep, ATurnedGridTurnsEveryPeriodAndAResumedRunTurnsItAlike) {
     SimState a = block_state(model);
     randomize(a, 5);
     EXPECT_EQ(state_grid_frame(model, a).rotation, Mat3::Identity());
-    std::vector<Mat3> frames;
-    SimState resumed;
-    for (int i = 0; i < 12; ++i) {
-        if (i == 5) {
-            resumed = a;
-            resumed.workspace.reset();
-        }
-        step(model, a, stable_dt(model, a));
-        const GridFrame frame = state_grid_frame(model, a);
-        frames.push_back(frame.rotation);
-        // a turn about the vertical through the domain's centre
-        EXPECT_NEAR((frame.rotation * frame.rotation.transpose() - Mat3::Identity()).norm(), 0,
-                    tol::kRoundoff);
-        EXPECT_EQ(frame.rotation.row(1), Eigen::RowVector3d(0, 1, 0));
-        EXPECT_EQ(frame.centre, (a.domain_min + a.domain_max) / 2);
-        // the cache is the world's: the state turned back
-        const ParticleFrame cached = state_to_frame(model, a, CacheAttributes{});
-        const std::vector<size_t> slot = test::slot_of_id(a);
-        for (size_t id = 0; id < a.size(); ++id) {
-            const Vec3 world = frame.world_point(a.x[slot[id]]);
-            ASSERT_LT((cached.P[id].cast<Real>() - world).norm(), 1e-6 * world.norm())
-                << "id " << id;
-            ASSERT_LT((cached.v[id].cast<Real>() - frame.world_vector(a.v[slot[id]])).norm(),
-                      1e-6 * (1 + a.v[slot[id]].norm()))
-                << "id " << id;
-        }
-    }
-    // the grid of step 1 is turned, and the state with it: the cache is not the state's x
-    EXPECT_GT((frames[0] - Mat3::Identity()).norm(), 1e-3);
-    for (int i = 1; i < 12; ++i) {
-        // frames[i] is the grid of step i + 1, which starts at step count i
-        const bool turned = frames[i] != frames[i - 1];
-        EXPECT_EQ(turned, i % 3 == 0) << "step " << i;
-    }
-    for (int i = 5; i < 12; ++i) step(model, resumed, stable_dt(model, resumed));
-    expect_same_bits_by_id(a, resumed);
+    expect_a_grid_moved_every_3_steps_and_a_resumed_run_alike(
+        model, a, [&](const SimState& s) { return Mat3(state_grid_frame(model, s).rotation); },
+        [&](const SimState& s) {
+            const GridFrame frame = state_grid_frame(model, s);
+            // a turn about the vertical through the domain's centre, away from the world's
+            EXPECT_NEAR((frame.rotation * frame.rotation.transpose() - Mat3::Identity()).norm(), 0,
+                        tol::kRoundoff);
+            EXPECT_EQ(frame.rotation.row(1), Eigen::RowVector3d(0, 1, 0));
+            EXPECT_GT((frame.rotation - Mat3::Identity()).norm(), 1e-3);
+            EXPECT_EQ(frame.centre, (s.domain_min + s.domain_max) / 2);
+            // the cache is the world's: the state turned back
+            const ParticleFrame cached = state_to_frame(model, s, CacheAttributes{});
+            const std::vector<size_t> slot = test::slot_of_id(s);
+            for (size_t id = 0; id < s.size(); ++id) {
+                const Vec3 world = frame.world_point(s.x[slot[id]]);
+                ASSERT_LT((cached.P[id].cast<Real>() - world).norm(), 1e-6 * world.norm())
+                    << "id " << id;
+                ASSERT_LT((cached.v[id].cast<Real>() - frame.world_vector(s.v[slot[id]])).norm(),
+                          1e-6 * (1 + s.v[slot[id]].norm()))
+                    << "id " << id;
+            }
+        });
 }
 
 // A turned grid is the fixed grid under a turned body: a moving, strained, drying block stepped on
