@@ -379,23 +379,23 @@ StepStats step(const SimModel& model, SimState& state, Real dt) {
     SimWorkspace& ws = ensure_workspace(model, state);
     StepStats stats;
     // a turned grid: at the start of each period the state moves into the frame of the period's
-    // grid, and its stress cache (computed in the last grid's frame) is stale
-    const int64_t turn = model.grid_turn_interval;
-    if (turn > 0 && state.step_count % turn == 0) {
+    // grid (and its stress cache, computed in the last grid's frame, is stale)
+    const int64_t turn = model.grid_turn_interval, shift = model.grid_shift_interval;
+    const bool grid_turns_now = turn > 0 && state.step_count % turn == 0;
+    const bool grid_shifts_now = shift > 0 && state.step_count % shift == 0;
+    if (grid_turns_now) {
         const GridFrame held = state_grid_frame(model, state);
         const Mat3 next = rotation_about_vertical(
             grid_turn_angle(static_cast<uint64_t>(state.step_count / turn)));
         turn_state(state, next * held.rotation.transpose(), held.centre);
-        ws.tau_step = -1;
     }
     // the moisture CG's warm start extrapolates fluxes at fixed nodes: none survive a move
-    const int64_t shift = model.grid_shift_interval;
-    if ((shift > 0 && state.step_count % shift == 0) || (turn > 0 && state.step_count % turn == 0))
-        state.moisture_flux.clear();
+    if (grid_turns_now || grid_shifts_now) state.moisture_flux.clear();
 
-    // the stress cache is the last step's (and so Fe's) only if that step was this state's last;
-    // it stays marked stale until this step has succeeded
-    const bool tau_is_current = ws.tau_step == state.step_count && ws.tau.size() == state.size();
+    // the stress cache is the last step's (and so Fe's) only if that step was this state's last
+    // and the state has not turned since; it stays marked stale until this step has succeeded
+    const bool tau_is_current =
+        !grid_turns_now && ws.tau_step == state.step_count && ws.tau.size() == state.size();
     ws.tau_step = -1;
 
     // 1. bin particles into grid blocks (and every few steps reorder their arrays)
