@@ -7,7 +7,7 @@
 # SHOT_FILE must use the plates mode; the test runs a copy of it that adds
 # "debris": "points" to /surfacing, so the output has pieces and debris files.
 # 1. mc-init, mc-sim and mc-surface run the shot's frames 1-BLENDER_TEST_FRAMES (default 12: the
-#    cracks of fig8_c open at frame 3) into a temporary folder, one thread each; all of its frames
+#    cracks of fig8_c open at frame 7) into a temporary folder, one thread each; all of its frames
 #    when those have no frame without cracks and one with cracks before the last;
 # 2. mc-surface writes the same frames as .obj too, from the shot as given (no debris), and in
 #    the paper's surfacing, `ours`, whose fragment ids the add-on reads as piece ids like the
