@@ -6,13 +6,13 @@
 #
 # SHOT_FILE must use the plates mode; the test runs a copy of it that adds
 # "debris": "points" to /surfacing, so the output has pieces and debris files.
-# 1. mc-init, mc-sim and mc-surface run the shot's frames 1-BLENDER_TEST_FRAMES (default 12: the
+# 1. mc-init, mc-sim and mc-surface run the shot's frames 1-BLENDER_TEST_FRAMES (default 20: the
 #    cracks of fig8_c open at frame 7) into a temporary folder, one thread each; all of its frames
 #    when those have no frame without cracks and one with cracks before the last;
 # 2. mc-surface writes the same frames as .obj too, from the shot as given (no debris), and in
 #    the paper's surfacing, `ours`, whose fragment ids the add-on reads as piece ids like the
 #    plates mode's: fig8_c's plates are one piece in every frame (README, Close-ups), its `ours`
-#    fragments a dozen by frame 12, so the piece checks see many ids;
+#    fragments 10 by frame 20 (2026-11-27), so the piece checks see many ids;
 #    blender_test_mesh_info (pipeline/io's assimp and debris readers, not the add-on's) reads
 #    every mesh file, glb and obj, and every debris file of three frames: the first without a
 #    crack file, the first with one, and the last;
@@ -36,7 +36,7 @@ bin=$(cd "$2" && pwd)
 zip=$3
 given_shot=${4:-$src/shots/fig8_c.json}
 here=$(cd "$(dirname "${BASH_SOURCE[0]}")" && pwd)
-frames=${BLENDER_TEST_FRAMES:-12}
+frames=${BLENDER_TEST_FRAMES:-20}
 
 command -v blender >/dev/null ||
     fail "blender not found: the add-on's test needs Debian's Blender (make test installs it: apt-get install blender)"
