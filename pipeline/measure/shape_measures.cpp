@@ -37,18 +37,47 @@ SizeSummary summarize_sizes(const std::vector<Real>& sizes) {
     return summary;
 }
 
+// A lattice's columns along one axis: the lowest coordinate and the pitch (0: not a lattice).
+struct LatticeAxis {
+    Real first = 0;
+    Real pitch = 0;
+};
+
+// Rest coordinate `axis` of the particles as a lattice: when they take at most half as many
+// distinct values as there are particles (every column holds two or more) and those values lie
+// within a hundredth of a pitch of first + k pitch.
+LatticeAxis lattice_axis(const std::vector<Vec3>& rest, int axis) {
+    std::vector<Real> v(rest.size());
+    for (size_t p = 0; p < rest.size(); ++p) v[p] = rest[p][axis];
+    std::sort(v.begin(), v.end());
+    if (v.size() < 4 || !(v.back() > v.front())) return {};
+    const Real same = 1e-9 * (v.back() - v.front());
+    std::vector<Real> distinct{v.front()};
+    for (Real x : v)
+        if (x - distinct.back() > same) distinct.push_back(x);
+    if (distinct.size() < 2 || 2 * distinct.size() > v.size()) return {};
+    const Real pitch = (distinct.back() - distinct.front()) / Real(distinct.size() - 1);
+    for (size_t k = 0; k < distinct.size(); ++k)
+        if (std::abs(distinct[k] - (distinct.front() + Real(k) * pitch)) > Real(0.01) * pitch)
+            return {};
+    return {distinct.front(), pitch};
+}
+
 }  // namespace
 
-RestColumns build_rest_columns(const std::vector<Vec3>& rest, Real width) {
-    if (!(width > 0))
-        throw InputError("rest columns: width = " + std::to_string(width) + ": expected > 0");
+RestColumns build_rest_columns(const std::vector<Vec3>& rest, Real spacing) {
+    if (!(spacing > 0))
+        throw InputError("rest columns: width = " + std::to_string(spacing) + ": expected > 0");
     RestColumns columns;
-    columns.width = width;
+    columns.width = spacing;
+    for (int axis = 0; axis < 2; ++axis) {
+        const LatticeAxis lattice = lattice_axis(rest, axis == 0 ? 0 : 2);
+        columns.pitch[axis] = lattice.pitch > 0 ? lattice.pitch : spacing;
+        columns.origin[axis] = lattice.pitch > 0 ? lattice.first - lattice.pitch / 2 : Real(0);
+    }
     const int32_t n = static_cast<int32_t>(rest.size());
-    std::vector<std::pair<int64_t, int64_t>> cell(n);
-    for (int32_t p = 0; p < n; ++p)
-        cell[p] = {static_cast<int64_t>(std::floor(rest[p].x() / width)),
-                   static_cast<int64_t>(std::floor(rest[p].z() / width))};
+    std::vector<ColumnCell> cell(n);
+    for (int32_t p = 0; p < n; ++p) cell[p] = columns.cell_of(rest[p].x(), rest[p].z());
     columns.particle.resize(n);
     std::iota(columns.particle.begin(), columns.particle.end(), 0);
     std::sort(columns.particle.begin(), columns.particle.end(), [&](int32_t a, int32_t b) {
@@ -235,10 +264,10 @@ SurfacePolygons measure_surface_polygons(const CoreTopology& topo,
     SurfacePolygons polygons;
     polygons.top_particles = layer.top_particles;
     const std::vector<int32_t>& size = layer.size;
-    // each top particle stands for an equal share of the footprint (columns x width^2)
+    // each top particle stands for an equal share of the footprint (columns x cell area)
     const Real particle_area =
         polygons.top_particles > 0
-            ? columns.n_columns() * columns.width * columns.width / polygons.top_particles
+            ? columns.n_columns() * columns.pitch.x() * columns.pitch.y() / polygons.top_particles
             : 0;
     std::vector<Real> areas;
     for (int32_t p = 0; p < topo.n_particles; ++p)
@@ -334,23 +363,21 @@ Real line_angle_deg(const Vec2& d) {
     return a >= 180 ? a - 180 : a;
 }
 
-using ColumnCells = std::set<std::pair<int64_t, int64_t>>;
+using ColumnCells = std::set<ColumnCell>;
 
-// the footprint's column cells (rest x-z bins of one width w)
-ColumnCells footprint_cells(const CoreTopology& topo, const RestColumns& columns, Real w) {
+// the footprint's column cells
+ColumnCells footprint_cells(const CoreTopology& topo, const RestColumns& columns) {
     ColumnCells footprint;
     for (int32_t c = 0; c < columns.n_columns(); ++c) {
         const Vec3& r = topo.X[columns.particle[columns.begin[c]]];
-        footprint.insert({static_cast<int64_t>(std::floor(r.x() / w)),
-                          static_cast<int64_t>(std::floor(r.z() / w))});
+        footprint.insert(columns.cell_of(r.x(), r.z()));
     }
     return footprint;
 }
 
 // a point kRimColumns or more columns inside the footprint: not on the rim
-bool is_inland(const ColumnCells& footprint, const Vec2& at, Real w) {
-    const int64_t cx = static_cast<int64_t>(std::floor(at.x() / w)),
-                  cz = static_cast<int64_t>(std::floor(at.y() / w));
+bool is_inland(const ColumnCells& footprint, const RestColumns& columns, const Vec2& at) {
+    const auto [cx, cz] = columns.cell_of(at.x(), at.y());
     for (int64_t dx = -kRimColumns; dx <= kRimColumns; ++dx)
         for (int64_t dz = -kRimColumns; dz <= kRimColumns; ++dz)
             if (!footprint.count({cx + dx, cz + dz})) return false;
@@ -362,10 +389,11 @@ bool is_inland(const ColumnCells& footprint, const Vec2& at, Real w) {
 // an eigen solver would hand back a coordinate axis for it); sets oriented_points and
 // axis_aligned_fraction
 void measure_crack_directions(const std::vector<Vec2>& point, const PointGrid& grid, Real radius,
-                              const ColumnCells& footprint, Real w, CrackNetwork& net) {
+                              const ColumnCells& footprint, const RestColumns& columns,
+                              CrackNetwork& net) {
     int32_t aligned = 0, oriented = 0;
     for (const Vec2& at : point) {
-        if (!is_inland(footprint, at, w)) continue;
+        if (!is_inland(footprint, columns, at)) continue;
         Vec2 mean = Vec2::Zero();
         int n = 0;
         grid.near(at, radius, [&](int32_t j) { mean += point[j], ++n; });
@@ -507,7 +535,7 @@ CrackNetwork measure_crack_network(const CoreTopology& topo, const std::vector<u
     const PointGrid grid(point, branch_radius);
     // the rim is left out of the directions: cracks along the slab's own edges follow its
     // outline, not the grid, and a box's outline runs along the grid axes
-    measure_crack_directions(point, grid, direction_radius, footprint_cells(topo, columns, w), w,
+    measure_crack_directions(point, grid, direction_radius, footprint_cells(topo, columns), columns,
                              net);
     classify_junctions(point, pair, grid, junction_radius, branch_radius, w, net);
     return net;
@@ -518,17 +546,15 @@ PolygonSides measure_polygon_sides(const CoreTopology& topo, const std::vector<u
     constexpr Real kPlateShare = 0.01;
     constexpr int32_t kMinSideColumns = 3;
     const std::vector<int32_t> label = top_polygon_labels(topo, is_broken, columns, min_particles);
-    const Real w = columns.width;
     // each column's cell and the polygon of its top particle (-1: a crumb's, or none)
-    using Cell = std::pair<int64_t, int64_t>;
+    using Cell = ColumnCell;
     std::map<Cell, int32_t> region;
     std::map<int32_t, int32_t> columns_of;
     int32_t labelled = 0;
     for (int32_t c = 0; c < columns.n_columns(); ++c) {
         const Vec3& r = topo.X[columns.particle[columns.begin[c]]];
         const int32_t top = label[columns.particle[columns.begin[c + 1] - 1]];
-        region[{static_cast<int64_t>(std::floor(r.x() / w)),
-                static_cast<int64_t>(std::floor(r.z() / w))}] = top;
+        region[columns.cell_of(r.x(), r.z())] = top;
         if (top >= 0) ++columns_of[top], ++labelled;
     }
     // plates seed a breadth-first fill of the other columns, in cell order (deterministic)

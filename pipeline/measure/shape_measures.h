@@ -5,14 +5,17 @@
 /// fragment size grow with eps; Fig. 8: NACC alone cracks only vertically, the full model curls)
 /// into numbers a test can check and a README can quote.
 ///
-/// The layer is cut into vertical columns on its rest positions (a square grid in x-z of one
-/// particle spacing); inside a column the particles keep their rest order from bottom to top.
-/// Vertical cracks separate columns sideways and leave each column's stack intact, while a
-/// horizontal crack opens a gap inside a column: that is what tells the two apart, with no need
-/// for crack-face normals (which on a jittered tet mesh point every way).
+/// The layer is cut into vertical columns on its rest positions (cells in x-z of one particle
+/// spacing, or of the lattice's pitch when the particles stand on one); inside a column the
+/// particles keep their rest order from bottom to top. Vertical cracks separate columns sideways
+/// and leave each column's stack intact, while a horizontal crack opens a gap inside a column: that
+/// is what tells the two apart, with no need for crack-face normals (which on a jittered tet mesh
+/// point every way).
 #include <array>
+#include <cmath>
 #include <cstdint>
 #include <limits>
+#include <utility>
 #include <vector>
 
 #include "sim/core/types.h"
@@ -21,20 +24,38 @@
 
 namespace mudcrack {
 
+/// The x-z cell of a column: a pair of bin indices.
+using ColumnCell = std::pair<int64_t, int64_t>;
+
 /// Particles grouped in vertical columns of their rest positions, each sorted by rest height.
 struct RestColumns {
-    Real width = 0;                 // column width [m] (x and z)
+    Real width = 0;  // particle spacing [m]: the scale of the top layer's depth and of the radii
+    // the cells' pitch in x and z [m] and their corner: the lattice's pitch with each lattice
+    // column at a cell's centre when the particles stand in columns of a lattice, else the
+    // spacing from 0
+    Vec2 pitch = Vec2::Zero();
+    Vec2 origin = Vec2::Zero();
     std::vector<int32_t> begin;     // CSR offsets into particle, (n_columns + 1)
     std::vector<int32_t> particle;  // particle ids, bottom to top within a column
     int32_t n_columns() const { return static_cast<int32_t>(begin.size()) - 1; }
+    /// The cell of the rest point (x, z).
+    ColumnCell cell_of(Real x, Real z) const {
+        return {static_cast<int64_t>(std::floor((x - origin.x()) / pitch.x())),
+                static_cast<int64_t>(std::floor((z - origin.y()) / pitch.y()))};
+    }
 };
 
-/// Bins rest positions into columns of the given width [m] (> 0). Deterministic: columns are
-/// ordered by (x, z) cell, particles within a column by rest height, then id.
-RestColumns build_rest_columns(const std::vector<Vec3>& rest, Real width);
+/// Bins rest positions into columns (> 0 spacing [m]). Along an axis whose rest coordinates take
+/// few, evenly spaced values (a heightfield's columns, a regular box lattice) the cells follow
+/// that lattice, one column per lattice column whatever the layers' height: a heightfield's
+/// volume-based spacing is below its pitch (thinner layers), and cells of that spacing left
+/// every few cells empty, which read as holes in the footprint. Elsewhere (a jittered lattice, a
+/// meshed body) the cells are `spacing` wide from 0. Deterministic: columns are ordered by
+/// (x, z) cell, particles within a column by rest height, then id.
+RestColumns build_rest_columns(const std::vector<Vec3>& rest, Real spacing);
 
-/// The column width for a particle set: the edge of a cube of the mean particle volume
-/// (the lattice spacing for box and heightfield sources).
+/// The particle spacing of a particle set: the edge of a cube of the mean particle volume (a box
+/// lattice's spacing; below a heightfield's pitch, whose layers are thinner).
 Real particle_spacing(const std::vector<Real>& rest_volume);
 
 struct LayerShape {

@@ -2,6 +2,7 @@
 #include <gtest/gtest.h>
 
 #include <array>
+#include <cmath>
 #include <numeric>
 #include <vector>
 
@@ -399,6 +400,45 @@ TEST_F(CrackNetworkTest, AGridOfCracksCutsFourSidedPlatesAndOnlyInlandOnesCount)
     EXPECT_EQ(sides.histogram[4], 1);
     // uncut, the top is one plate on the rim: none inland
     EXPECT_EQ(measure_polygon_sides(m_topo, none(), m_columns, 1).inland_plates, 0);
+}
+
+// A heightfield's lattice has layers thinner than its pitch, so the spacing mc-measure takes from
+// the particle volume lies below the pitch (kH 0.6^(1/3) here). Cells of that spacing left an
+// empty one every few cells, so no crack point was inland and no plate either; the columns now
+// follow the lattice, and the crack network reads as on the cubic lattice.
+TEST_F(CrackNetworkTest, ALatticeOfThinLayersKeepsOneColumnPerLatticeColumnAndNoHoles) {
+    TetMesh thin = m_mesh;
+    for (Vec3& x : thin.X) x.y() *= 0.6;
+    const CoreTopology topo = build_core_topology(thin);
+    const RestColumns columns = build_rest_columns(thin.X, kH * std::cbrt(0.6));
+    EXPECT_EQ(columns.n_columns(), 31 * 31);
+    EXPECT_NEAR(columns.pitch.x(), kH, tol::kRoundoff);
+    EXPECT_NEAR(columns.pitch.y(), kH, tol::kRoundoff);
+    for (int c = 0; c < columns.n_columns(); ++c)
+        ASSERT_EQ(columns.begin[c + 1] - columns.begin[c], 3);
+    std::vector<uint8_t> along = none(), grid = none();
+    cut(Vec2(1.53, -1), Vec2(1.53, 4), along);
+    for (double at : {1.03, 2.03}) {
+        cut(Vec2(at, -1), Vec2(at, 4), grid);
+        cut(Vec2(-1, at), Vec2(4, at), grid);
+    }
+    const CrackNetwork a = measure_crack_network(topo, along, columns, 1);
+    EXPECT_GT(a.oriented_points, 20);
+    EXPECT_GT(a.axis_aligned_fraction, 0.95);
+    EXPECT_EQ(measure_polygon_sides(topo, grid, columns, 1).inland_plates, 1);
+}
+
+// Off a lattice (here a jittered one: every particle its own x and z), the cells are the given
+// spacing wide from 0, as before.
+TEST(RestColumns, OffALatticeTheCellsAreTheSpacingWideFromZero) {
+    std::vector<Vec3> rest = lattice();
+    for (size_t p = 0; p < rest.size(); ++p)
+        rest[p] += kSpacing * Vec3(0.3 * std::sin(1.7 * p), 0, 0.3 * std::cos(2.3 * p));
+    const RestColumns columns = build_rest_columns(rest, kSpacing);
+    EXPECT_EQ(columns.pitch, Vec2(kSpacing, kSpacing));
+    EXPECT_EQ(columns.origin, Vec2::Zero());
+    EXPECT_EQ(columns.cell_of(rest[0].x(), rest[0].z()),
+              ColumnCell(std::floor(rest[0].x() / kSpacing), std::floor(rest[0].z() / kSpacing)));
 }
 
 TEST(CrackPace, FirstCrackAndTheFrameByWhichHalfOfTheLastFramesBreaksExist) {
