@@ -331,6 +331,15 @@ protected:
         }
     }
     std::vector<uint8_t> none() const { return std::vector<uint8_t>(m_topo.n_edges(), 0); }
+    /// Two cracks along x and two along z, cutting the 3 m square into 3 x 3 plates.
+    std::vector<uint8_t> three_by_three() const {
+        std::vector<uint8_t> broken = none();
+        for (double at : {1.03, 2.03}) {
+            cut(Vec2(at, -1), Vec2(at, 4), broken);
+            cut(Vec2(-1, at), Vec2(4, at), broken);
+        }
+        return broken;
+    }
 
     TetMesh m_mesh;
     CoreTopology m_topo;
@@ -387,13 +396,9 @@ TEST_F(CrackNetworkTest, ACrackEndingOnAnotherIsATJunctionThreeFromAPointAreAY) 
 }
 
 TEST_F(CrackNetworkTest, AGridOfCracksCutsFourSidedPlatesAndOnlyInlandOnesCount) {
-    // two cracks along x and two along z cut the 3 m square into 3 x 3 plates; only the middle
-    // one stays off the rim, and it borders four plates along a side (the corner ones at a point)
-    std::vector<uint8_t> broken = none();
-    for (double at : {1.03, 2.03}) {
-        cut(Vec2(at, -1), Vec2(at, 4), broken);
-        cut(Vec2(-1, at), Vec2(4, at), broken);
-    }
+    // of the 3 x 3 plates only the middle one stays off the rim, and it borders four plates along
+    // a side (the corner ones at a point)
+    const std::vector<uint8_t> broken = three_by_three();
     const PolygonSides sides = measure_polygon_sides(m_topo, broken, m_columns, 1);
     EXPECT_EQ(sides.inland_plates, 1);
     EXPECT_EQ(sides.mean_sides, 4);
@@ -416,16 +421,12 @@ TEST_F(CrackNetworkTest, ALatticeOfThinLayersKeepsOneColumnPerLatticeColumnAndNo
     EXPECT_NEAR(columns.pitch.y(), kH, tol::kRoundoff);
     for (int c = 0; c < columns.n_columns(); ++c)
         ASSERT_EQ(columns.begin[c + 1] - columns.begin[c], 3);
-    std::vector<uint8_t> along = none(), grid = none();
+    std::vector<uint8_t> along = none();
     cut(Vec2(1.53, -1), Vec2(1.53, 4), along);
-    for (double at : {1.03, 2.03}) {
-        cut(Vec2(at, -1), Vec2(at, 4), grid);
-        cut(Vec2(-1, at), Vec2(4, at), grid);
-    }
     const CrackNetwork a = measure_crack_network(topo, along, columns, 1);
     EXPECT_GT(a.oriented_points, 20);
     EXPECT_GT(a.axis_aligned_fraction, 0.95);
-    EXPECT_EQ(measure_polygon_sides(topo, grid, columns, 1).inland_plates, 1);
+    EXPECT_EQ(measure_polygon_sides(topo, three_by_three(), columns, 1).inland_plates, 1);
 }
 
 // Off a lattice (here a jittered one: every particle its own x and z), the cells are the given
