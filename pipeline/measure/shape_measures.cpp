@@ -44,8 +44,9 @@ struct LatticeAxis {
 };
 
 // Rest coordinate `axis` of the particles as a lattice: when they take at most half as many
-// distinct values as there are particles (every column holds two or more) and those values lie
-// within a hundredth of a pitch of first + k pitch.
+// distinct values as there are particles (on a lattice, a plane of particles shares each one; a
+// jittered lattice or a mesh gives nearly every particle its own) and those values lie within a
+// hundredth of a pitch of first + k pitch.
 LatticeAxis lattice_axis(const std::vector<Vec3>& rest, int axis) {
     std::vector<Real> v(rest.size());
     for (size_t p = 0; p < rest.size(); ++p) v[p] = rest[p][axis];
