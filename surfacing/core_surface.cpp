@@ -48,6 +48,11 @@ struct PointOwners {
     }
 };
 
+/// [particle spacings] The largest jump a fresh cut eases in (FrameCores::opening): a cell in a
+/// lattice of two particles per cell, about half the longest edge a tet mesh of the lattice has
+/// at Eq. 14's threshold, so at the default open_speed every cut has eased in within 10 frames.
+constexpr Real kMaxEasedGap = 2;
+
 /// What the plates mode adds to a frame's cores (docs/physics.md §5.7).
 struct PlateCores {
     const WallRestPositions* walls = nullptr;      // smoothed rest points of the crack walls
@@ -56,21 +61,14 @@ struct PlateCores {
     int wall_steps = 0;                            // Taubin steps over wall_graph
     const std::vector<int32_t>* piece = nullptr;   // piece of each particle (kDebris: none)
     Real close_gap = 0;                            // [m] sides closer than this meet
-    // the frame each edge is cut from (ShotFracture)
+    // the frame each edge is cut from, and its vector the frame before (ShotFracture)
     const std::vector<int32_t>* cut_frame = nullptr;
+    const std::vector<Vec3f>* cut_edge = nullptr;
     // [m per frame] how fast a fresh crack's sides part
     Real open_speed = 0;
+    // [m] the largest jump a cut eases in (kMaxEasedGap spacings)
+    Real max_eased_gap = 0;
 };
-
-/// [particle spacings per frame] A fresh crack whose sides were welded apart from each other
-/// parts this fast beyond its particles' motion (FrameCores::opening): 0.2 spacings, 0.1 cells in
-/// a lattice of two particles per cell, well under the quarter cell a viewer sees as a pop with
-/// room for the walls' smoothing to follow its neighbours.
-constexpr Real kOpenSpeed = 0.2;
-/// Frames after a cut over which its sides may still be parting; its share of the way fades
-/// out by then, so a side whose particles moved far apart before the cut parts faster than
-/// kOpenSpeed only beyond kOpeningFrames kOpenSpeed = 9.6 spacings.
-constexpr int kOpeningFrames = 48;
 
 /// smoothstep from 0 at a to 1 at b.
 Real smoothstep(Real a, Real b, Real x) {
@@ -177,7 +175,7 @@ public:
         Real saturation = 0, alpha = 0;
     };
     /// The welded vertex of class `rep`: the average of its members' copies (copy()); in the
-    /// plates mode, parted at a bounded speed and closed.
+    /// plates mode, eased in from where a fresh cut split it (opening) and closed.
     Welded welded(const PointOwners& o, int rep) const {
         Welded w;
         int members = 0;
@@ -235,66 +233,87 @@ private:
     Vec3 rest(RestPointKind kind, int32_t id, const Vec3& y0) const {
         return m_plates.walls ? m_plates.walls->of(kind, id, y0) : y0;
     }
-    /// A fresh crack parts at a bounded speed (plates mode). The cuts of the last kOpeningFrames
-    /// frames split this point's class step by step: c_0 is where today's class is, c_a where
-    /// the class it had a frames ago is (both from today's copies). The side travels from the old
-    /// classes toward c_0 along the polyline c_0, c_a1, c_a2, ... (the ages at which a cut split
-    /// it) and sits at arc length l = max_a min(L_a - a open_speed, L_a (K - a) / K) from c_0, with
-    /// L_a the polyline's length from c_0 to c_a and K = kOpeningFrames: a cut a frames ago has
-    /// had a frames to cover the way at open_speed, and its share of the way is gone by age K.
-    /// So an edge cut when its particles had already moved apart (a band the simulation
-    /// stretched before it broke, a particle that tore loose) parts its sides by open_speed a
-    /// frame (faster only when its way is longer than K open_speed), however many cuts split
-    /// the point, and never leaves the copies of its old class; a crack cut as it opens, the
-    /// common case, shows at once.
+    /// A fresh crack eases in the jump its cut would make (plates mode). When a cut at frame f
+    /// splits this side's class S from the class O it had before, the side would jump from
+    /// where O was welded the frame before to where S is. Today that way is c_O - c_S, the means
+    /// of their copies, but it has grown since by what the particles moved apart after the cut
+    /// (a crack that keeps widening), which shows at once. That growth is measured on the edges
+    /// between the two: G = sum_(i in S, k in O \ S) (x_k - x_i) / (|O| |S|), today's less the
+    /// frame before the cut's (cut_edge, record_cut_edges); for an edge's midpoint it is how far
+    /// its two particles moved apart, the two sides' turning aside. The particles' own vectors,
+    /// not their cores' turned offsets: a torn particle's rotation can turn by half a turn from
+    /// one frame to the next. The side stands at D = c_O - c_S - G from S,
+    /// and |D| shrinks by open_speed a frame: offset = D max(0, min(|D|, kMaxEasedGap) -
+    /// a open_speed) / |D|, a = now - f + 1 the cut's age. So a cut moves a vertex at most
+    /// open_speed a frame beyond its particles (the rare jump over kMaxEasedGap jumps the excess),
+    /// every cut has eased in by kMaxEasedGap / open_speed frames, and the whole rim of a crack
+    /// follows its particles alike: no saw-teeth.
     void opening(const PointOwners& o, int rep, Vec3& side) const {
         const std::vector<int32_t>& cut_frame = *m_plates.cut_frame;
+        const std::vector<Vec3f>& cut_edge = *m_plates.cut_edge;
+        const Real speed = m_plates.open_speed;
         const int now = m_frame.frame;
-        // the ages at which the class changes: a cut at frame f splits it from age now - f + 1
-        std::array<int, 6> ages{};
-        int n_ages = 0;
-        for (int k = 0; k < o.n_edges; ++k) {
-            const int age = now - cut_frame[o.edge[k]] + 1;
-            if (age >= 1 && age < kOpeningFrames &&
-                std::find(ages.begin(), ages.begin() + n_ages, age) == ages.begin() + n_ages)
-                ages[n_ages++] = age;
-        }
-        if (n_ages == 0) return;
-        for (int i = 1; i < n_ages; ++i)  // ascending (at most 6)
-            for (int j = i; j > 0 && ages[j - 1] > ages[j]; --j) std::swap(ages[j - 1], ages[j]);
         std::array<Vec3, 4> copies;
-        for (int j = 0; j < o.n; ++j) copies[j] = copy(o, j);
-        auto welded_at_age = [&](int age) {
-            unsigned mask = 0;
-            for (int k = 0; k < o.n_edges; ++k)
-                if (cut_frame[o.edge[k]] <= now - age) mask |= 1u << k;
-            const WeldReps reps = o.reps_under(mask);
-            Vec3 sum = Vec3::Zero();
-            int members = 0;
-            for (int j = 0; j < o.n; ++j)
-                if (reps[j] == reps[rep]) {
-                    sum += copies[j];
-                    ++members;
-                }
-            return Vec3(sum / members);
-        };
-        std::array<Vec3, 7> c;
-        c[0] = side;
-        Real length = 0, arc = 0;
-        for (int i = 0; i < n_ages; ++i) {
-            const Real a = Real(ages[i]);
-            c[i + 1] = welded_at_age(ages[i]);
-            length += (c[i + 1] - c[i]).norm();
-            arc = std::max(arc, std::min(length - a * m_plates.open_speed,
-                                         length * (kOpeningFrames - a) / kOpeningFrames));
+        bool have_copies = false;
+        Vec3 offset = Vec3::Zero();
+        for (int k = 0; k < o.n_edges; ++k) {
+            const int32_t f = cut_frame[o.edge[k]];
+            const Real age = Real(now - f + 1);
+            if (f > now || !(age * speed < m_plates.max_eased_gap)) continue;
+            // each cut frame once: at its first edge
+            bool seen = false;
+            for (int l = 0; l < k && !seen; ++l) seen = cut_frame[o.edge[l]] == f;
+            if (seen) continue;
+            unsigned before = 0, after = 0;
+            for (int l = 0; l < o.n_edges; ++l) {
+                if (cut_frame[o.edge[l]] < f) before |= 1u << l;
+                if (cut_frame[o.edge[l]] <= f) after |= 1u << l;
+            }
+            const WeldReps old_reps = o.reps_under(before), new_reps = o.reps_under(after);
+            std::array<bool, 4> in_old{}, in_new{};
+            int n_old = 0, n_new = 0;
+            for (int j = 0; j < o.n; ++j) {
+                in_old[j] = old_reps[j] == old_reps[rep];
+                in_new[j] = new_reps[j] == new_reps[rep];
+                n_old += in_old[j];
+                n_new += in_new[j];
+            }
+            if (n_new == n_old) continue;  // this cut did not split this side's class
+            if (!have_copies) {
+                for (int j = 0; j < o.n; ++j) copies[j] = copy(o, j);
+                have_copies = true;
+            }
+            Vec3 way = Vec3::Zero();  // n_old n_new (c_O - c_S)
+            for (int j = 0; j < o.n; ++j) {
+                if (in_old[j]) way += Real(n_new) * copies[j];
+                if (in_new[j]) way -= Real(n_old) * copies[j];
+            }
+            // what the particles opened since, on the pairs cut at f (the others' vectors are
+            // from their own, earlier cuts); at least one pair is, or the class would not split
+            Vec3 growth = Vec3::Zero();
+            int pairs_cut_at_f = 0;
+            for (int l = 0; l < o.n_edges; ++l) {
+                const int32_t e = o.edge[l];
+                const auto [p, q] = m_topo.edges[e];
+                const int i = o.slot_of(p), j = o.slot_of(q);
+                const bool q_split_off = in_new[i] && in_old[j] && !in_new[j];
+                const bool p_split_off = in_new[j] && in_old[i] && !in_new[i];
+                if ((!q_split_off && !p_split_off) || cut_frame[e] != f) continue;
+                const Vec3 grown = (m_frame.P[q] - m_frame.P[p] - cut_edge[e]).cast<Real>();
+                growth += q_split_off ? grown : Vec3(-grown);
+                ++pairs_cut_at_f;
+            }
+            // the mean pair's growth over all |S| |O \ S| pairs, / (|O| |S|): G
+            const int pairs = n_new * (n_old - n_new);
+            growth *= Real(pairs) / Real(std::max(1, pairs_cut_at_f) * n_old * n_new);
+            // the way less what the particles opened along it since, toward where O was welded
+            const Real way_length = way.norm() / Real(n_old * n_new);
+            if (!(way_length > 0)) continue;
+            const Real length = way_length - std::max(Real(0), growth.dot(way) / way.norm());
+            const Real left = std::min(length, m_plates.max_eased_gap) - age * speed;
+            if (left > 0) offset += (left / way.norm()) * way;
         }
-        for (int i = 0; i < n_ages && arc > 0; ++i) {
-            const Real segment = (c[i + 1] - c[i]).norm();
-            if (segment <= 0) continue;
-            const Real t = std::min(arc, segment);
-            side = c[i] + (t / segment) * (c[i + 1] - c[i]);
-            arc -= t;
-        }
+        side += offset;
     }
 
     /// Close gaps (plates mode): the copies of this point's owners in other pieces are the far
@@ -733,7 +752,8 @@ DebrisPoints collect_debris(const CoreTopology& topo, const ParticleFrame& frame
 
 /// The plates mode: the frame's pieces and walls from the shot's fracture, close gaps, then the
 /// same meshing as the other modes. With `in_sequence`, the frame is one of a shot's frames and
-/// fresh cracks part at kOpenSpeed; else (a frame on its own) they show at once.
+/// fresh cracks part at params.open_speed (0: at once); else (a frame on its own) they show at
+/// once.
 void surface_plates(const CoreTopology& topo, const ParticleFrame& frame,
                     const ShotFracture& fracture, const SurfaceParams& params, bool in_sequence,
                     SurfacedFrame& out) {
@@ -757,17 +777,23 @@ void surface_plates(const CoreTopology& topo, const ParticleFrame& frame,
     plates.close_gap = params.close_gaps * spacing;
     if (in_sequence) {
         plates.cut_frame = &fracture.cut_frame;
-        plates.open_speed = kOpenSpeed * spacing;
+        plates.cut_edge = &fracture.cut_edge;
+        plates.max_eased_gap = kMaxEasedGap * spacing;
+        plates.open_speed = params.open_speed * spacing;
     }
     const FrameCores cores(topo, frame, pieces.is_cut, params, plates);
     build_boundary(topo, cores, frag, out);
     if (params.cracks) build_crack(topo, cores, frag, pieces.is_cut, out);
     out.particle_piece = std::move(pieces.id);
-    if (in_sequence) {
+    if (in_sequence && params.open_speed > 0) {
+        // a cut has eased in once age open_speed >= kMaxEasedGap
         out.edge_settled.assign(topo.edges.size(), 0);
-        const int settled_by = frame.frame - kOpeningFrames + 1;
         parallel_for(topo.n_edges(), [&](int64_t e) {
-            out.edge_settled[e] = fracture.cut_frame[e] <= settled_by ? 1 : 0;
+            const int32_t f = fracture.cut_frame[e];
+            out.edge_settled[e] =
+                f <= frame.frame && Real(frame.frame - f + 1) * params.open_speed >= kMaxEasedGap
+                    ? 1
+                    : 0;
         });
     } else {
         out.edge_settled = pieces.is_cut;

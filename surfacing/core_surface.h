@@ -39,7 +39,8 @@ struct SurfacedFrame {
     std::vector<uint8_t> edge_settled;    // the cut edges whose sides have finished parting: a
                                           // vertex's position is made from the owners of its
                                           // class under these (plates mode in a sequence: cut
-                                          // kOpeningFrames or more frames ago; else edge_cut)
+                                          // long enough ago that its gap has eased in at
+                                          // open_speed; else edge_cut)
 };
 
 /// Surfaces one frame. Deterministic: the result depends only on the arguments, never on the

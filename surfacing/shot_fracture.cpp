@@ -41,6 +41,7 @@ ShotFracture plan_shot_fracture(const CoreTopology& topo, const ParticleFrame& l
                                     ? first_break[e]
                                     : std::min(last, std::max(first_damage[p], first_damage[q]));
     });
+    fracture.cut_edge.assign(topo.edges.size(), Vec3f::Zero());
     fracture.walls = smooth_walls(topo, fracture.last.is_cut, params.wall_smoothing);
     if (params.wall_smoothing > 0) {
         fracture.wall_graph = plan_wall_graph(topo, fracture.last.is_cut);
@@ -49,6 +50,27 @@ ShotFracture plan_shot_fracture(const CoreTopology& topo, const ParticleFrame& l
                                   kWallMotionRadius * mean_particle_spacing(topo));
     }
     return fracture;
+}
+
+void record_cut_edges(const CoreTopology& topo, const ParticleFrame& frame,
+                      ShotFracture& fracture) {
+    check_frame_fits(topo, frame);
+    const int32_t next = frame.frame + 1;
+    parallel_for(topo.n_edges(), [&](int64_t e) {
+        if (fracture.cut_frame[e] != next) return;
+        const auto [p, q] = topo.edges[e];
+        fracture.cut_edge[e] = frame.P[q] - frame.P[p];
+    });
+}
+
+std::vector<int> frames_before_cuts(const ShotFracture& fracture, int first, int last) {
+    std::vector<uint8_t> needed(std::max(0, last - first + 1), 0);
+    for (int32_t f : fracture.cut_frame)
+        if (f != kNeverBroken && f - 1 >= first && f - 1 <= last) needed[f - 1 - first] = 1;
+    std::vector<int> frames;
+    for (int i = 0; i < int(needed.size()); ++i)
+        if (needed[i]) frames.push_back(first + i);
+    return frames;
 }
 
 Pieces pieces_at_frame(const CoreTopology& topo, const ShotFracture& fracture, int frame) {

@@ -24,9 +24,12 @@ namespace mudcrack {
 struct ShotFracture {
     Pieces last;                     // the pieces of the last frame (find_pieces)
     std::vector<int32_t> cut_frame;  // per edge: the first frame it is cut; kNeverBroken if never
-    WallRestPositions walls;         // the last frame's walls, placed in the rest state
-    WallGraph wall_graph;            // and as a graph, to smooth them where they are
-    WallDeformation wall_motion;     // the smoothed motion of the particles along them
+    // per edge (p, q): x_q - x_p the frame before it was cut (record_cut_edges); zero where that
+    // frame was not recorded, or the edge is never cut
+    std::vector<Vec3f> cut_edge;
+    WallRestPositions walls;      // the last frame's walls, placed in the rest state
+    WallGraph wall_graph;         // and as a graph, to smooth them where they are
+    WallDeformation wall_motion;  // the smoothed motion of the particles along them
 };
 
 /// The fracture of a shot whose last frame is `last_frame`. `first_break` is the shot's break
@@ -36,6 +39,17 @@ struct ShotFracture {
 ShotFracture plan_shot_fracture(const CoreTopology& topo, const ParticleFrame& last_frame,
                                 const std::vector<int32_t>& first_break,
                                 const SurfaceParams& params);
+
+/// Records into fracture.cut_edge each edge (p, q) cut in the frame after `frame`: x_q - x_p,
+/// where its particles stood the last frame they were welded. A fresh crack shows at once what
+/// they moved apart since, and eases in only the rest of its jump (FrameCores::opening in
+/// core_surface.cpp). Each frame writes only its own edges, so frames can be recorded in any
+/// order, also in parallel.
+void record_cut_edges(const CoreTopology& topo, const ParticleFrame& frame, ShotFracture& fracture);
+
+/// The frames record_cut_edges needs, ascending: each frame in [first, last] after which an edge
+/// is cut. A cut in the first cached frame has no frame before it: it shows at once.
+std::vector<int> frames_before_cuts(const ShotFracture& fracture, int first, int last);
 
 /// The pieces of frame `frame` (at most the last frame): the particles joined through the edges
 /// not yet cut. Each such piece holds one or more of the last frame's pieces and takes the

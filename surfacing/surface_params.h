@@ -39,6 +39,9 @@ struct SurfaceParams {
     Real debris_gap = 0.5;
     // [particle spacings] walls closer than this meet (no hairline gaps)
     Real close_gaps = 0.25;
+    // [particle spacings per frame] how fast a fresh crack whose particles parted before it was
+    // cut parts its sides (FrameCores::opening); 0: every crack shows as open as its particles
+    Real open_speed = 0.2;
     // Taubin steps of the crack walls, in rest space and where they are (0: off)
     int wall_smoothing = 25;
     DebrisOutput debris = DebrisOutput::None;

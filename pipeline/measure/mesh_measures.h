@@ -50,8 +50,8 @@ struct SurfaceMotion {
 /// of the particles it follows (the convex hull of their moves). Those are the owners of its rest
 /// point in its weld class under a's settled cuts (SurfacedFrame::edge_settled): its class, and
 /// while a fresh crack parts, the class it had before the cut. So a crack that opens as its
-/// particles part does not count, nor a side that parts from the middle of its old class at the
-/// plates mode's bounded speed while its particles tear apart faster; a vertex that snaps from
+/// particles part does not count, nor a side that eases from where its old class was welded at
+/// the plates mode's open_speed while its particles tear apart faster; a vertex that snaps from
 /// where its class was welded before to where it is welded now, or that smoothing moves away from
 /// its particles, does.
 /// @param piece_a, piece_b the piece of each particle in a and b (SurfacedFrame::particle_piece)

@@ -405,6 +405,7 @@ std::optional<SurfaceParams> build_surface(const json& tree, Issues& issues) {
                     {"min_piece_size", &S::min_piece_size},
                     {"debris_gap", &S::debris_gap},
                     {"close_gaps", &S::close_gaps},
+                    {"open_speed", &S::open_speed},
                     {"wall_smoothing", &S::wall_smoothing}});
     s.debris =
         text(tree, "/surfacing/debris") == "points" ? DebrisOutput::Points : DebrisOutput::None;

@@ -237,6 +237,8 @@ std::vector<KeySpec> build_fixed_table() {
         .doc("plates mode: a torn particle whose every path to a plate opened more than this (in particle spacings) is debris"),
     Key("/surfacing/close_gaps", T::Number).def(0.25).ge(0).le(1).units("spacings")
         .doc("plates mode: crack walls whose sides are closer than this (in particle spacings) meet: no hairline gaps"),
+    Key("/surfacing/open_speed", T::Number).def(SurfaceParams{}.open_speed).ge(0).le(10).units("spacings/frame")
+        .doc("plates mode: how fast a fresh crack cut after its particles parted opens beyond their motion (against pops); 0: at once (no lag, no saw-teeth)"),
     Key("/surfacing/wall_smoothing", T::Integer).def(SurfaceParams{}.wall_smoothing).ge(0).le(100).units("iterations")
         .doc("plates mode: Taubin steps that smooth the crack walls, in rest space and where they are (0: the dual-cell walls)"),
     Key("/surfacing/debris", T::Enum).def("none").choices({"none", "points"}).units("")

@@ -374,11 +374,12 @@ TEST_F(ShotTest, PlatesKeysAreBoundedAndDebrisNeedsThePlatesMode) {
     EXPECT_EQ(shot.surface->cell_size, 0.03);  // /sim/h: min_piece_size's unit
     const std::string msg = error_of(R"({"mudcrack": 1, "source": {"type": "box"}, "material": {},
         "surfacing": {"mode": "ours", "debris": "points", "min_piece_size": 0, "debris_gap": 0,
-                      "close_gaps": -1, "wall_smoothing": 1000}})");
+                      "close_gaps": -1, "open_speed": -0.1, "wall_smoothing": 1000}})");
     expect_contains(msg, {"/surfacing/debris = \"points\": needs /surfacing/mode = \"plates\"",
                           "/surfacing/min_piece_size = 0: must be > 0",
                           "/surfacing/debris_gap = 0: must be > 0",
                           "/surfacing/close_gaps = -1: must be in [0, 1]",
+                          "/surfacing/open_speed = -0.1: must be in [0, 10]",
                           "/surfacing/wall_smoothing = 1000: must be in [0, 100]"});
     expect_contains(error_of(R"({"mudcrack": 1, "source": {"type": "box"}, "material": {},
         "surfacing": {"mode": "plate"}})"),

@@ -258,12 +258,18 @@ std::optional<MotionTracker> make_motion_tracker(const Shot& shot, const Surface
                          surface_dir.string() + ": run mc-surface first");
     std::optional<ShotFracture> fracture;
     if (shot.surface->mode == SurfaceMode::Plates) {
-        const fs::path last_path =
-            frame_path(sim_dir, "particles", surfacing.history->last_frame, "vdb");
-        sim_files.verify(last_path);
-        fracture = plan_shot_fracture(*surfacing.topo,
-                                      points_to_frame(read_points(last_path), last_path.string()),
+        auto load = [&](int n) {
+            const fs::path path = frame_path(sim_dir, "particles", n, "vdb");
+            sim_files.verify(path);
+            return points_to_frame(read_points(path), path.string());
+        };
+        fracture = plan_shot_fracture(*surfacing.topo, load(surfacing.history->last_frame),
                                       surfacing.history->first_break, *shot.surface);
+        // where each cut edge's particles stood the frame before it, as mc-surface records it
+        if (shot.surface->open_speed > 0)
+            for (int n : frames_before_cuts(*fracture, surfacing.history->first_frame,
+                                            surfacing.history->last_frame))
+                record_cut_edges(*surfacing.topo, load(n), *fracture);
     }
     return std::make_optional<MotionTracker>(*surfacing.topo, *surfacing.history, *shot.surface,
                                              shot.sim.h, std::move(fracture));

@@ -315,6 +315,15 @@ Breaks plan_breaks(const SurfaceInputs& in, const SurfaceParams& params, const C
         breaks.fracture =
             plan_shot_fracture(topo, load_frame(in.sim_dir, in.sim_files, in.sim_last, topo),
                                breaks.history.first_break, params);
+        if (params.open_speed > 0) {
+            // where each cut edge's particles stood the frame before it (record_cut_edges)
+            const std::vector<int> before =
+                frames_before_cuts(*breaks.fracture, in.sim_first, in.sim_last);
+            for_each_item(int(before.size()), [&](int i) {
+                record_cut_edges(topo, load_frame(in.sim_dir, in.sim_files, before[i], topo),
+                                 *breaks.fracture);
+            });
+        }
         log::info("plates: the fracture of frame " + std::to_string(in.sim_last) + ": " +
                   std::to_string(breaks.fracture->last.count) + " pieces, " +
                   std::to_string(breaks.fracture->last.debris) + " debris particles, " +
@@ -427,6 +436,7 @@ json surface_manifest(const Shot& shot, const SurfaceInputs& in, const SurfacePa
                        {"cell_size", params.cell_size},
                        {"debris_gap", params.debris_gap},
                        {"close_gaps", params.close_gaps},
+                       {"open_speed", params.open_speed},
                        {"wall_smoothing", params.wall_smoothing},
                        {"debris", params.debris == DebrisOutput::Points ? "points" : "none"}};
     // fps: the shot's (/frames/fps), so a DCC importer sets its scene's rate from this manifest
