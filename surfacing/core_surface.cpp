@@ -63,11 +63,12 @@ struct PlateCores {
     Real close_gap = 0;                            // [m] sides closer than this meet
     // the frame each edge is cut from, and its vector the frame before (ShotFracture)
     const std::vector<int32_t>* cut_frame = nullptr;
-    const std::vector<Vec3f>* cut_edge = nullptr;
+    const CutEdgeVectors* cut_edges = nullptr;
     // [m per frame] how fast a fresh crack's sides part
     Real open_speed = 0;
-    // [m] the largest jump a cut eases in (kMaxEasedGap spacings)
+    // [m] the largest jump a cut eases in (kMaxEasedGap spacings), and in how many frames
     Real max_eased_gap = 0;
+    int easing_frames = 0;
 };
 
 /// smoothstep from 0 at a to 1 at b.
@@ -239,7 +240,7 @@ private:
     /// of their copies, but it has grown since by what the particles moved apart after the cut
     /// (a crack that keeps widening), which shows at once. That growth is measured on the edges
     /// between the two: G = sum_(i in S, k in O \ S) (x_k - x_i) / (|O| |S|), today's less the
-    /// frame before the cut's (cut_edge, record_cut_edges); for an edge's midpoint it is how far
+    /// frame before the cut's (cut_edges, record_cut_edges); for an edge's midpoint it is how far
     /// its two particles moved apart, the two sides' turning aside. The particles' own vectors,
     /// not their cores' turned offsets: a torn particle's rotation can turn by half a turn from
     /// one frame to the next. The side stands at D = c_O - c_S - G from S,
@@ -250,7 +251,7 @@ private:
     /// follows its particles alike: no saw-teeth.
     void opening(const PointOwners& o, int rep, Vec3& side) const {
         const std::vector<int32_t>& cut_frame = *m_plates.cut_frame;
-        const std::vector<Vec3f>& cut_edge = *m_plates.cut_edge;
+        const CutEdgeVectors& cut_edges = *m_plates.cut_edges;
         const Real speed = m_plates.open_speed;
         const int now = m_frame.frame;
         std::array<Vec3, 4> copies;
@@ -258,8 +259,8 @@ private:
         Vec3 offset = Vec3::Zero();
         for (int k = 0; k < o.n_edges; ++k) {
             const int32_t f = cut_frame[o.edge[k]];
-            const Real age = Real(now - f + 1);
-            if (f > now || !(age * speed < m_plates.max_eased_gap)) continue;
+            const int age = now - f + 1;
+            if (f > now || age >= m_plates.easing_frames) continue;
             // each cut frame once: at its first edge
             bool seen = false;
             for (int l = 0; l < k && !seen; ++l) seen = cut_frame[o.edge[l]] == f;
@@ -299,7 +300,7 @@ private:
                 const bool q_split_off = in_new[i] && in_old[j] && !in_new[j];
                 const bool p_split_off = in_new[j] && in_old[i] && !in_new[i];
                 if ((!q_split_off && !p_split_off) || cut_frame[e] != f) continue;
-                const Vec3 grown = (m_frame.P[q] - m_frame.P[p] - cut_edge[e]).cast<Real>();
+                const Vec3 grown = (m_frame.P[q] - m_frame.P[p] - cut_edges.of(e)).cast<Real>();
                 growth += q_split_off ? grown : Vec3(-grown);
                 ++pairs_cut_at_f;
             }
@@ -310,7 +311,7 @@ private:
             const Real way_length = way.norm() / Real(n_old * n_new);
             if (!(way_length > 0)) continue;
             const Real length = way_length - std::max(Real(0), growth.dot(way) / way.norm());
-            const Real left = std::min(length, m_plates.max_eased_gap) - age * speed;
+            const Real left = std::min(length, m_plates.max_eased_gap) - Real(age) * speed;
             if (left > 0) offset += (left / way.norm()) * way;
         }
         side += offset;
@@ -777,8 +778,9 @@ void surface_plates(const CoreTopology& topo, const ParticleFrame& frame,
     plates.close_gap = params.close_gaps * spacing;
     if (in_sequence) {
         plates.cut_frame = &fracture.cut_frame;
-        plates.cut_edge = &fracture.cut_edge;
+        plates.cut_edges = &fracture.cut_edges;
         plates.max_eased_gap = kMaxEasedGap * spacing;
+        plates.easing_frames = easing_frames(params);
         plates.open_speed = params.open_speed * spacing;
     }
     const FrameCores cores(topo, frame, pieces.is_cut, params, plates);
@@ -786,14 +788,11 @@ void surface_plates(const CoreTopology& topo, const ParticleFrame& frame,
     if (params.cracks) build_crack(topo, cores, frag, pieces.is_cut, out);
     out.particle_piece = std::move(pieces.id);
     if (in_sequence && params.open_speed > 0) {
-        // a cut has eased in once age open_speed >= kMaxEasedGap
+        // a cut has eased in from its age easing_frames on
         out.edge_settled.assign(topo.edges.size(), 0);
+        const int settled_by = frame.frame + 1 - plates.easing_frames;
         parallel_for(topo.n_edges(), [&](int64_t e) {
-            const int32_t f = fracture.cut_frame[e];
-            out.edge_settled[e] =
-                f <= frame.frame && Real(frame.frame - f + 1) * params.open_speed >= kMaxEasedGap
-                    ? 1
-                    : 0;
+            out.edge_settled[e] = fracture.cut_frame[e] <= settled_by ? 1 : 0;
         });
     } else {
         out.edge_settled = pieces.is_cut;
@@ -802,6 +801,12 @@ void surface_plates(const CoreTopology& topo, const ParticleFrame& frame,
 }
 
 }  // namespace
+
+int easing_frames(const SurfaceParams& params) {
+    if (!(params.open_speed > 0)) return 0;
+    // a cut of age a eases in min(|way|, kMaxEasedGap) - a open_speed > 0: ages below this
+    return static_cast<int>(std::ceil(kMaxEasedGap / params.open_speed - 1e-9));
+}
 
 SurfacedFrame surface_frame(const CoreTopology& topo, const ParticleFrame& frame,
                             const std::vector<int32_t>& first_break, const SurfaceParams& params,

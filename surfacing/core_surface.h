@@ -43,6 +43,12 @@ struct SurfacedFrame {
                                           // open_speed; else edge_cut)
 };
 
+/// How many frames a fresh cut of the plates mode takes to ease in (FrameCores::opening in
+/// core_surface.cpp): a cut at frame f moves its vertices beyond their particles in frames f to
+/// f + easing_frames - 2 and is settled from f + easing_frames - 1; 0 when open_speed is 0
+/// (cracks show at once). 10 at the default open_speed.
+int easing_frames(const SurfaceParams& params);
+
 /// Surfaces one frame. Deterministic: the result depends only on the arguments, never on the
 /// thread count or on which other frames were surfaced before.
 ///

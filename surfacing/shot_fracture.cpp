@@ -41,7 +41,9 @@ ShotFracture plan_shot_fracture(const CoreTopology& topo, const ParticleFrame& l
                                     ? first_break[e]
                                     : std::min(last, std::max(first_damage[p], first_damage[q]));
     });
-    fracture.cut_edge.assign(topo.edges.size(), Vec3f::Zero());
+    for (int32_t e = 0; e < topo.n_edges(); ++e)
+        if (fracture.last.is_cut[e]) fracture.cut_edges.edge.push_back(e);
+    fracture.cut_edges.vector.assign(fracture.cut_edges.edge.size(), Vec3f::Zero());
     fracture.walls = smooth_walls(topo, fracture.last.is_cut, params.wall_smoothing);
     if (params.wall_smoothing > 0) {
         fracture.wall_graph = plan_wall_graph(topo, fracture.last.is_cut);
@@ -56,20 +58,25 @@ void record_cut_edges(const CoreTopology& topo, const ParticleFrame& frame,
                       ShotFracture& fracture) {
     check_frame_fits(topo, frame);
     const int32_t next = frame.frame + 1;
-    parallel_for(topo.n_edges(), [&](int64_t e) {
+    CutEdgeVectors& cut = fracture.cut_edges;
+    parallel_for(static_cast<int64_t>(cut.edge.size()), [&](int64_t i) {
+        const int32_t e = cut.edge[i];
         if (fracture.cut_frame[e] != next) return;
         const auto [p, q] = topo.edges[e];
-        fracture.cut_edge[e] = frame.P[q] - frame.P[p];
+        cut.vector[i] = frame.P[q] - frame.P[p];
     });
 }
 
-std::vector<int> frames_before_cuts(const ShotFracture& fracture, int first, int last) {
-    std::vector<uint8_t> needed(std::max(0, last - first + 1), 0);
+std::vector<int> frames_before_cuts(const ShotFracture& fracture, int cache_first, int first,
+                                    int last, int easing) {
+    // a cut at f eases in frames f .. f + easing - 2: those that reach [first, last]
+    const int lo = std::max(cache_first, first + 1 - easing), hi = last - 1;
+    std::vector<uint8_t> needed(std::max(0, hi - lo + 1), 0);
     for (int32_t f : fracture.cut_frame)
-        if (f != kNeverBroken && f - 1 >= first && f - 1 <= last) needed[f - 1 - first] = 1;
+        if (f != kNeverBroken && f - 1 >= lo && f - 1 <= hi) needed[f - 1 - lo] = 1;
     std::vector<int> frames;
     for (int i = 0; i < int(needed.size()); ++i)
-        if (needed[i]) frames.push_back(first + i);
+        if (needed[i]) frames.push_back(lo + i);
     return frames;
 }
 

@@ -9,6 +9,7 @@
 /// state; frame n shows the cuts the soil has made by then. A wall appears only where and when an
 /// edge breaks, a particle never changes side, and a wall vertex never moves in the rest state: a
 /// frame's mesh moves with its particles alone.
+#include <algorithm>
 #include <cstdint>
 #include <vector>
 
@@ -21,15 +22,24 @@
 
 namespace mudcrack {
 
+/// x_q - x_p of each edge (p, q) the shot cuts, the frame before its cut (record_cut_edges):
+/// 16 bytes per cut edge, where a vector over every edge took 12 per edge.
+struct CutEdgeVectors {
+    std::vector<int32_t> edge;  // the edges the last frame cuts, ascending
+    std::vector<Vec3f> vector;  // per edge: x_q - x_p; zero where that frame was not recorded
+    /// The vector of cut edge e (one of `edge`).
+    const Vec3f& of(int32_t e) const {
+        return vector[std::lower_bound(edge.begin(), edge.end(), e) - edge.begin()];
+    }
+};
+
 struct ShotFracture {
     Pieces last;                     // the pieces of the last frame (find_pieces)
     std::vector<int32_t> cut_frame;  // per edge: the first frame it is cut; kNeverBroken if never
-    // per edge (p, q): x_q - x_p the frame before it was cut (record_cut_edges); zero where that
-    // frame was not recorded, or the edge is never cut
-    std::vector<Vec3f> cut_edge;
-    WallRestPositions walls;      // the last frame's walls, placed in the rest state
-    WallGraph wall_graph;         // and as a graph, to smooth them where they are
-    WallDeformation wall_motion;  // the smoothed motion of the particles along them
+    CutEdgeVectors cut_edges;        // where each cut edge's particles stood before its cut
+    WallRestPositions walls;         // the last frame's walls, placed in the rest state
+    WallGraph wall_graph;            // and as a graph, to smooth them where they are
+    WallDeformation wall_motion;     // the smoothed motion of the particles along them
 };
 
 /// The fracture of a shot whose last frame is `last_frame`. `first_break` is the shot's break
@@ -40,16 +50,19 @@ ShotFracture plan_shot_fracture(const CoreTopology& topo, const ParticleFrame& l
                                 const std::vector<int32_t>& first_break,
                                 const SurfaceParams& params);
 
-/// Records into fracture.cut_edge each edge (p, q) cut in the frame after `frame`: x_q - x_p,
+/// Records into fracture.cut_edges each edge (p, q) cut in the frame after `frame`: x_q - x_p,
 /// where its particles stood the last frame they were welded. A fresh crack shows at once what
 /// they moved apart since, and eases in only the rest of its jump (FrameCores::opening in
 /// core_surface.cpp). Each frame writes only its own edges, so frames can be recorded in any
 /// order, also in parallel.
 void record_cut_edges(const CoreTopology& topo, const ParticleFrame& frame, ShotFracture& fracture);
 
-/// The frames record_cut_edges needs, ascending: each frame in [first, last] after which an edge
-/// is cut. A cut in the first cached frame has no frame before it: it shows at once.
-std::vector<int> frames_before_cuts(const ShotFracture& fracture, int first, int last);
+/// The frames record_cut_edges needs to surface frames [first, last] whose cuts ease in over
+/// `easing` frames (easing_frames in core_surface.h), ascending: each frame in the cache
+/// [cache_first, cache_last] after which an edge is cut that is still easing in one of them. A
+/// cut in the cache's first frame has no frame before it: it shows at once.
+std::vector<int> frames_before_cuts(const ShotFracture& fracture, int cache_first, int first,
+                                    int last, int easing);
 
 /// The pieces of frame `frame` (at most the last frame): the particles joined through the edges
 /// not yet cut. Each such piece holds one or more of the last frame's pieces and takes the

@@ -347,7 +347,7 @@ template <class FrameAt>
 ShotFracture plan_fracture(const TornSlab& slab, int last, const SurfaceParams& params,
                            FrameAt&& frame_at) {
     ShotFracture fracture = plan_shot_fracture(slab.topo, frame_at(last), slab.first_break, params);
-    for (int n : frames_before_cuts(fracture, 1, last))
+    for (int n : frames_before_cuts(fracture, 1, 1, last, easing_frames(params)))
         record_cut_edges(slab.topo, frame_at(n), fracture);
     return fracture;
 }
@@ -359,17 +359,23 @@ TEST(ShotFracture, RecordsEachCutEdgeTheFrameBeforeItsCut) {
     const SurfaceParams params = plates_params();
     auto frame_at = [&](int n) { return tear.at(n, 0.01 * n); };
     const ShotFracture fracture = plan_fracture(tear.slab, tear.last, params, frame_at);
-    EXPECT_EQ(frames_before_cuts(fracture, 1, tear.last), (std::vector<int>{1, 4}));
+    EXPECT_EQ(easing_frames(params), 10);  // 2 spacings at 0.2 a frame
+    EXPECT_EQ(frames_before_cuts(fracture, 1, 1, tear.last, 10), (std::vector<int>{1, 4}));
+    // frame 6 alone: the cut at 2 has eased in by then, the one at 5 has not
+    EXPECT_EQ(frames_before_cuts(fracture, 1, 6, 6, 3), (std::vector<int>{4}));
+    EXPECT_EQ(frames_before_cuts(fracture, 1, 6, 6, 2), (std::vector<int>{}));
+    EXPECT_EQ(frames_before_cuts(fracture, 1, 6, 6, 10), (std::vector<int>{1, 4}));
     int recorded = 0;
+    ASSERT_EQ(fracture.cut_edges.edge.size(), fracture.cut_edges.vector.size());
     for (int32_t e = 0; e < tear.slab.topo.n_edges(); ++e) {
         const int32_t f = fracture.cut_frame[e];
-        if (f == kNeverBroken) {
-            EXPECT_EQ(fracture.cut_edge[e], Vec3f::Zero());
-            continue;
-        }
+        const bool listed =
+            std::binary_search(fracture.cut_edges.edge.begin(), fracture.cut_edges.edge.end(), e);
+        EXPECT_EQ(listed, f != kNeverBroken) << "edge " << e;
+        if (!listed) continue;
         const auto [p, q] = tear.slab.topo.edges[e];
         const ParticleFrame before = frame_at(f - 1);
-        EXPECT_EQ(fracture.cut_edge[e], Vec3f(before.P[q] - before.P[p])) << "edge " << e;
+        EXPECT_EQ(fracture.cut_edges.of(e), Vec3f(before.P[q] - before.P[p])) << "edge " << e;
         ++recorded;
     }
     EXPECT_GT(recorded, 0);
