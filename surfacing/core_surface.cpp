@@ -239,16 +239,16 @@ private:
     /// where O was welded the frame before to where S is. Today that way is c_O - c_S, the means
     /// of their copies, but it has grown since by what the particles moved apart after the cut
     /// (a crack that keeps widening), which shows at once. That growth is measured on the edges
-    /// between the two: G = sum_(i in S, k in O \ S) (x_k - x_i) / (|O| |S|), today's less the
-    /// frame before the cut's (cut_edges, record_cut_edges); for an edge's midpoint it is how far
-    /// its two particles moved apart, the two sides' turning aside. The particles' own vectors,
-    /// not their cores' turned offsets: a torn particle's rotation can turn by half a turn from
-    /// one frame to the next. The side stands at D = c_O - c_S - G from S,
-    /// and |D| shrinks by open_speed a frame: offset = D max(0, min(|D|, kMaxEasedGap) -
-    /// a open_speed) / |D|, a = now - f + 1 the cut's age. So a cut moves a vertex at most
-    /// open_speed a frame beyond its particles (the rare jump over kMaxEasedGap jumps the excess),
-    /// every cut has eased in by kMaxEasedGap / open_speed frames, and the whole rim of a crack
-    /// follows its particles alike: no saw-teeth.
+    /// between the two cut at f: G = sum_(i in S, k in O \ S) (x_k - x_i) / (|O| |S|), today's
+    /// less the frame before the cut's (cut_edges, record_cut_edges), the mean pair standing in
+    /// for pairs cut earlier; for an edge's midpoint it is how far its two particles moved apart.
+    /// The particles' own vectors, not their cores' turned offsets: a torn particle's rotation can
+    /// turn by half a turn from one frame to the next. Only G's part along the way counts: the
+    /// side stands min(|c_O - c_S| - G.w, kMaxEasedGap) - a open_speed from S toward O (w the
+    /// way's direction, a = now - f + 1 the cut's age), when that is positive; several cuts add
+    /// up. So a cut moves a vertex at most open_speed a frame beyond its particles (the rare jump
+    /// over kMaxEasedGap jumps the excess), every cut has eased in by easing_frames, and the whole
+    /// rim of a crack follows its particles alike: no saw-teeth.
     void opening(const PointOwners& o, int rep, Vec3& side) const {
         const std::vector<int32_t>& cut_frame = *m_plates.cut_frame;
         const CutEdgeVectors& cut_edges = *m_plates.cut_edges;
