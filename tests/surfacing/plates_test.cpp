@@ -347,8 +347,7 @@ template <class FrameAt>
 ShotFracture plan_fracture(const TornSlab& slab, int last, const SurfaceParams& params,
                            FrameAt&& frame_at) {
     ShotFracture fracture = plan_shot_fracture(slab.topo, frame_at(last), slab.first_break, params);
-    for (int n : frames_before_cuts(fracture, 1, 1, last, easing_frames(params)))
-        record_cut_edges(slab.topo, frame_at(n), fracture);
+    record_cut_edges_for(slab.topo, fracture, 1, 1, last, easing_frames(params), frame_at);
     return fracture;
 }
 

@@ -267,10 +267,9 @@ std::optional<MotionTracker> make_motion_tracker(const Shot& shot, const Surface
                                       surfacing.history->first_break, *shot.surface);
         // where each cut edge's particles stood the frame before it, as mc-surface records it
         if (shot.surface->open_speed > 0)
-            for (int n : frames_before_cuts(
-                     *fracture, surfacing.history->first_frame, surfacing.history->first_frame,
-                     surfacing.history->last_frame, easing_frames(*shot.surface)))
-                record_cut_edges(*surfacing.topo, load(n), *fracture);
+            record_cut_edges_for(*surfacing.topo, *fracture, surfacing.history->first_frame,
+                                 surfacing.history->first_frame, surfacing.history->last_frame,
+                                 easing_frames(*shot.surface), load);
     }
     return std::make_optional<MotionTracker>(*surfacing.topo, *surfacing.history, *shot.surface,
                                              shot.sim.h, std::move(fracture));

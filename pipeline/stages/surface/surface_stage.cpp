@@ -315,16 +315,11 @@ Breaks plan_breaks(const SurfaceInputs& in, const SurfaceParams& params, const C
         breaks.fracture =
             plan_shot_fracture(topo, load_frame(in.sim_dir, in.sim_files, in.sim_last, topo),
                                breaks.history.first_break, params);
-        if (params.open_speed > 0) {
-            // where each cut edge's particles stood the frame before it (record_cut_edges)
-            const std::vector<int> before = frames_before_cuts(
-                *breaks.fracture, in.sim_first, in.first, in.last, easing_frames(params));
-            // one frame at a time: this runs beside the shot's fracture, before any frame's
-            // surfacing, and two frames at once raised the demo's peak by 10 %
-            for (int n : before)
-                record_cut_edges(topo, load_frame(in.sim_dir, in.sim_files, n, topo),
-                                 *breaks.fracture);
-        }
+        // where each cut edge's particles stood the frame before it
+        if (params.open_speed > 0)
+            record_cut_edges_for(
+                topo, *breaks.fracture, in.sim_first, in.first, in.last, easing_frames(params),
+                [&](int n) { return load_frame(in.sim_dir, in.sim_files, n, topo); });
         log::info("plates: the fracture of frame " + std::to_string(in.sim_last) + ": " +
                   std::to_string(breaks.fracture->last.count) + " pieces, " +
                   std::to_string(breaks.fracture->last.debris) + " debris particles, " +
