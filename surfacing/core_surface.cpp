@@ -98,7 +98,8 @@ public:
             const Mat3 R = has_fe ? core_rotation(frame.Fe[p].cast<Real>()) : Mat3::Identity();
             m_A[p] = has_jw ? Real(std::cbrt(Real(frame.Jw[p]))) * R : R;
         });
-        if (plates.wall_motion) smooth_wall_motion(topo, *plates.wall_motion, frame, m_x, m_A);
+        if (plates.wall_motion)
+            smooth_wall_motion(topo, *plates.wall_motion, frame, plates.easing_frames, m_x, m_A);
         if (plates.wall_graph && !plates.wall_graph->empty()) smooth_walls_where_they_are();
     }
 

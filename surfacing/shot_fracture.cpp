@@ -48,7 +48,7 @@ ShotFracture plan_shot_fracture(const CoreTopology& topo, const ParticleFrame& l
     if (params.wall_smoothing > 0) {
         fracture.wall_graph = plan_wall_graph(topo, fracture.last.is_cut);
         fracture.wall_motion =
-            plan_wall_deformation(topo, fracture.last.is_cut, fracture.last.id,
+            plan_wall_deformation(topo, fracture.last.is_cut, fracture.cut_frame, fracture.last.id,
                                   kWallMotionRadius * mean_particle_spacing(topo));
     }
     return fracture;

@@ -3,6 +3,7 @@
 #include <Eigen/Eigenvalues>
 #include <algorithm>
 #include <cmath>
+#include <limits>
 
 #include "sim/core/parallel.h"
 #include "surfacing/pieces.h"
@@ -28,19 +29,24 @@ struct ParticleEdges {
     }
 };
 
-/// The wall particles: the corners of every tet around a cut edge (the owners of its wall points).
-std::vector<int32_t> wall_particles(const CoreTopology& topo, const std::vector<uint8_t>& is_cut,
-                                    const std::vector<int32_t>& piece) {
-    std::vector<uint8_t> on_wall(topo.n_particles, 0);
+/// The wall particles: the corners of every tet around a cut edge (the owners of its wall
+/// points), each with the frame of its first cut.
+void find_wall_particles(const CoreTopology& topo, const std::vector<uint8_t>& is_cut,
+                         const std::vector<int32_t>& cut_frame, const std::vector<int32_t>& piece,
+                         WallDeformation& d) {
+    constexpr int32_t kNever = std::numeric_limits<int32_t>::max();
+    std::vector<int32_t> first_cut(topo.n_particles, kNever);
     for (int32_t e = 0; e < topo.n_edges(); ++e) {
         if (!is_cut[e]) continue;
         for (int32_t c = topo.edge_tet_begin[e]; c < topo.edge_tet_begin[e + 1]; ++c)
-            for (int32_t p : topo.tets[topo.edge_tet[c] / 6]) on_wall[p] = 1;
+            for (int32_t p : topo.tets[topo.edge_tet[c] / 6])
+                first_cut[p] = std::min(first_cut[p], cut_frame[e]);
     }
-    std::vector<int32_t> out;
-    for (int32_t p = 0; p < topo.n_particles; ++p)
-        if (on_wall[p] && piece[p] != kDebris) out.push_back(p);
-    return out;
+    for (int32_t p = 0; p < topo.n_particles; ++p) {
+        if (first_cut[p] == kNever || piece[p] == kDebris) continue;
+        d.particle.push_back(p);
+        d.first_cut.push_back(first_cut[p]);
+    }
 }
 
 /// The particles within `radius` of p in the rest state reached from it through uncut edges
@@ -74,15 +80,17 @@ std::vector<int32_t> neighbourhood(const CoreTopology& topo, const ParticleEdges
 }  // namespace
 
 size_t WallDeformation::memory_bytes() const {
-    return (particle.size() + begin.size() + neighbour.size()) * sizeof(int32_t) +
+    return (particle.size() + first_cut.size() + begin.size() + neighbour.size()) *
+               sizeof(int32_t) +
            weight.size() * sizeof(float) + rest_centre.size() * sizeof(Vec3) +
            rest_inverse.size() * sizeof(Mat3);
 }
 
 WallDeformation plan_wall_deformation(const CoreTopology& topo, const std::vector<uint8_t>& is_cut,
+                                      const std::vector<int32_t>& cut_frame,
                                       const std::vector<int32_t>& piece, Real radius) {
     WallDeformation d;
-    d.particle = wall_particles(topo, is_cut, piece);
+    find_wall_particles(topo, is_cut, cut_frame, piece, d);
     const int64_t n = static_cast<int64_t>(d.particle.size());
     const ParticleEdges adjacency(topo);
     std::vector<std::vector<int32_t>> found(n);
@@ -127,9 +135,15 @@ WallDeformation plan_wall_deformation(const CoreTopology& topo, const std::vecto
 }
 
 void smooth_wall_motion(const CoreTopology& topo, const WallDeformation& d,
-                        const ParticleFrame& frame, std::vector<Vec3>& x, std::vector<Mat3>& A) {
+                        const ParticleFrame& frame, int ease_frames, std::vector<Vec3>& x,
+                        std::vector<Mat3>& A) {
     parallel_for(static_cast<int64_t>(d.particle.size()), [&](int64_t i) {
         if (d.rest_inverse[i].isZero()) return;
+        const Real w = ease_frames > 0
+                           ? std::clamp(Real(frame.frame - d.first_cut[i]) / Real(ease_frames),
+                                        Real(0), Real(1))
+                           : Real(1);
+        if (w == 0) return;
         Real total = 0;
         Vec3 centre = Vec3::Zero();
         for (int32_t k = d.begin[i]; k < d.begin[i + 1]; ++k) {
@@ -144,8 +158,10 @@ void smooth_wall_motion(const CoreTopology& topo, const WallDeformation& d,
                      (topo.X[q] - d.rest_centre[i]).transpose();
         }
         const int32_t p = d.particle[i];
-        A[p] = cross * d.rest_inverse[i];
-        x[p] = centre + A[p] * (topo.X[p] - d.rest_centre[i]);
+        const Mat3 fitted_A = cross * d.rest_inverse[i];
+        const Vec3 fitted_x = centre + fitted_A * (topo.X[p] - d.rest_centre[i]);
+        A[p] += w * (fitted_A - A[p]);
+        x[p] += w * (fitted_x - x[p]);
     });
 }
 

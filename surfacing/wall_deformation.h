@@ -9,6 +9,12 @@
 /// crack: within `radius` in the rest state and reached from it without crossing an edge the
 /// last frame cuts. The neighbourhoods are fixed for the shot, so the smoothed motion is as
 /// continuous in time as the particles are, and a wall still follows only its own side.
+///
+/// While a band tears, its particles part unevenly by up to a cell a frame, and the fitted motion
+/// of a particle beside it swings as fast: a rim that follows it would jump beyond its particles.
+/// So in a sequence the fit eases in as a fresh crack does (FrameCores::opening): from the frame
+/// of a particle's first cut, its motion blends from its own to the fitted one over the cut's
+/// easing frames, by the time its band has mostly torn.
 #include <cstdint>
 #include <vector>
 
@@ -21,6 +27,8 @@ namespace mudcrack {
 /// The wall particles and their neighbourhoods, from the rest state and the last frame's cuts.
 struct WallDeformation {
     std::vector<int32_t> particle;   // particles that own a point of a last-frame wall, ascending
+    std::vector<int32_t> first_cut;  // the frame of the first cut among the walls each one owns
+                                     // a point of (ShotFracture::cut_frame)
     std::vector<int32_t> begin;      // CSR offsets of each one's neighbours, (particle.size() + 1)
     std::vector<int32_t> neighbour;  // neighbour particle ids (the particle itself included)
     std::vector<float> weight;       // their weights (Gaussian in rest distance, sigma radius / 2)
@@ -32,18 +40,23 @@ struct WallDeformation {
 };
 
 /// The neighbourhoods of the particles that own a point of a wall through the edges with
-/// is_cut[e] != 0: particles within `radius` [m] of each in the rest state, joined to it through
+/// is_cut[e] != 0, cut from frame cut_frame[e]: particles within `radius` [m] of each in the rest
+/// state, joined to it through
 /// uncut edges, of the same piece (piece[p]; kDebris particles are neither smoothed nor used).
 /// A neighbourhood too small or too flat to fit an affine map (fewer than 6 particles, or a rest
 /// covariance whose least principal variance is under 2 % of its largest) keeps its particle's
 /// own motion. Deterministic.
 WallDeformation plan_wall_deformation(const CoreTopology& topo, const std::vector<uint8_t>& is_cut,
+                                      const std::vector<int32_t>& cut_frame,
                                       const std::vector<int32_t>& piece, Real radius);
 
 /// The smoothed motion of the wall particles in `frame`: x[p] and A[p] such that a rest point y0
 /// of p's core goes to x[p] + A[p] (y0 - X_p), A the fitted affine map's linear part. Only the
-/// wall particles of `deformation` that were fitted are written.
+/// wall particles of `deformation` that were fitted are written. On entry x and A hold each
+/// particle's own motion; with ease_frames > 0, a particle first cut at frame c moves by the blend
+/// w fit + (1 - w) own, w = (frame - c) / ease_frames clamped to [0, 1] (0: the fit at once).
 void smooth_wall_motion(const CoreTopology& topo, const WallDeformation& deformation,
-                        const ParticleFrame& frame, std::vector<Vec3>& x, std::vector<Mat3>& A);
+                        const ParticleFrame& frame, int ease_frames, std::vector<Vec3>& x,
+                        std::vector<Mat3>& A);
 
 }  // namespace mudcrack

@@ -666,7 +666,7 @@ TEST(WallDeformation, FollowsAnAffineMotionExactlyAndStaysOnItsSideOfEveryCut) {
     for (const Vec3& X : slab.topo.X) frame.P.push_back((M * X + shift).cast<float>());
     std::vector<Vec3> x(slab.topo.n_particles, Vec3::Zero());
     std::vector<Mat3> A(slab.topo.n_particles, Mat3::Zero());
-    smooth_wall_motion(slab.topo, d, frame, x, A);
+    smooth_wall_motion(slab.topo, d, frame, 0, x, A);
     int fitted = 0;
     for (size_t i = 0; i < d.particle.size(); ++i) {
         if (d.rest_inverse[i].isZero()) continue;
@@ -676,6 +676,42 @@ TEST(WallDeformation, FollowsAnAffineMotionExactlyAndStaysOnItsSideOfEveryCut) {
         EXPECT_LT((A[p] - M).norm(), 1e-4);
     }
     EXPECT_GT(fitted, 0);
+}
+
+TEST(WallDeformation, EasesInFromOwnMotionToTheFitOverTheFramesAfterEachParticlesFirstCut) {
+    // the slab's band is cut at frame 1; the particles' own motion is a shift, the fit a stretch
+    const TornSlab slab;
+    const ShotFracture fracture =
+        plan_shot_fracture(slab.topo, slab.opened(0.05), slab.first_break, plates_params());
+    const WallDeformation& d = fracture.wall_motion;
+    ASSERT_FALSE(d.empty());
+    for (int32_t c : d.first_cut) EXPECT_EQ(c, 1);
+    const Mat3 M = Vec3(1.2, 0.9, 1.0).asDiagonal();
+    const Vec3 own_shift(0.01, 0, 0);
+    constexpr int kEase = 4;
+    for (int frame_number : {0, 1, 2, 3, 5, 9}) {
+        ParticleFrame frame;
+        frame.frame = frame_number;
+        for (const Vec3& X : slab.topo.X) frame.P.push_back((M * X).cast<float>());
+        std::vector<Vec3> x(slab.topo.n_particles), own_x(slab.topo.n_particles);
+        for (int32_t p = 0; p < slab.topo.n_particles; ++p) own_x[p] = slab.topo.X[p] + own_shift;
+        x = own_x;
+        std::vector<Mat3> A(slab.topo.n_particles, Mat3::Identity());
+        smooth_wall_motion(slab.topo, d, frame, kEase, x, A);
+        const double w = std::clamp((frame_number - 1) / double(kEase), 0.0, 1.0);
+        int fitted = 0;
+        for (size_t i = 0; i < d.particle.size(); ++i) {
+            if (d.rest_inverse[i].isZero()) continue;
+            ++fitted;
+            const int32_t p = d.particle[i];
+            const Vec3 fit_x = M * slab.topo.X[p];
+            EXPECT_LT((x[p] - (w * fit_x + (1 - w) * own_x[p])).norm(), 1e-5)
+                << "frame " << frame_number << ", particle " << p;
+            EXPECT_LT((A[p] - (w * M + (1 - w) * Mat3::Identity())).norm(), 1e-4)
+                << "frame " << frame_number << ", particle " << p;
+        }
+        EXPECT_GT(fitted, 0);
+    }
 }
 
 }  // namespace
