@@ -100,7 +100,7 @@ inline Vec3 volume_preserving_sigma(const Vec3& d, Real m_start, Real J) {
         if (!(std::abs(f) > Real(4e-16)) || !(df > 0)) break;
         m -= f / df;
     }
-    const Real J_third = std::cbrt(J);
+    const Real J_third = cube_root(J);
     Vec3 sigma;
     for (int k = 0; k < 3; ++k) sigma(k) = J_third * std::sqrt(std::max(m + d(k), Real(0)));
     return sigma;
@@ -148,7 +148,7 @@ inline NaccPrincipalReturn nacc_return_principal(const Vec3& sigma, Real alpha, 
     const Real mean_b = (b(0) + b(1) + b(2)) / 3;
     const Vec3 dev_b = b.array() - mean_b;
     const Real dev_b_norm = dev_b.norm();
-    const Real s_norm = mu * cbrt_inv_sq(J) * dev_b_norm;
+    const Real s_norm = mu * inv_cube_root_squared(J) * dev_b_norm;
 
     NaccPrincipalReturn out{sigma, alpha, nacc_yield_case(p, s_norm, p0, beta, M, kappa)};
     if (out.yield_case == kNaccInside) return out;  // case 3a
@@ -157,7 +157,7 @@ inline NaccPrincipalReturn nacc_return_principal(const Vec3& sigma, Real alpha, 
         const bool compression = out.yield_case == kNaccCompressionTip;
         // p <= kappa/2 always, so p > p0 implies p0 < kappa/2 and the root is real
         const Real J_new = std::sqrt(compression ? 1 - 2 * p0 / kappa : 1 + 2 * beta * p0 / kappa);
-        out.sigma.setConstant(std::cbrt(J_new));
+        out.sigma.setConstant(cube_root(J_new));
         if (nacc.hardening) out.alpha += std::log(J / J_new);
         return out;
     }
@@ -166,11 +166,11 @@ inline NaccPrincipalReturn nacc_return_principal(const Vec3& sigma, Real alpha, 
 
     // Case 3b: scale s radially onto the ellipse at fixed p and tr(b_hat).
     const Real s_norm_new = std::sqrt(std::max(-y_p / a, Real(0)));
-    const Real J_two_thirds = std::cbrt(J) * std::cbrt(J);
+    const Real J_two_thirds = cube_root(J) * cube_root(J);
     const Real scale = dev_b_norm > 0 ? J_two_thirds / mu * s_norm_new / dev_b_norm : Real(0);
     if (preserve_volume) {
-        out.sigma =
-            volume_preserving_sigma(dev_b * (scale * cbrt_inv_sq(J)), mean_b * cbrt_inv_sq(J), J);
+        out.sigma = volume_preserving_sigma(dev_b * (scale * inv_cube_root_squared(J)),
+                                            mean_b * inv_cube_root_squared(J), J);
     } else {
         for (int k = 0; k < 3; ++k)
             out.sigma(k) = std::sqrt(std::max(mean_b + scale * dev_b(k), Real(0)));
@@ -253,7 +253,7 @@ inline NaccProjection nacc_project(const Mat3& Fe_trial, Real alpha, Real beta,
     const Real J = nacc_safe_J(Fe_trial.determinant());
     Mat3 dev_b = Fe_trial * Fe_trial.transpose();
     dev_b.diagonal().array() -= dev_b.trace() / 3;
-    const Real s_norm = lame.mu * cbrt_inv_sq(J) * dev_b.norm();
+    const Real s_norm = lame.mu * inv_cube_root_squared(J) * dev_b.norm();
     const Real p = -lame.kappa / 2 * (J * J - 1);
     const Real p0 = nacc_p0(alpha, nacc.xi, lame.kappa);
     if (nacc_yield_case(p, s_norm, p0, beta, nacc.M, lame.kappa) == kNaccInside) {

@@ -30,7 +30,8 @@ inline Real neo_hookean_energy(const Mat3& Fe, const LameParams& p) {
     const Real J = Fe.determinant();
     if (!(J > 0)) return std::numeric_limits<Real>::infinity();
     const Real tr_b = Fe.squaredNorm();
-    return p.mu / 2 * (tr_b * cbrt_inv_sq(J) - 3) + p.kappa / 2 * ((J * J - 1) / 2 - std::log(J));
+    return p.mu / 2 * (tr_b * inv_cube_root_squared(J) - 3) +
+           p.kappa / 2 * ((J * J - 1) / 2 - std::log(J));
 }
 
 /// Principal Kirchhoff stresses [Pa] from the singular values of Fe (the eigenvalues of tau;
@@ -39,7 +40,7 @@ inline Vec3 neo_hookean_kirchhoff_principal(const Vec3& sigma, const LameParams&
     const Real J = sigma(0) * sigma(1) * sigma(2);
     const Vec3 b = sigma.cwiseProduct(sigma);
     const Real mean_b = (b(0) + b(1) + b(2)) / 3;
-    const Real shear = p.mu * cbrt_inv_sq(J);
+    const Real shear = p.mu * inv_cube_root_squared(J);
     const Real volumetric = p.kappa / 2 * (J * J - 1);
     return (shear * (b.array() - mean_b) + volumetric).matrix();
 }
@@ -56,8 +57,11 @@ struct NeoHookeanTerms {
 
 /// The terms of Fe. Defined for any Fe; shear is +infinity at J = 0. Every product-sum is an
 /// explicit fused_madd, so the terms (and tau) round alike wherever they are inlined: the stress
-/// G2P caches for the next P2G and the stress P2G computes itself are the same bits.
-inline NeoHookeanTerms neo_hookean_terms(const Mat3& F, const LameParams& p) {
+/// G2P caches for the next P2G and the stress P2G computes itself are the same bits. Always
+/// inlined: the inline cube root made it large enough that g++ 12 called it from the G2P, and the
+/// call's stores and loads of the terms cost more than the cube root saved.
+[[gnu::always_inline]] inline NeoHookeanTerms neo_hookean_terms(const Mat3& F,
+                                                                const LameParams& p) {
     const auto dot3 = [](Real a0, Real a1, Real a2, Real b0, Real b1, Real b2) {
         return fused_madd(a2, b2, fused_madd(a1, b1, a0 * b0));
     };
@@ -72,7 +76,7 @@ inline NeoHookeanTerms neo_hookean_terms(const Mat3& F, const LameParams& p) {
     t.b = {row_dot(0, 0), row_dot(1, 1), row_dot(2, 2),
            row_dot(0, 1), row_dot(0, 2), row_dot(1, 2)};
     t.mean_b = (t.b.xx + t.b.yy + t.b.zz) / 3;
-    t.shear = p.mu * cbrt_inv_sq(t.J);
+    t.shear = p.mu * inv_cube_root_squared(t.J);
     return t;
 }
 
@@ -104,7 +108,7 @@ inline Mat3 neo_hookean_kirchhoff(const Svd3& svd, const LameParams& p) {
 inline Mat3 neo_hookean_first_piola(const Mat3& Fe, const LameParams& p) {
     const Real J = Fe.determinant();
     const Mat3 Finv_T = Fe.inverse().transpose();
-    const Real shear = p.mu * cbrt_inv_sq(J);
+    const Real shear = p.mu * inv_cube_root_squared(J);
     return shear * (Fe - Fe.squaredNorm() / 3 * Finv_T) + p.kappa / 2 * (J * J - 1) * Finv_T;
 }
 

@@ -5,6 +5,7 @@
 #include <cmath>
 
 #include "sim/core/types.h"
+#include "sim/material/material_math.h"
 #include "sim/model.h"
 
 namespace mudcrack {
@@ -86,7 +87,7 @@ inline PoreStep pore_step(Real Jw_old, Real saturation, Real eta, Real max_log_s
     } else {
         r.log_ratio = log_ratio;
         r.Jw = target;
-        r.Fe_scale = std::cbrt(Jw_old / target);
+        r.Fe_scale = cube_root(Jw_old / target);
     }
     return r;
 }
