@@ -6,6 +6,7 @@
 
 #include "sim/grid/bspline.h"
 #include "sim/material/damage.h"
+#include "sim/material/material_math.h"
 #include "sim/material/nacc.h"
 #include "sim/material/neo_hookean.h"
 #include "sim/moisture/pore.h"
@@ -183,9 +184,9 @@ G2PResult g2p_impl(const SimModel& model, SimState& state, const SparseGrid& gri
                     theta = std::clamp(theta + dth, Real(0), moist.eta);
                     if (evaporating && evaporating[p]) {
                         const Real V = state.V0[p] * J_start;
-                        theta = moist.theta0 +
-                                (theta - moist.theta0) *
-                                    std::exp(-evaporation_rate_dt * std::exp(-std::log(V) / 3));
+                        theta =
+                            moist.theta0 + (theta - moist.theta0) *
+                                               std::exp(-evaporation_rate_dt * inv_cube_root(V));
                     }
                 }
                 state.theta[p] = theta;
