@@ -58,6 +58,8 @@ struct TornSlab {
         for (size_t e = 0; e < b.size(); ++e) b[e] = first_break[e] <= 1;
         return b;
     }
+    /// The plates mode's fracture of the slab, planned from frame 1 opened 5 cm.
+    ShotFracture fracture() const;
 };
 
 SurfaceParams plates_params() {
@@ -66,6 +68,10 @@ SurfaceParams plates_params() {
     p.cell_size = 2 * kH;  // /sim/h: two particle spacings, as in the shipped shots
     p.min_piece_size = 1;  // plates at least 0.2 m across
     return p;
+}
+
+ShotFracture TornSlab::fracture() const {
+    return plan_shot_fracture(topo, opened(0.05), first_break, plates_params());
 }
 
 /// The connected groups of a mesh's faces through shared weld keys.
@@ -528,8 +534,7 @@ TEST(Plates, AWallDoesNotPopWhenACrackIsCutNextToIt) {
 
 TEST(WallGraph, SmoothsTheWallsWhereTheyAreAndTheirRimsAlongTheRim) {
     const TornSlab slab;
-    const ShotFracture fracture =
-        plan_shot_fracture(slab.topo, slab.opened(0.05), slab.first_break, plates_params());
+    const ShotFracture fracture = slab.fracture();
     const WallGraph& graph = fracture.wall_graph;
     ASSERT_FALSE(graph.empty());
     // the cut runs through the slab: its walls reach the surface and have a rim, a curve of its own
@@ -650,8 +655,7 @@ TEST(Plates, EveryFrameOfAGrowingNetworkIsClosed) {
 
 TEST(WallDeformation, FollowsAnAffineMotionExactlyAndStaysOnItsSideOfEveryCut) {
     const TornSlab slab;
-    const ShotFracture fracture =
-        plan_shot_fracture(slab.topo, slab.opened(0.05), slab.first_break, plates_params());
+    const ShotFracture fracture = slab.fracture();
     const WallDeformation& d = fracture.wall_motion;
     ASSERT_FALSE(d.empty());
     for (size_t i = 0; i < d.particle.size(); ++i)
@@ -681,8 +685,7 @@ TEST(WallDeformation, FollowsAnAffineMotionExactlyAndStaysOnItsSideOfEveryCut) {
 TEST(WallDeformation, EasesInFromOwnMotionToTheFitOverTheFramesAfterEachParticlesFirstCut) {
     // the slab's band is cut at frame 1; the particles' own motion is a shift, the fit a stretch
     const TornSlab slab;
-    const ShotFracture fracture =
-        plan_shot_fracture(slab.topo, slab.opened(0.05), slab.first_break, plates_params());
+    const ShotFracture fracture = slab.fracture();
     const WallDeformation& d = fracture.wall_motion;
     ASSERT_FALSE(d.empty());
     for (int32_t c : d.first_cut) EXPECT_EQ(c, 1);
