@@ -88,8 +88,11 @@ size_t WallDeformation::memory_bytes() const {
 
 WallDeformation plan_wall_deformation(const CoreTopology& topo, const std::vector<uint8_t>& is_cut,
                                       const std::vector<int32_t>& cut_frame,
-                                      const std::vector<int32_t>& piece, Real radius) {
+                                      const std::vector<int32_t>& piece, Real radius,
+                                      Real max_lead) {
     WallDeformation d;
+    d.max_lead = max_lead;
+    d.core_reach = mean_particle_spacing(topo) / 2;
     find_wall_particles(topo, is_cut, cut_frame, piece, d);
     const int64_t n = static_cast<int64_t>(d.particle.size());
     const ParticleEdges adjacency(topo);
@@ -160,8 +163,12 @@ void smooth_wall_motion(const CoreTopology& topo, const WallDeformation& d,
         const int32_t p = d.particle[i];
         const Mat3 fitted_A = cross * d.rest_inverse[i];
         const Vec3 fitted_x = centre + fitted_A * (topo.X[p] - d.rest_centre[i]);
-        A[p] += w * (fitted_A - A[p]);
-        x[p] += w * (fitted_x - x[p]);
+        const Vec3 dx = fitted_x - x[p];
+        const Mat3 dA = fitted_A - A[p];
+        const Real lead = dx.norm() + dA.norm() * d.core_reach;
+        const Real share = w * (lead > d.max_lead ? d.max_lead / lead : Real(1));
+        A[p] += share * dA;
+        x[p] += share * dx;
     });
 }
 

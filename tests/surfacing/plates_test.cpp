@@ -668,8 +668,10 @@ TEST(WallDeformation, FollowsAnAffineMotionExactlyAndStaysOnItsSideOfEveryCut) {
     ParticleFrame frame;
     frame.frame = 1;
     for (const Vec3& X : slab.topo.X) frame.P.push_back((M * X + shift).cast<float>());
-    std::vector<Vec3> x(slab.topo.n_particles, Vec3::Zero());
-    std::vector<Mat3> A(slab.topo.n_particles, Mat3::Zero());
+    // on entry each particle's own motion, as FrameCores passes it: its position, no rotation
+    std::vector<Vec3> x;
+    for (const Vec3f& P : frame.P) x.push_back(P.cast<double>());
+    std::vector<Mat3> A(slab.topo.n_particles, Mat3::Identity());
     smooth_wall_motion(slab.topo, d, frame, 0, x, A);
     int fitted = 0;
     for (size_t i = 0; i < d.particle.size(); ++i) {
@@ -683,13 +685,14 @@ TEST(WallDeformation, FollowsAnAffineMotionExactlyAndStaysOnItsSideOfEveryCut) {
 }
 
 TEST(WallDeformation, EasesInFromOwnMotionToTheFitOverTheFramesAfterEachParticlesFirstCut) {
-    // the slab's band is cut at frame 1; the particles' own motion is a shift, the fit a stretch
+    // the slab's band is cut at frame 1; the fit is a stretch, the particles' own motion the
+    // stretch and a shift of a tenth of a spacing, without its linear part
     const TornSlab slab;
     const ShotFracture fracture = slab.fracture();
     const WallDeformation& d = fracture.wall_motion;
     ASSERT_FALSE(d.empty());
     for (int32_t c : d.first_cut) EXPECT_EQ(c, 1);
-    const Mat3 M = Vec3(1.2, 0.9, 1.0).asDiagonal();
+    const Mat3 M = Vec3(1.1, 0.95, 1.0).asDiagonal();
     const Vec3 own_shift(0.01, 0, 0);
     constexpr int kEase = 4;
     for (int frame_number : {0, 1, 2, 3, 5, 9}) {
@@ -697,7 +700,8 @@ TEST(WallDeformation, EasesInFromOwnMotionToTheFitOverTheFramesAfterEachParticle
         frame.frame = frame_number;
         for (const Vec3& X : slab.topo.X) frame.P.push_back((M * X).cast<float>());
         std::vector<Vec3> x(slab.topo.n_particles), own_x(slab.topo.n_particles);
-        for (int32_t p = 0; p < slab.topo.n_particles; ++p) own_x[p] = slab.topo.X[p] + own_shift;
+        for (int32_t p = 0; p < slab.topo.n_particles; ++p)
+            own_x[p] = M * slab.topo.X[p] + own_shift;
         x = own_x;
         std::vector<Mat3> A(slab.topo.n_particles, Mat3::Identity());
         smooth_wall_motion(slab.topo, d, frame, kEase, x, A);
@@ -714,6 +718,39 @@ TEST(WallDeformation, EasesInFromOwnMotionToTheFitOverTheFramesAfterEachParticle
                 << "frame " << frame_number << ", particle " << p;
         }
         EXPECT_GT(fitted, 0);
+    }
+}
+
+TEST(WallDeformation, CarriesAParticleTornLooseFromItsNeighbourhoodAtMostMaxLead) {
+    // every particle follows a stretch, and one wall particle's own motion put it 10 spacings
+    // away: the fit pulls it back by max_lead, no more, and its neighbours not at all
+    const TornSlab slab;
+    const ShotFracture fracture = slab.fracture();
+    const WallDeformation& d = fracture.wall_motion;
+    EXPECT_NEAR(d.max_lead, 1.5 * mean_particle_spacing(slab.topo), 1e-12);
+    EXPECT_NEAR(d.core_reach, 0.5 * mean_particle_spacing(slab.topo), 1e-12);
+    const Mat3 M = Vec3(1.1, 0.95, 1.0).asDiagonal();
+    ParticleFrame frame;
+    frame.frame = 1;
+    for (const Vec3& X : slab.topo.X) frame.P.push_back((M * X).cast<float>());
+    size_t loose = 0;
+    while (loose < d.particle.size() && d.rest_inverse[loose].isZero()) ++loose;
+    ASSERT_LT(loose, d.particle.size());
+    const int32_t p = d.particle[loose];
+    std::vector<Vec3> own_x;
+    for (const Vec3f& P : frame.P) own_x.push_back(P.cast<double>());
+    own_x[p] += Vec3(10 * kH, 0, 0);
+    std::vector<Vec3> x = own_x;
+    std::vector<Mat3> A(slab.topo.n_particles, Mat3::Identity());
+    smooth_wall_motion(slab.topo, d, frame, 0, x, A);
+    const double lead = (x[p] - own_x[p]).norm() + (A[p] - Mat3::Identity()).norm() * d.core_reach;
+    EXPECT_NEAR(lead, d.max_lead, 1e-9);
+    EXPECT_LT((x[p] - own_x[p]).normalized().x(), -0.999);  // back towards the fit
+    for (size_t i = 0; i < d.particle.size(); ++i) {
+        const int32_t q = d.particle[i];
+        if (q == p || d.rest_inverse[i].isZero()) continue;
+        EXPECT_LT((x[q] - M * slab.topo.X[q]).norm(), 1e-5) << "particle " << q;
+        EXPECT_LT((A[q] - M).norm(), 1e-4) << "particle " << q;
     }
 }
 
