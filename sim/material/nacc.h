@@ -18,6 +18,7 @@
 #include "sim/material/material_math.h"
 #include "sim/material/neo_hookean.h"
 #include "sim/material/svd3.h"
+#include "sim/material/symmetric_eigenvalues.h"
 #include "sim/model.h"
 
 namespace mudcrack {
@@ -123,41 +124,47 @@ inline Real nacc_safe_J(Real J) {
                     std::numeric_limits<Real>::max());
 }
 
-/// Result of a return mapping in principal space.
-struct NaccPrincipalReturn {
-    Vec3 sigma;      // singular values of the returned Fe (same U, V as the trial)
-    Real alpha;      // updated hardening state (ziran's logJp)
-    int yield_case;  // NaccYieldCase
+/// A return mapping as it acts on the trial's left Cauchy-Green tensor b = Fe Fe^T: the returned
+/// b is c0 I + s b, on the same principal axes (docs/physics.md §2.2). Every case is of that
+/// form: inside c0 = 0, s = 1; at a tip c0 = J_new^(2/3), s = 0 (all deviatoric strain removed);
+/// projected (3b) c0 = (1 - s) tr(b) / 3 with s = ||s_new|| / ||s_trial|| in [0, 1) (the
+/// deviator scaled radially at fixed tr b). So the map needs only the trial's rotation
+/// invariants, and the returned Fe follows from either the trial's SVD (nacc_return_principal)
+/// or a matrix function of b (nacc_project), without one.
+struct NaccBMap {
+    Real c0 = 0;                   // isotropic part of the returned b
+    Real s = 1;                    // factor on the trial b
+    Real alpha = 0;                // updated hardening state (ziran's logJp)
+    int yield_case = kNaccInside;  // NaccYieldCase
 };
 
-/// Return mapping on the trial singular values (docs/physics.md §2.2). beta = beta0 (1-s) + beta1 s
-/// comes from the caller; nacc.beta0/beta1 are not read here. With preserve_volume the case-3b
-/// result keeps det Fe_new = |J_trial| exactly, so it satisfies y = 0 exactly (see
-/// volume_preserving_sigma; off by default, as in the reference code). `strength` multiplies p0:
-/// the particle's share of a heterogeneous soil (sim/material/strength_field.h), 1 for uniform.
-inline NaccPrincipalReturn nacc_return_principal(const Vec3& sigma, Real alpha, Real beta,
-                                                 const NaccParams& nacc, const LameParams& lame,
-                                                 bool preserve_volume = false, Real strength = 1) {
+/// The return mapping's NaccBMap from the trial's J = det Fe (|J| is used: an inverted trial
+/// returns as its mirror image), mean_b = tr(b) / 3 and dev_b_norm = ||b - mean_b I||.
+/// beta = beta0 (1 - s) + beta1 s comes from the caller; nacc.beta0/beta1 are not read here.
+/// `strength` multiplies p0: the particle's share of a heterogeneous soil
+/// (sim/material/strength_field.h), 1 for uniform.
+inline NaccBMap nacc_b_map(Real J_trial, Real mean_b, Real dev_b_norm, Real alpha, Real beta,
+                           const NaccParams& nacc, const LameParams& lame, Real strength = 1) {
     constexpr Real kMax = std::numeric_limits<Real>::max();
     const Real kappa = lame.kappa, mu = lame.mu, M = nacc.M;
     const Real p0 = strength * nacc_p0(alpha, nacc.xi, kappa);
-    const Real J = nacc_safe_J(sigma(0) * sigma(1) * sigma(2));
+    const Real J = nacc_safe_J(J_trial);
     const Real p = -kappa / 2 * (J * J - 1);  // -inf for J^2 overflow: the tension tip
-    // trial deviatoric Kirchhoff stress s_hat = mu J^(-2/3) dev(b_hat), b_hat = sigma^2
-    const Vec3 b = sigma.cwiseProduct(sigma);
-    const Real mean_b = (b(0) + b(1) + b(2)) / 3;
-    const Vec3 dev_b = b.array() - mean_b;
-    const Real dev_b_norm = dev_b.norm();
+    // trial deviatoric Kirchhoff stress s_hat = mu J^(-2/3) dev(b_hat)
     const Real s_norm = mu * inv_cube_root_squared(J) * dev_b_norm;
 
-    NaccPrincipalReturn out{sigma, alpha, nacc_yield_case(p, s_norm, p0, beta, M, kappa)};
+    NaccBMap out;
+    out.alpha = alpha;
+    out.yield_case = nacc_yield_case(p, s_norm, p0, beta, M, kappa);
     if (out.yield_case == kNaccInside) return out;  // case 3a
     // Cases 1 and 2: project to a tip of the ellipse, all deviatoric strain removed.
     if (out.yield_case != kNaccProjected) {
         const bool compression = out.yield_case == kNaccCompressionTip;
         // p <= kappa/2 always, so p > p0 implies p0 < kappa/2 and the root is real
         const Real J_new = std::sqrt(compression ? 1 - 2 * p0 / kappa : 1 + 2 * beta * p0 / kappa);
-        out.sigma.setConstant(cube_root(J_new));
+        const Real J_new_third = cube_root(J_new);
+        out.c0 = J_new_third * J_new_third;
+        out.s = 0;
         if (nacc.hardening) out.alpha += std::log(J / J_new);
         return out;
     }
@@ -167,14 +174,8 @@ inline NaccPrincipalReturn nacc_return_principal(const Vec3& sigma, Real alpha, 
     // Case 3b: scale s radially onto the ellipse at fixed p and tr(b_hat).
     const Real s_norm_new = std::sqrt(std::max(-y_p / a, Real(0)));
     const Real J_two_thirds = cube_root(J) * cube_root(J);
-    const Real scale = dev_b_norm > 0 ? J_two_thirds / mu * s_norm_new / dev_b_norm : Real(0);
-    if (preserve_volume) {
-        out.sigma = volume_preserving_sigma(dev_b * (scale * inv_cube_root_squared(J)),
-                                            mean_b * inv_cube_root_squared(J), J);
-    } else {
-        for (int k = 0; k < 3; ++k)
-            out.sigma(k) = std::sqrt(std::max(mean_b + scale * dev_b(k), Real(0)));
-    }
+    out.s = dev_b_norm > 0 ? J_two_thirds / mu * s_norm_new / dev_b_norm : Real(0);
+    out.c0 = (1 - out.s) * mean_b;
 
     // "Fake p" hardening: intersect the ray from the ellipse centre through the trial point
     // with y = 0 and harden by the elastic J that root's pressure would need.
@@ -198,6 +199,38 @@ inline NaccPrincipalReturn nacc_return_principal(const Vec3& sigma, Real alpha, 
         const Real p_fake = (p - p_c) * (p1 - p_c) > 0 ? p1 : p2;
         const Real J_fake = std::sqrt(std::abs(1 - 2 * p_fake / kappa));
         if (J_fake > kNaccMinFakeJ) out.alpha += std::log(J / J_fake);
+    }
+    return out;
+}
+
+/// Result of a return mapping in principal space.
+struct NaccPrincipalReturn {
+    Vec3 sigma;      // singular values of the returned Fe (same U, V as the trial)
+    Real alpha;      // updated hardening state (ziran's logJp)
+    int yield_case;  // NaccYieldCase
+};
+
+/// Return mapping on the trial singular values (docs/physics.md §2.2): nacc_b_map on them, then
+/// sigma_new = sqrt(c0 + s sigma^2). With preserve_volume the case-3b result keeps det Fe_new =
+/// |J_trial| exactly, so it satisfies y = 0 exactly (see volume_preserving_sigma; off by
+/// default, as in the reference code). See nacc_b_map for beta and strength.
+inline NaccPrincipalReturn nacc_return_principal(const Vec3& sigma, Real alpha, Real beta,
+                                                 const NaccParams& nacc, const LameParams& lame,
+                                                 bool preserve_volume = false, Real strength = 1) {
+    const Vec3 b = sigma.cwiseProduct(sigma);
+    const Real mean_b = (b(0) + b(1) + b(2)) / 3;
+    const Vec3 dev_b = b.array() - mean_b;
+    const NaccBMap map = nacc_b_map(sigma(0) * sigma(1) * sigma(2), mean_b, dev_b.norm(), alpha,
+                                    beta, nacc, lame, strength);
+    NaccPrincipalReturn out{sigma, map.alpha, map.yield_case};
+    if (map.yield_case == kNaccInside) return out;  // case 3a: sigma unchanged, bit for bit
+    if (preserve_volume && map.yield_case == kNaccProjected) {
+        const Real J = nacc_safe_J(sigma(0) * sigma(1) * sigma(2));
+        out.sigma = volume_preserving_sigma(dev_b * (map.s * inv_cube_root_squared(J)),
+                                            mean_b * inv_cube_root_squared(J), J);
+    } else {
+        for (int k = 0; k < 3; ++k)
+            out.sigma(k) = std::sqrt(std::max(fused_madd(map.s, b(k), map.c0), Real(0)));
     }
     return out;
 }
@@ -241,26 +274,87 @@ struct NaccProjection {
     int yield_case;  // NaccYieldCase
 };
 
-/// The same return mapping as nacc_return_map, for callers that take the stress from Fe
-/// directly (neo_hookean_kirchhoff(Fe, ...)) and so need no SVD of the result: the case is first
-/// decided from the rotation invariants det Fe and ||dev(Fe Fe^T)|| (equal to prod sigma and
-/// ||dev(sigma^2)||), and the SVD is computed only for states that leave the yield surface.
-/// Inside states (the common case) cost no SVD and come back bitwise unchanged. Up to round-off
-/// in states within ~1e-15 of the yield surface, the result equals nacc_return_map's.
+/// nacc_project falls back to the SVD when b's smallest eigenvalue is below this fraction of its
+/// largest (singular values 1e3 apart): g(b) divides by the eigenvalues, and so loses accuracy
+/// as cond(b) grows. No soil state comes near it; the stability matrix's extreme cases do.
+constexpr Real kBMapMinEigenvalueRatio = 1e-6;
+/// ... or when its eigenvalues leave [this, 1 / this], where the products of up to six of them
+/// and the h's that g(b) is made of could overflow or underflow (J of 1e-30 or 1e30).
+constexpr Real kBMapMinEigenvalue = 1e-20;
+
+/// The Fe with the NaccBMap's b (c0 I + s b) and Fe's rotation: Fe_new = g(b) Fe with the matrix
+/// function g(lambda) = sqrt(c0 / lambda + s) of b = Fe Fe^T (docs/physics.md §2.2: b's principal
+/// axes are Fe's left singular vectors, and g(b) b^(1/2) = (c0 I + s b)^(1/2)). g(b) is the
+/// quadratic in b that interpolates g at b's eigenvalues (Newton form), with divided differences
+/// taken in closed form, so (nearly) repeated eigenvalues lose nothing to cancellation:
+///   g[l1, l2] = -c0 / (l1 l2 (h1 + h2)),
+///   g[l1, l2, l3] = c0 (h2 + (c0 + s (l1 + l3)) / (k1 + k3)) / (l1 l2 l3 (h1 + h2)(h2 + h3)),
+/// h_i = g(l_i), k_i = l_i h_i. An eigenvalue off by d (a nearly double one, from the cubic)
+/// moves g(b) by O(d^2). False, and Fe_new untouched, when b is singular, ill-conditioned or
+/// extreme (kBMapMinEigenvalueRatio, kBMapMinEigenvalue) or not finite: the caller then takes
+/// the SVD.
+inline bool apply_nacc_b_map(const NaccBMap& map, const SymMat3& b, const Mat3& Fe, Mat3& Fe_new) {
+    const CharacteristicRoots roots = characteristic_roots(b);
+    const Real l1 = roots.isolated, l2 = roots.middle(), l3 = roots.other;
+    const Real l_min = std::min(l1, std::min(l2, l3)), l_max = std::max(l1, std::max(l2, l3));
+    if (!(l_min > kBMapMinEigenvalueRatio * l_max) || !(l_min > kBMapMinEigenvalue) ||
+        !(l_max < 1 / kBMapMinEigenvalue))
+        return false;
+    const Real c0 = map.c0, s = map.s;
+    // two divisions, not eight: they sit on the particle's dependency chain
+    const Real l12 = l1 * l2, l123 = l12 * l3;
+    const Real c0_over_l123 = c0 / l123;
+    const Real h1 = std::sqrt(fused_madd(c0_over_l123, l2 * l3, s)),
+               h2 = std::sqrt(fused_madd(c0_over_l123, l1 * l3, s)),
+               h3 = std::sqrt(fused_madd(c0_over_l123, l12, s));
+    if (roots.scalar) {
+        Fe_new = h1 * Fe;
+        return true;
+    }
+    // d12 = -c0 / (l1 l2 h12), d123 = c0 (h2 k13 + c0 + s (l1 + l3)) / (l1 l2 l3 h12 h23 k13)
+    const Real h12 = h1 + h2, h23 = h2 + h3, k13 = l1 * h1 + l3 * h3;
+    const Real c0_over_denominator = c0 / (l123 * h12 * h23 * k13);
+    const Real d12 = -c0_over_denominator * (l3 * h23 * k13);
+    const Real d123 = c0_over_denominator * (fused_madd(h2, k13, c0) + s * (l1 + l3));
+    // g(b) = h1 I + d12 (b - l1 I) + d123 (b - l1 I)(b - l2 I)
+    Mat3 b1 = b.matrix(), b2 = b1;
+    b1.diagonal().array() -= l1;
+    b2.diagonal().array() -= l2;
+    Mat3 g = d123 * (b1 * b2) + d12 * b1;
+    g.diagonal().array() += h1;
+    Fe_new = g * Fe;
+    return true;
+}
+
+/// The return mapping of nacc_return_map for callers that take the stress from Fe directly
+/// (neo_hookean_kirchhoff(Fe, ...)), from Fe's Neo-Hookean terms (J and b, which the caller
+/// usually has for the stress or an inside test already) and without an SVD: the case and the
+/// hardening from nacc_b_map on the rotation invariants, the returned Fe from apply_nacc_b_map.
+/// Inside states come back bitwise unchanged. The result equals nacc_return_map's to round-off
+/// (a few 1e-16 of ||Fe||). An inverted or ill-conditioned trial (det Fe <= 0, or see
+/// kBMapMinEigenvalueRatio) takes nacc_return_map's SVD, so extreme states return as they did.
+inline NaccProjection nacc_project(const Mat3& Fe_trial, const NeoHookeanTerms& trial, Real alpha,
+                                   Real beta, const NaccParams& nacc, const LameParams& lame,
+                                   Real strength = 1) {
+    const SymMat3& b = trial.b;
+    const Real dxx = b.xx - trial.mean_b, dyy = b.yy - trial.mean_b, dzz = b.zz - trial.mean_b;
+    const Real dev_b_norm = std::sqrt(dxx * dxx + dyy * dyy + dzz * dzz +
+                                      2 * (b.xy * b.xy + b.xz * b.xz + b.yz * b.yz));
+    const NaccBMap map =
+        nacc_b_map(trial.J, trial.mean_b, dev_b_norm, alpha, beta, nacc, lame, strength);
+    NaccProjection out{Fe_trial, map.alpha, map.yield_case};
+    if (map.yield_case == kNaccInside) return out;
+    if (trial.J > 0 && apply_nacc_b_map(map, b, Fe_trial, out.Fe)) return out;
+    const NaccReturn r = nacc_return_map(Fe_trial, alpha, beta, nacc, lame, false, strength);
+    return {r.Fe, r.alpha, r.yield_case};
+}
+
+/// nacc_project of Fe_trial alone (its terms computed here).
 inline NaccProjection nacc_project(const Mat3& Fe_trial, Real alpha, Real beta,
                                    const NaccParams& nacc, const LameParams& lame,
-                                   bool preserve_volume = false) {
-    const Real J = nacc_safe_J(Fe_trial.determinant());
-    Mat3 dev_b = Fe_trial * Fe_trial.transpose();
-    dev_b.diagonal().array() -= dev_b.trace() / 3;
-    const Real s_norm = lame.mu * inv_cube_root_squared(J) * dev_b.norm();
-    const Real p = -lame.kappa / 2 * (J * J - 1);
-    const Real p0 = nacc_p0(alpha, nacc.xi, lame.kappa);
-    if (nacc_yield_case(p, s_norm, p0, beta, nacc.M, lame.kappa) == kNaccInside) {
-        return {Fe_trial, alpha, kNaccInside};
-    }
-    const NaccReturn r = nacc_return_map(Fe_trial, alpha, beta, nacc, lame, preserve_volume);
-    return {r.Fe, r.alpha, r.yield_case};
+                                   Real strength = 1) {
+    return nacc_project(Fe_trial, neo_hookean_terms(Fe_trial, lame), alpha, beta, nacc, lame,
+                        strength);
 }
 
 }  // namespace mudcrack

@@ -8,6 +8,7 @@
 #include <Eigen/Geometry>
 
 #include "sim/core/types.h"
+#include "sim/material/symmetric_eigenvalues.h"
 
 namespace mudcrack {
 namespace svd3_detail {
@@ -64,39 +65,11 @@ inline Vec3 eigenvector_of_simple_eigenvalue(const Mat3& S, Real lambda) {
 /// is nearly repeated the basis may be mixed within the near-degenerate plane; svd3's one-sided
 /// polish repairs exactly that.
 inline Mat3 eigenbasis(const Mat3& S) {
-    const Real m = S.trace() / 3;
-    const Real k00 = S(0, 0) - m, k11 = S(1, 1) - m, k22 = S(2, 2) - m;
-    const Real s01 = S(0, 1), s02 = S(0, 2), s12 = S(1, 2);
-    const Real p2 =
-        (k00 * k00 + k11 * k11 + k22 * k22 + 2 * (s01 * s01 + s02 * s02 + s12 * s12)) / 6;
+    const CharacteristicRoots roots = characteristic_roots(S);
     // S = m I to round-off: every basis is an eigenbasis
-    if (!(p2 > Real(1e-34) * m * m)) return Mat3::Identity();
-    const Real p = std::sqrt(p2);
-    const Real det_k = k00 * (k11 * k22 - s12 * s12) - s01 * (s01 * k22 - s12 * s02) +
-                       s02 * (s01 * s12 - k11 * s02);
-    // The eigenvalues are m + p x with x the roots of x^3 - 3x - 2r = 0, r = det(K/p)/2 in
-    // [-1, 1] (x = 2 cos(acos(r)/3 + 2 pi k/3)). The root at the end of [-2, 2] on r's side is
-    // the best-separated eigenvalue (r >= 0: the largest); by symmetry it is sign(r) times the
-    // largest root of x^3 - 3x - 2|r|, which lies in [sqrt 3, 2] where the cubic's slope is
-    // >= 6. Two Halley steps from a quadratic fit (error < 1.1e-3) reach round-off (checked
-    // over |r| in [0, 1]); no acos/cos calls.
-    const Real r = std::min(std::max(det_k / (2 * p2 * p), Real(-1)), Real(1));
-    const Real r_abs = std::abs(r);
-    Real x = Real(1.7320508075688772) + r_abs * (Real(0.3213884) - Real(0.0534392) * r_abs);
-    for (int it = 0; it < 2; ++it) {
-        const Real f = x * x * x - 3 * x - 2 * r_abs;
-        const Real df = 3 * x * x - 3;
-        x -= 2 * f * df / (2 * df * df - f * 6 * x);
-    }
-    const bool isolated_is_largest = r >= 0;
-    const Real x_isolated = isolated_is_largest ? x : -x;
-    // the other extreme root, from the deflated quadratic x'^2 + x x' + x^2 - 3 = 0 (inaccurate
-    // only when it is nearly double, which svd3's polish repairs)
-    const Real x_other =
-        -x_isolated / 2 -
-        std::copysign(std::sqrt(std::max(12 - 3 * x * x, Real(0))), x_isolated) / 2;
-    const Real isolated = m + p * x_isolated;
-    const Real other = m + p * x_other;
+    if (roots.scalar) return Mat3::Identity();
+    const bool isolated_is_largest = roots.isolated_is_largest;
+    const Real isolated = roots.isolated, other = roots.other;
     const Vec3 v = eigenvector_of_simple_eigenvalue(S, isolated);
 
     // second vector: eigenvector of the other extreme eigenvalue, made orthogonal to v (any

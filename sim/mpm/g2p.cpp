@@ -215,8 +215,8 @@ G2PResult g2p_impl(const SimModel& model, SimState& state, const SparseGrid& gri
                     // and Fe_trial is what the return map returns (case 3a)
                     state.alpha[p] = alpha;
                 } else {
-                    const NaccReturn r =
-                        nacc_return_map(Fe_trial, alpha, beta, nacc, lame, false, strength);
+                    const NaccProjection r =
+                        nacc_project(Fe_trial, trial_terms, alpha, beta, nacc, lame, strength);
                     if (has_damage)
                         state.damage[p] = damage_after_return(state.damage[p], alpha, r.alpha,
                                                               nacc.damage_strain);
