@@ -364,7 +364,7 @@ TEST(ShotFracture, RecordsEachCutEdgeTheFrameBeforeItsCut) {
     const SurfaceParams params = plates_params();
     auto frame_at = [&](int n) { return tear.at(n, 0.01 * n); };
     const ShotFracture fracture = plan_fracture(tear.slab, tear.last, params, frame_at);
-    EXPECT_EQ(easing_frames(params), 10);  // 2 spacings at 0.2 a frame
+    EXPECT_EQ(easing_frames(params), 20);  // 4 spacings at 0.2 a frame
     EXPECT_EQ(frames_before_cuts(fracture, 1, 1, tear.last, 10), (std::vector<int>{1, 4}));
     // frame 6 alone: the cut at 2 has eased in by then, the one at 5 has not
     EXPECT_EQ(frames_before_cuts(fracture, 1, 6, 6, 3), (std::vector<int>{4}));
