@@ -109,7 +109,8 @@ void BM_NaccReturnMap(benchmark::State& state) {
 }
 BENCHMARK(BM_NaccReturnMap)->Arg(0)->Arg(1);
 
-/// nacc_project: the same mapping without the result's SVD; inside states skip the SVD.
+/// nacc_project: the same mapping without an SVD (the matrix function of b; the SVD only for
+/// inverted or extreme states); inside states return after the invariants.
 void BM_NaccProject(benchmark::State& state) {
     const bool outside = state.range(0) != 0;
     const std::vector<Mat3> F = deformations(outside ? 0.3 : 0.002, 4);
