@@ -399,7 +399,9 @@ StepStats step(const SimModel& model, SimState& state, Real dt) {
     ws.tau_step = -1;
 
     // 1. bin particles into grid blocks (and every few steps reorder their arrays)
+    WallTimer phase;
     bin_and_sort(state, ws, false, tau_is_current);
+    stats.seconds.bin = phase.seconds();
 
     // which parts of the moisture model run this step
     const bool has_pores = model.moisture && model.moisture->eta > 0;
@@ -407,6 +409,7 @@ StepStats step(const SimModel& model, SimState& state, Real dt) {
     const bool solve_moisture_now = has_pores && state.step_count % interval == 0;
 
     // 1. P2G (with the moisture fields on solve steps)
+    phase.reset();
     MoistureGrid* mg = nullptr;
     if (solve_moisture_now) {
         mg = &ws.moisture;
@@ -414,12 +417,16 @@ StepStats step(const SimModel& model, SimState& state, Real dt) {
     }
     if (!tau_is_current) mpm::kirchhoff_stresses(model, state, ws.tau);
     mpm::particle_to_grid(state, ws.tau.data(), ws.grid, mg, dt, ws.windows);
+    stats.seconds.p2g = phase.seconds();
 
     // 2. grid velocity update, colliders and walls
+    phase.reset();
     mpm::update_grid_velocity(model, ws.grid, dt);
+    stats.seconds.grid = phase.seconds();
 
     // 3. implicit moisture diffusion with evaporation, dt_m = k dt
     if (solve_moisture_now) {
+        phase.reset();
         MoistureSeal seal;
         seal.seal_colliders = model.moisture->seal_colliders;
         seal.has_ground = model.ground.has_value();
@@ -431,9 +438,11 @@ StepStats step(const SimModel& model, SimState& state, Real dt) {
                            state.moisture_flux, ws.windows);
         stats.cg_iterations = ms.iterations;
         stats.cg_residual = ms.residual;
+        stats.seconds.moisture = phase.seconds();
     }
 
     // 4-8. G2P, kinematics, pore update, return mapping, advection, finite-ness
+    phase.reset();
     mpm::MoistureUpdate moisture_update;
     if (mg) {
         moisture_update.dtheta = mg->x.data();
@@ -444,6 +453,7 @@ StepStats step(const SimModel& model, SimState& state, Real dt) {
     }
     const mpm::G2PResult g2p = mpm::grid_to_particle(model, state, ws.grid, moisture_update,
                                                      has_pores, dt, ws.windows, ws.tau.data());
+    stats.seconds.g2p = phase.seconds();
     state.time += dt;
     state.step_count = substep;
     if (g2p.bad_slot >= 0) {

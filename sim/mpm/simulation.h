@@ -73,7 +73,29 @@ struct SimState {
 };
 
 /// Counters of one step, for progress lines and the manifest.
+/// Where a step's wall time went, phase by phase [s]: each phase from its first parallel loop's
+/// start to its last one's end on the calling thread, so on several threads it includes the wait
+/// for the slowest worker (what a phase's scaling is judged by). For the benchmarks' per-phase
+/// table; the results of a step do not depend on it.
+struct StepPhaseSeconds {
+    double bin = 0;       // binning, and every few steps the arrays' reorder by block
+    double p2g = 0;       // the stresses (when not cached) and the scatter, moisture's fields too
+    double grid = 0;      // grid velocities, colliders and walls
+    double moisture = 0;  // the moisture solve (0 on steps that do not solve it)
+    double g2p = 0;       // gather, kinematics, pores, return map, advection, checks
+    double total() const { return bin + p2g + grid + moisture + g2p; }
+    StepPhaseSeconds& operator+=(const StepPhaseSeconds& o) {
+        bin += o.bin;
+        p2g += o.p2g;
+        grid += o.grid;
+        moisture += o.moisture;
+        g2p += o.g2p;
+        return *this;
+    }
+};
+
 struct StepStats {
+    StepPhaseSeconds seconds;     // wall time by phase
     int cg_iterations = 0;        // moisture CG iterations (0 without moisture)
     double cg_residual = 0;       // final relative residual
     int64_t active_nodes = 0;     // grid nodes with mass

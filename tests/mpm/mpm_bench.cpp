@@ -1,7 +1,10 @@
 // The issue-3 reference scene: a 0.49 m cube of 125,000 NACC particles (2x2x2 per cell, h = 0.02)
 // falling at 2 m/s onto a sticky ground, dt = 2e-4 fixed, with and without moisture, on 1 and 2
-// threads, stepped as mc-sim steps (through sim/mpm/step_retry.h). Reports particle-steps/s and
-// bytes per particle of simulation state (grid and the rollback copy included).
+// threads, stepped as mc-sim steps (through sim/mpm/step_retry.h). Reports particle-steps/s,
+// bytes per particle of simulation state (grid and the rollback copy included), and the wall ns
+// per particle-step of each phase of the step (ns_bin ... ns_g2p, StepPhaseSeconds) and of the
+// loop's rest (ns_rest): the per-phase table, whose 1- and 2-thread columns show which phase
+// does not scale.
 //
 //   build/bin/mpm_bench                        # 404 steps per run, 3 runs each, medians
 //   MUDCRACK_BENCH_STEPS=100 build/bin/mpm_bench --benchmark_filter=NoMoisture/1
@@ -90,12 +93,14 @@ void BM_ReferenceScene(benchmark::State& bs, int moisture_interval) {
     reference_particles(X, V0);
     const int steps = bench_steps();
     int64_t particle_steps = 0;
-    double bytes_per_particle = 0, cg_iterations = 0, cpu_seconds = 0;
+    double bytes_per_particle = 0, cg_iterations = 0, cpu_seconds = 0, loop_seconds = 0;
+    StepPhaseSeconds phases;  // of the accepted steps
     for (auto _ : bs) {
         bs.PauseTiming();
         SimState state = make_initial_state(model, X, V0);
         bs.ResumeTiming();
         const double cpu0 = process_cpu_seconds();
+        const WallTimer loop;
         // mc-sim's step loop: through the rollback and retry of failed substeps
         RetryingStepper stepper;
         stepper.restart(state);
@@ -105,8 +110,10 @@ void BM_ReferenceScene(benchmark::State& bs, int moisture_interval) {
                 stepper.attempt(model, state, stable_dt(model, state) * stepper.dt_scale());
             if (!a.is_accepted) continue;
             cg += a.stats.cg_iterations;
+            phases += a.stats.seconds;
             ++i;
         }
+        loop_seconds += loop.seconds();
         cpu_seconds += process_cpu_seconds() - cpu0;
         particle_steps += static_cast<int64_t>(state.size()) * steps;
         bytes_per_particle =
@@ -119,6 +126,17 @@ void BM_ReferenceScene(benchmark::State& bs, int moisture_interval) {
     bs.counters["bytes_per_particle"] = bytes_per_particle;
     bs.counters["cg_iters_per_step"] = cg_iterations;
     bs.counters["peak_rss_MB"] = static_cast<double>(peak_rss_bytes()) / (1 << 20);
+    // the per-phase table: wall ns per particle-step of each phase of step(), and the rest of the
+    // loop (the stable dt's reduction, the rollback copies, failed attempts)
+    const auto ns = [&](double seconds) {
+        return 1e9 * seconds / static_cast<double>(particle_steps);
+    };
+    bs.counters["ns_bin"] = ns(phases.bin);
+    bs.counters["ns_p2g"] = ns(phases.p2g);
+    bs.counters["ns_grid"] = ns(phases.grid);
+    bs.counters["ns_moisture"] = ns(phases.moisture);
+    bs.counters["ns_g2p"] = ns(phases.g2p);
+    bs.counters["ns_rest"] = ns(loop_seconds - phases.total());
 }
 
 // the rollback point of sim/mpm/step_retry.h: a copy of the reference state (moisture arrays
