@@ -72,7 +72,6 @@ struct SimState {
     }
 };
 
-/// Counters of one step, for progress lines and the manifest.
 /// Where a step's wall time went, phase by phase [s]: each phase from its first parallel loop's
 /// start to its last one's end on the calling thread, so on several threads it includes the wait
 /// for the slowest worker (what a phase's scaling is judged by). For the benchmarks' per-phase
@@ -94,6 +93,7 @@ struct StepPhaseSeconds {
     }
 };
 
+/// Counters of one step, for progress lines and the manifest.
 struct StepStats {
     StepPhaseSeconds seconds;     // wall time by phase
     int cg_iterations = 0;        // moisture CG iterations (0 without moisture)
