@@ -96,6 +96,9 @@ struct TimeParams {
     int frame_end = 24;       // last frame, inclusive
 };
 
+/// The precision of a state's directional arrays (/sim/precision).
+enum class StatePrecision { Double, Float };
+
 struct SimModel {
     Real h = 0.05;                         // grid spacing [m]
     Vec3 gravity = Vec3(0, -9.81, 0);      // [m/s^2]
@@ -114,6 +117,9 @@ struct SimModel {
     // (0: a grid along the world's axes; sim/mpm/simulation.cpp, docs/physics.md §6.5). Needs an
     // auto domain and a vertical gravity (the shot loader refuses the others).
     int grid_turn_interval = 0;
+    // what the state keeps its directional arrays (x, v, C, Fe) in between steps: SimState or
+    // SimStateFloat (sim/mpm/simulation.h); the step computes in double either way
+    StatePrecision precision = StatePrecision::Double;
     CacheAttributes cache;
 };
 

@@ -379,6 +379,8 @@ SimModel build_sim(json& tree, Issues& issues) {
                            {"checkpoint_every", &SimModel::checkpoint_every},
                            {"grid_shift", &SimModel::grid_shift_interval},
                            {"grid_turn", &SimModel::grid_turn_interval}});
+    model.precision =
+        text(tree, "/sim/precision") == "float" ? StatePrecision::Float : StatePrecision::Double;
     model.initial_velocity = vec3(tree, "/source/initial_velocity");
     read_fields<ElasticParams>(tree, "/material", model.elastic,
                                {{"density", &ElasticParams::density},

@@ -196,6 +196,10 @@ std::vector<KeySpec> build_fixed_table() {
         .doc("every k steps the grid turns to a new random angle about the vertical, so no crack follows "
              "its axes; needs an auto domain and a vertical gravity; 0 = a grid along the world's axes "
              "(docs/physics.md §6.5)"),
+    Key("/sim/precision", T::Enum).def("double").choices({"double", "float"}).units("")
+        .doc("what the particles' positions, velocities, affine velocities and Fe are kept in between steps: "
+             "float halves those arrays (a third less memory per particle); the step computes in double "
+             "either way, and the scalars stay double (docs/physics.md §7.1)"),
     Key("/sim/checkpoint_every", T::Integer).def(10).ge(0).units("frames").doc("frames between full-precision checkpoints; 0 = off"),
 
     // --- frames

@@ -103,7 +103,9 @@ int bits_for(uint64_t count) {
 
 }  // namespace
 
-void bin_particles(SparseGrid& grid, const std::vector<Vec3>& x, const std::vector<int32_t>& id) {
+template <class StateReal>
+void bin_particles(SparseGrid& grid, const std::vector<Eigen::Matrix<StateReal, 3, 1>>& x,
+                   const std::vector<int32_t>& id) {
     const GridGeometry& geo = grid.geo;
     const int64_t n = static_cast<int64_t>(x.size());
 
@@ -111,7 +113,7 @@ void bin_particles(SparseGrid& grid, const std::vector<Vec3>& x, const std::vect
     grid.particle_key.resize(n);
     grid.order.resize(n);
     parallel_for(n, [&](int64_t p) {
-        const Vec3 xg = geo.to_grid(x[p]);
+        const Vec3 xg = geo.to_grid(x[p].template cast<Real>());
         int b[3];
         for (int d = 0; d < 3; ++d) b[d] = static_cast<int>(std::floor(xg[d] - Real(0.5))) >> 2;
         grid.particle_key[p] = geo.block_key(b[0], b[1], b[2]);
@@ -205,5 +207,10 @@ void bin_particles(SparseGrid& grid, const std::vector<Vec3>& x, const std::vect
         std::fill(grid.nodes.begin() + b, grid.nodes.begin() + e, Real(0));
     });
 }
+
+template void bin_particles(SparseGrid&, const std::vector<Eigen::Matrix<double, 3, 1>>&,
+                            const std::vector<int32_t>&);
+template void bin_particles(SparseGrid&, const std::vector<Eigen::Matrix<float, 3, 1>>&,
+                            const std::vector<int32_t>&);
 
 }  // namespace mudcrack::mpm

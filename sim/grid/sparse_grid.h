@@ -100,7 +100,10 @@ struct SparseGrid {
 /// sort of the slots), builds the particle-block lists and colours, allocates the blocks the
 /// stencils touch, and zeroes the node fields. Positions must lie in [h, (cells-1) h] from the
 /// origin (the step clamps them there). Ids must be distinct and in [0, n).
-void bin_particles(SparseGrid& grid, const std::vector<Vec3>& x, const std::vector<int32_t>& id);
+/// Positions in either precision a state keeps them in (SimStateOf).
+template <class StateReal>
+void bin_particles(SparseGrid& grid, const std::vector<Eigen::Matrix<StateReal, 3, 1>>& x,
+                   const std::vector<int32_t>& id);
 
 /// Runs fn(thread, pblock) over all particle blocks, colour by colour; blocks of one colour run
 /// in parallel. Use for scatters (window flushes must not race).

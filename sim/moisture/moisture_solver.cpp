@@ -153,8 +153,10 @@ constexpr Real kExposedVolumeFraction = 0.75;
 // particles per cell the last massive node lies 1.25 h above the top layer, outside its cell)
 // and scatters their evaporation: r into mg.evaporation (zeroed), and lambda S w^2 into mg.diag
 // when the Robin term is implicit. Particle blocks whose window holds no surface node are skipped.
-void evaporation_pass(const MoistureParams& mp, const SparseGrid& grid, const MoistureParticles& pp,
-                      MoistureGrid& mg, std::vector<std::vector<Real>>& windows) {
+template <class S>
+void evaporation_pass(const MoistureParams& mp, const SparseGrid& grid,
+                      const MoistureParticlesOf<S>& pp, MoistureGrid& mg,
+                      std::vector<std::vector<Real>>& windows) {
     const mpm::GridGeometry& geo = grid.geo;
     const bool implicit_robin = mp.implicit_robin;
     const bool surface_layer = mp.evaporation == MoistureParams::Evaporation::Surface;
@@ -199,7 +201,7 @@ void evaporation_pass(const MoistureParams& mp, const SparseGrid& grid, const Mo
         for (int32_t i = grid.pblock_begin[pb]; i < grid.pblock_begin[pb + 1]; ++i) {
             const int32_t p = grid.order[i];
             // the stencil base first: the weights are needed only on boundary particles
-            const Vec3 xg = geo.to_grid(pp.x[p]);
+            const Vec3 xg = geo.to_grid(pp.x[p].template cast<Real>());
             int o[3];
             for (int d = 0; d < 3; ++d)
                 o[d] = static_cast<int>(std::floor(xg[d] - Real(0.5))) - origin[d];
@@ -269,9 +271,9 @@ constexpr int kOperatorBatch = 32;
 // @note Longer than a page on purpose: it is the CG's hot loop, one call per iteration (measured
 // by mpm_bench's Moisture cases and tools/bench_moisture_cost.sh), its batch's gathers and
 // scatters sharing the window and the row weights in one pass.
-template <bool kImplicitRobin>
-void operator_pass(const MoistureParams& mp, const SparseGrid& grid, const MoistureParticles& pp,
-                   const MoistureGrid& mg, const Real* x, Real* y,
+template <bool kImplicitRobin, class S>
+void operator_pass(const MoistureParams& mp, const SparseGrid& grid,
+                   const MoistureParticlesOf<S>& pp, const MoistureGrid& mg, const Real* x, Real* y,
                    std::vector<std::vector<Real>>& windows) {
     const int64_t n_nodes = node_count(grid);
     parallel_chunks(n_nodes, [&](int, int64_t b, int64_t e) { std::fill(y + b, y + e, Real(0)); });
@@ -295,7 +297,8 @@ void operator_pass(const MoistureParams& mp, const SparseGrid& grid, const Moist
             for (int k = 0; k < count; ++k) {
                 const int32_t p = grid.order[first + k];
                 OperatorParticle& op = batch[k];
-                const mpm::Stencil st = mpm::make_stencil(geo.to_grid(pp.x[p]));
+                const mpm::Stencil st =
+                    mpm::make_stencil(geo.to_grid(pp.x[p].template cast<Real>()));
                 const mpm::AxisWeights &ax = st.axis[0], &ay = st.axis[1], &az = st.axis[2];
                 op.offset = mpm::window_index(ax.base - origin.x(), ay.base - origin.y(),
                                               az.base - origin.z());
@@ -376,13 +379,14 @@ void operator_pass(const MoistureParams& mp, const SparseGrid& grid, const Moist
 }
 
 // y = L x (+ R x when the evaporation is implicit and on)
-void apply_stiffness(const MoistureParams& mp, const SparseGrid& grid, const MoistureParticles& pp,
-                     const MoistureGrid& mg, const Real* x, Real* y,
-                     std::vector<std::vector<Real>>& windows) {
+template <class S>
+void apply_stiffness(const MoistureParams& mp, const SparseGrid& grid,
+                     const MoistureParticlesOf<S>& pp, const MoistureGrid& mg, const Real* x,
+                     Real* y, std::vector<std::vector<Real>>& windows) {
     if (mp.implicit_robin && mp.lambda > 0)
-        operator_pass<true>(mp, grid, pp, mg, x, y, windows);
+        operator_pass<true, S>(mp, grid, pp, mg, x, y, windows);
     else
-        operator_pass<false>(mp, grid, pp, mg, x, y, windows);
+        operator_pass<false, S>(mp, grid, pp, mg, x, y, windows);
 }
 
 }  // namespace
@@ -413,8 +417,9 @@ namespace {
 // Jacobi-preconditioned conjugate gradients on (M + L [+ R]) x = b, from the x, r and p that
 // solve_moisture set up (mg.diag holds the inverse Jacobi diagonal); b2 = |b|^2, rz0 = r.p,
 // r2 = |r|^2 of that start
+template <class S>
 MoistureSolveStats conjugate_gradients(const MoistureParams& mp, const SparseGrid& grid,
-                                       const MoistureParticles& pp, Real dt, MoistureGrid& mg,
+                                       const MoistureParticlesOf<S>& pp, Real dt, MoistureGrid& mg,
                                        std::vector<std::vector<Real>>& windows, Real b2, Real rz0,
                                        Real r2) {
     const int64_t n_nodes = node_count(grid);
@@ -458,8 +463,9 @@ MoistureSolveStats conjugate_gradients(const MoistureParams& mp, const SparseGri
 
 }  // namespace
 
+template <class S>
 MoistureSolveStats solve_moisture(const MoistureParams& mp, const MoistureSeal& seal,
-                                  const SparseGrid& grid, const MoistureParticles& pp, Real dt,
+                                  const SparseGrid& grid, const MoistureParticlesOf<S>& pp, Real dt,
                                   MoistureGrid& mg, MoistureFluxHistory& history,
                                   std::vector<std::vector<Real>>& windows) {
     const mpm::GridGeometry& geo = grid.geo;
@@ -554,5 +560,14 @@ MoistureSolveStats solve_moisture(const MoistureParams& mp, const MoistureSeal& 
     record_moisture_flux(history, grid, mg.Ap.data(), dt);
     return stats;
 }
+
+template MoistureSolveStats solve_moisture(const MoistureParams&, const MoistureSeal&,
+                                           const SparseGrid&, const MoistureParticlesOf<double>&,
+                                           Real, MoistureGrid&, MoistureFluxHistory&,
+                                           std::vector<std::vector<Real>>&);
+template MoistureSolveStats solve_moisture(const MoistureParams&, const MoistureSeal&,
+                                           const SparseGrid&, const MoistureParticlesOf<float>&,
+                                           Real, MoistureGrid&, MoistureFluxHistory&,
+                                           std::vector<std::vector<Real>>&);
 
 }  // namespace mudcrack

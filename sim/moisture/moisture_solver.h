@@ -46,12 +46,14 @@ struct MoistureSeal {
 };
 
 /// The particles as the moisture solve reads them, in slot order.
-struct MoistureParticles {
-    const Vec3* x = nullptr;      // positions x^n [m]
-    const Real* V0 = nullptr;     // rest volumes [m^3]
-    const Real* J = nullptr;      // total volume ratio: V^n = V0 J
-    const Real* theta = nullptr;  // water content theta^n
+template <class StateReal>
+struct MoistureParticlesOf {
+    const Eigen::Matrix<StateReal, 3, 1>* x = nullptr;  // positions x^n [m]
+    const Real* V0 = nullptr;                           // rest volumes [m^3]
+    const Real* J = nullptr;                            // total volume ratio: V^n = V0 J
+    const Real* theta = nullptr;                        // water content theta^n
 };
+using MoistureParticles = MoistureParticlesOf<double>;
 
 struct MoistureSolveStats {
     int iterations = 0;  // CG iterations (operator applications after the initial residual)
@@ -69,9 +71,11 @@ void begin_moisture_p2g(MoistureGrid& mg, const mpm::SparseGrid& grid);
 /// flux is recorded there (flux_history.h).
 /// @param dt moisture time step [s] (k dt when solving every k MPM steps)
 /// @param windows per-thread scratch, at least 5 * 224 values each
+template <class StateReal>
 MoistureSolveStats solve_moisture(const MoistureParams& params, const MoistureSeal& seal,
-                                  const mpm::SparseGrid& grid, const MoistureParticles& particles,
-                                  Real dt, MoistureGrid& mg, MoistureFluxHistory& history,
+                                  const mpm::SparseGrid& grid,
+                                  const MoistureParticlesOf<StateReal>& particles, Real dt,
+                                  MoistureGrid& mg, MoistureFluxHistory& history,
                                   std::vector<std::vector<Real>>& windows);
 
 /// Equivalent-sphere cross-section S = pi R^2, R = (3 V / (4 pi))^(1/3) of a particle of

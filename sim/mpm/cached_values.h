@@ -12,28 +12,39 @@
 
 namespace mudcrack::cached_value {
 
-inline Vec3f v(const SimModel&, const SimState& s, size_t p) { return s.v[p].cast<float>(); }
+template <class S>
+inline Vec3f v(const SimModel&, const SimStateOf<S>& s, size_t p) {
+    return s.v[p].template cast<float>();
+}
 
-inline float theta(const SimModel&, const SimState& s, size_t p) {
+template <class S>
+inline float theta(const SimModel&, const SimStateOf<S>& s, size_t p) {
     return s.theta.empty() ? 0.f : static_cast<float>(s.theta[p]);
 }
 
-inline float saturation(const SimModel& model, const SimState& s, size_t p) {
+template <class S>
+inline float saturation(const SimModel& model, const SimStateOf<S>& s, size_t p) {
     const Real eta = model.moisture ? model.moisture->eta : 0;
     return s.theta.empty() ? 1.f : static_cast<float>(saturation_of(s.theta[p], eta));
 }
 
-inline float alpha(const SimModel&, const SimState& s, size_t p) {
+template <class S>
+inline float alpha(const SimModel&, const SimStateOf<S>& s, size_t p) {
     return s.alpha.empty() ? 0.f : static_cast<float>(s.alpha[p]);
 }
 
-inline float Jw(const SimModel&, const SimState& s, size_t p) {
+template <class S>
+inline float Jw(const SimModel&, const SimStateOf<S>& s, size_t p) {
     return s.theta.empty() ? 1.f : static_cast<float>(s.Jw[p]);
 }
 
-inline Mat3f Fe(const SimModel&, const SimState& s, size_t p) { return s.Fe[p].cast<float>(); }
+template <class S>
+inline Mat3f Fe(const SimModel&, const SimStateOf<S>& s, size_t p) {
+    return s.Fe[p].template cast<float>();
+}
 
-inline float damage(const SimModel&, const SimState& s, size_t p) {
+template <class S>
+inline float damage(const SimModel&, const SimStateOf<S>& s, size_t p) {
     return s.damage.empty() ? 0.f : static_cast<float>(s.damage[p]);
 }
 

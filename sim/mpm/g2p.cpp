@@ -1,6 +1,7 @@
 // G2P and the per-particle update of docs/physics.md §7 steps 4-8.
 #include <algorithm>
 #include <cmath>
+#include <type_traits>
 
 #include <immintrin.h>
 
@@ -111,8 +112,8 @@ inline void gather_velocity(const Real* win, int o0, int o1, int o2, const AxisW
 // share of mpm_bench's particle-steps/s), each particle's phases (gather, kinematics, pores,
 // plasticity, advection, checks) sharing locals in one pass; the kernels it calls are the
 // small, tested functions.
-template <bool kTheta, bool kPore, bool kNacc>
-G2PResult g2p_impl(const SimModel& model, SimState& state, const SparseGrid& grid,
+template <bool kTheta, bool kPore, bool kNacc, class S>
+G2PResult g2p_impl(const SimModel& model, SimStateOf<S>& state, const SparseGrid& grid,
                    const MoistureUpdate& moisture, Real dt, std::vector<std::vector<Real>>& windows,
                    SymMat3* tau) {
     const Real* dtheta = moisture.dtheta;
@@ -155,7 +156,7 @@ G2PResult g2p_impl(const SimModel& model, SimState& state, const SparseGrid& gri
         Real speed2 = max_speed2[t];
         for (int32_t i = grid.pblock_begin[pb]; i < grid.pblock_begin[pb + 1]; ++i) {
             const int32_t p = grid.order[i];
-            const Stencil st = make_stencil(geo.to_grid(state.x[p]));
+            const Stencil st = make_stencil(geo.to_grid(state.x[p].template cast<Real>()));
             const AxisWeights &ax = st.axis[0], &ay = st.axis[1], &az = st.axis[2];
             const int o0 = ax.base - origin.x(), o1 = ay.base - origin.y(),
                       o2 = az.base - origin.z();
@@ -171,7 +172,7 @@ G2PResult g2p_impl(const SimModel& model, SimState& state, const SparseGrid& gri
             // kinematics: Fe_trial = (I + dt C) Fe, J *= det(I + dt C)
             Mat3 dF = dt * Cp;
             dF.diagonal().array() += 1;
-            Mat3 Fe_trial = dF * state.Fe[p];
+            Mat3 Fe_trial = dF * state.Fe[p].template cast<Real>();
             const Real J_start = state.J[p];  // the volume the moisture solve saw
             state.J[p] = J_start * dF.determinant();
 
@@ -220,24 +221,39 @@ G2PResult g2p_impl(const SimModel& model, SimState& state, const SparseGrid& gri
                     if (has_damage)
                         state.damage[p] = damage_after_return(state.damage[p], alpha, r.alpha,
                                                               nacc.damage_strain);
-                    state.Fe[p] = r.Fe;
+                    state.Fe[p] = r.Fe.template cast<S>();
                     state.alpha[p] = r.alpha;
                 }
             }
-            if (is_elastic) state.Fe[p] = Fe_trial;
-            tau[p] = neo_hookean_kirchhoff(
-                is_elastic ? trial_terms : neo_hookean_terms(state.Fe[p], lame), lame);
+            if constexpr (std::is_same_v<S, Real>) {
+                if (is_elastic) state.Fe[p] = Fe_trial;
+                tau[p] = neo_hookean_kirchhoff(
+                    is_elastic ? trial_terms : neo_hookean_terms(state.Fe[p], lame), lame);
+            } else {
+                // the stress of Fe as stored (rounded to float), as kirchhoff_stresses computes it
+                // after a resume or a rollback, so a resumed run continues bit for bit. Read back
+                // through a volatile pointer: g++ 12 at -O3 -march=native gave the stress the
+                // unrounded Fe when the stored matrix was read back directly (caught by
+                // FloatState.ACopyContinuesBitForBit and the float resume test)
+                if (is_elastic) state.Fe[p] = Fe_trial.template cast<S>();
+                const volatile S* stored = state.Fe[p].data();
+                Mat3 Fe_stored;
+                for (int k = 0; k < 9; ++k) Fe_stored(k) = static_cast<Real>(stored[k]);
+                tau[p] = neo_hookean_kirchhoff(neo_hookean_terms(Fe_stored, lame), lame);
+            }
 
             // advect, clamped into the domain box
-            Vec3 x = state.x[p] + dt * vp;
+            Vec3 x = state.x[p].template cast<Real>() + dt * vp;
             x = x.cwiseMax(lo).cwiseMin(hi);
-            state.x[p] = x;
-            state.v[p] = vp;
-            state.C[p] = Cp;
+            state.x[p] = x.template cast<S>();
+            state.v[p] = vp.template cast<S>();
+            state.C[p] = Cp.template cast<S>();
 
             // finite-ness: a NaN or inf anywhere poisons the sum; J <= 0 is an inverted particle,
             // which no stable step produces (it precedes the overflow by many steps)
-            Real check = x.sum() + vp.sum() + state.Fe[p].sum() + state.J[p];
+            // (as stored: a float state overflows to inf at its own range)
+            Real check = Real(state.x[p].sum()) + Real(state.v[p].sum()) + Real(state.Fe[p].sum()) +
+                         state.J[p];
             if constexpr (kNacc) check += state.alpha[p];
             if constexpr (kPore) check += state.theta[p];
             if ((!std::isfinite(check) || !(state.J[p] > 0)) && (bad[t] < 0 || p < bad[t]))
@@ -256,8 +272,8 @@ G2PResult g2p_impl(const SimModel& model, SimState& state, const SparseGrid& gri
     return result;
 }
 
-template <bool kTheta, bool kPore>
-G2PResult dispatch_nacc(const SimModel& model, SimState& state, const SparseGrid& grid,
+template <bool kTheta, bool kPore, class S>
+G2PResult dispatch_nacc(const SimModel& model, SimStateOf<S>& state, const SparseGrid& grid,
                         const MoistureUpdate& moisture, Real dt,
                         std::vector<std::vector<Real>>& windows, SymMat3* tau) {
     if (model.nacc)
@@ -267,7 +283,8 @@ G2PResult dispatch_nacc(const SimModel& model, SimState& state, const SparseGrid
 
 }  // namespace
 
-G2PResult grid_to_particle(const SimModel& model, SimState& state, const SparseGrid& grid,
+template <class S>
+G2PResult grid_to_particle(const SimModel& model, SimStateOf<S>& state, const SparseGrid& grid,
                            const MoistureUpdate& moisture, bool pore_update, Real dt,
                            std::vector<std::vector<Real>>& windows, SymMat3* tau) {
     if (moisture.dtheta)
@@ -276,5 +293,12 @@ G2PResult grid_to_particle(const SimModel& model, SimState& state, const SparseG
         return dispatch_nacc<false, true>(model, state, grid, MoistureUpdate{}, dt, windows, tau);
     return dispatch_nacc<false, false>(model, state, grid, MoistureUpdate{}, dt, windows, tau);
 }
+
+template G2PResult grid_to_particle(const SimModel&, SimStateOf<double>&, const SparseGrid&,
+                                    const MoistureUpdate&, bool, Real,
+                                    std::vector<std::vector<Real>>&, SymMat3*);
+template G2PResult grid_to_particle(const SimModel&, SimStateOf<float>&, const SparseGrid&,
+                                    const MoistureUpdate&, bool, Real,
+                                    std::vector<std::vector<Real>>&, SymMat3*);
 
 }  // namespace mudcrack::mpm

@@ -24,16 +24,16 @@ using Lanes = Eigen::Array<Real, 4, 1>;
 // @note Longer than a page on purpose: its body is the step's per-particle scatter, a hot loop
 // (the P2G share of mpm_bench's particle-steps/s), each particle's weights, stress and moisture
 // terms sharing locals in one pass over its window.
-template <bool kMoisture>
-void p2g_impl(const SimState& state, const SymMat3* kirchhoff, SparseGrid& grid, MoistureGrid* mg,
-              Real dt, std::vector<std::vector<Real>>& windows) {
+template <bool kMoisture, class S>
+void p2g_impl(const SimStateOf<S>& state, const SymMat3* kirchhoff, SparseGrid& grid,
+              MoistureGrid* mg, Real dt, std::vector<std::vector<Real>>& windows) {
     constexpr int kStride = kNodeFields;
     const GridGeometry& geo = grid.geo;
     const Real h = geo.h;
     const Real stress_scale = dt * kInertiaInvScale * geo.inv_h * geo.inv_h;
-    const Vec3* x = state.x.data();
-    const Vec3* v = state.v.data();
-    const Mat3* C = state.C.data();
+    const auto* x = state.x.data();
+    const auto* v = state.v.data();
+    const auto* C = state.C.data();
     const Real* mass = state.mass.data();
     const Real* V0 = state.V0.data();
     const Real* J = state.J.data();
@@ -47,7 +47,7 @@ void p2g_impl(const SimState& state, const SymMat3* kirchhoff, SparseGrid& grid,
         const Vec3i origin = geo.block_coord(grid.pblock_key[pb]) * kBlockWidth;
         for (int32_t i = grid.pblock_begin[pb]; i < grid.pblock_begin[pb + 1]; ++i) {
             const int32_t p = grid.order[i];
-            const Stencil st = make_stencil(geo.to_grid(x[p]));
+            const Stencil st = make_stencil(geo.to_grid(x[p].template cast<Real>()));
             const AxisWeights &ax = st.axis[0], &ay = st.axis[1], &az = st.axis[2];
             const int o0 = ax.base - origin.x(), o1 = ay.base - origin.y(),
                       o2 = az.base - origin.z();
@@ -55,10 +55,10 @@ void p2g_impl(const SimState& state, const SymMat3* kirchhoff, SparseGrid& grid,
             // affine momentum with the stress folded in: A_p = m C - dt V0 (4/h^2) tau
             const Real m = mass[p];
             const Mat3 tau = kirchhoff[p].matrix();
-            const Mat3 Ah = h * (m * C[p] - (stress_scale * V0[p]) * tau);
+            const Mat3 Ah = h * (m * C[p].template cast<Real>() - (stress_scale * V0[p]) * tau);
             // (mass, momentum) at node (a,b,c): w (m, m v + A h ((a,b,c) - fx)), as 4-vectors
             // (mass first, with a zero affine part) so each node update is one SIMD add
-            const Vec3 q0 = m * v[p] - Ah * Vec3(ax.fx, ay.fx, az.fx);
+            const Vec3 q0 = m * v[p].template cast<Real>() - Ah * Vec3(ax.fx, ay.fx, az.fx);
 #if defined(__AVX__) && defined(__FMA__)
             // assembled in registers: written to memory entry by entry and read back as one
             // vector, they stalled store-to-load forwarding for each particle
@@ -139,20 +139,31 @@ void p2g_impl(const SimState& state, const SymMat3* kirchhoff, SparseGrid& grid,
 
 }  // namespace
 
-void kirchhoff_stresses(const SimModel& model, const SimState& state, std::vector<SymMat3>& tau) {
+template <class S>
+void kirchhoff_stresses(const SimModel& model, const SimStateOf<S>& state,
+                        std::vector<SymMat3>& tau) {
     const LameParams lame = lame_params(model.elastic);
     tau.resize(state.size());
     parallel_for(static_cast<int64_t>(state.size()), [&](int64_t p) {
-        tau[p] = neo_hookean_kirchhoff(neo_hookean_terms(state.Fe[p], lame), lame);
+        tau[p] =
+            neo_hookean_kirchhoff(neo_hookean_terms(state.Fe[p].template cast<Real>(), lame), lame);
     });
 }
 
-void particle_to_grid(const SimState& state, const SymMat3* tau, SparseGrid& grid,
+template <class S>
+void particle_to_grid(const SimStateOf<S>& state, const SymMat3* tau, SparseGrid& grid,
                       MoistureGrid* moisture, Real dt, std::vector<std::vector<Real>>& windows) {
     if (moisture)
-        p2g_impl<true>(state, tau, grid, moisture, dt, windows);
+        p2g_impl<true, S>(state, tau, grid, moisture, dt, windows);
     else
-        p2g_impl<false>(state, tau, grid, nullptr, dt, windows);
+        p2g_impl<false, S>(state, tau, grid, nullptr, dt, windows);
 }
+
+template void kirchhoff_stresses(const SimModel&, const SimStateOf<double>&, std::vector<SymMat3>&);
+template void kirchhoff_stresses(const SimModel&, const SimStateOf<float>&, std::vector<SymMat3>&);
+template void particle_to_grid(const SimStateOf<double>&, const SymMat3*, SparseGrid&,
+                               MoistureGrid*, Real, std::vector<std::vector<Real>>&);
+template void particle_to_grid(const SimStateOf<float>&, const SymMat3*, SparseGrid&, MoistureGrid*,
+                               Real, std::vector<std::vector<Real>>&);
 
 }  // namespace mudcrack::mpm

@@ -4,7 +4,9 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <sstream>
+#include <type_traits>
 
 #include "sim/core/check.h"
 #include "sim/core/error.h"
@@ -27,15 +29,33 @@ constexpr int kAutoDomainCellsBelow = 3;
 // auto domain: fraction of the particles' extent added above and around them
 constexpr Real kAutoDomainMargin = 0.5;
 
-// reorders an array of Real-component elements (Real, Vec3, Mat3) so slot i takes slot order[i],
-// one component at a time through an n-Real buffer
+// the number type an element is made of: itself for a number, the scalar of an Eigen matrix or
+// of a symmetric one
+template <class T, class = void>
+struct ComponentOf {
+    using type = T;
+};
+template <class T>
+struct ComponentOf<T, std::void_t<typename T::Scalar>> {
+    using type = typename T::Scalar;
+};
+template <>
+struct ComponentOf<SymMat3> {  // the stress cache's element: six Reals
+    using type = Real;
+};
+
+// reorders an array of float- or double-component elements (a number, Vec3, Mat3) so slot i
+// takes slot order[i], one component at a time through an n-Real buffer (a double holds either
+// exactly)
 template <class T>
 void permute_components(std::vector<T>& a, const std::vector<int32_t>& order,
                         std::vector<Real>& buf) {
     if (a.empty()) return;
-    constexpr int kComp = static_cast<int>(sizeof(T) / sizeof(Real));
-    static_assert(kComp * sizeof(Real) == sizeof(T), "element must be made of Reals");
-    Real* data = reinterpret_cast<Real*>(a.data());
+    using Component = typename ComponentOf<T>::type;
+    static_assert(std::is_floating_point_v<Component>, "element must be made of numbers");
+    constexpr int kComp = static_cast<int>(sizeof(T) / sizeof(Component));
+    static_assert(kComp * sizeof(Component) == sizeof(T), "element must be packed components");
+    Component* data = reinterpret_cast<Component*>(a.data());
     const int64_t n = static_cast<int64_t>(a.size());
     for (int k = 0; k < kComp; ++k) {
         parallel_for(n,
@@ -52,7 +72,8 @@ void permute_components(std::vector<int32_t>& a, const std::vector<int32_t>& ord
     parallel_for(n, [&](int64_t i) { a[i] = static_cast<int32_t>(buf[i]); });
 }
 
-void permute_state(SimState& s, const std::vector<int32_t>& order, std::vector<Real>& buf) {
+template <class S>
+void permute_state(SimStateOf<S>& s, const std::vector<int32_t>& order, std::vector<Real>& buf) {
     buf.resize(s.size());
     s.for_each_array(
         [&](const char*, auto& array, ArrayPresence) { permute_components(array, order, buf); });
@@ -113,20 +134,23 @@ Real state_turn_angle(const SimModel& model, int64_t step_count) {
 // and velocities turn, the APIC matrix as a spatial tensor (R C R^T), Fe on its spatial side
 // (R Fe: the current configuration turns, the rest and plastic ones do not). Every scalar (J,
 // alpha, theta, the damage) is frame-indifferent.
-void turn_state(SimState& s, const Mat3& turn, const Vec3& centre) {
+template <class S>
+void turn_state(SimStateOf<S>& s, const Mat3& turn, const Vec3& centre) {
     const Mat3 turn_t = turn.transpose();
     parallel_for(static_cast<int64_t>(s.size()), [&](int64_t p) {
-        s.x[p] = turn * (s.x[p] - centre) + centre;
-        s.v[p] = turn * s.v[p];
-        s.C[p] = turn * s.C[p] * turn_t;
-        s.Fe[p] = turn * s.Fe[p];
+        const Vec3 x = s.x[p].template cast<Real>();
+        s.x[p] = (turn * (x - centre) + centre).template cast<S>();
+        s.v[p] = (turn * s.v[p].template cast<Real>()).template cast<S>();
+        s.C[p] = (turn * s.C[p].template cast<Real>() * turn_t).template cast<S>();
+        s.Fe[p] = (turn * s.Fe[p].template cast<Real>()).template cast<S>();
     });
 }
 
 // The grid for the state's next step. A moving grid (/sim/grid_shift) starts u h below the domain
 // and ends (1 - u) h above it, one cell more per axis: it covers the domain whatever u is, and
 // its wall band only moves outward.
-SimWorkspace& ensure_workspace(const SimModel& model, SimState& state) {
+template <class S>
+SimWorkspace& ensure_workspace(const SimModel& model, SimStateOf<S>& state) {
     SimWorkspace& ws = state.workspace.get_or_create();
     if (model.grid_shift_interval > 0) {
         Vec3 u = grid_shift_cells(static_cast<uint64_t>(state.step_count) /
@@ -151,7 +175,8 @@ SimWorkspace& ensure_workspace(const SimModel& model, SimState& state) {
 
 // bins the particles and, every kResortInterval steps (and at t = 0), reorders the arrays by block
 // (and the stress cache with them, when it is current)
-void bin_and_sort(SimState& state, SimWorkspace& ws, bool force_sort, bool tau_is_current) {
+template <class S>
+void bin_and_sort(SimStateOf<S>& state, SimWorkspace& ws, bool force_sort, bool tau_is_current) {
     mpm::bin_particles(ws.grid, state.x, state.id);
     if ((force_sort || state.step_count % kResortInterval == 0) && !is_identity(ws.grid.order)) {
         permute_state(state, ws.grid.order, ws.permute_buffer);
@@ -163,7 +188,8 @@ void bin_and_sort(SimState& state, SimWorkspace& ws, bool force_sort, bool tau_i
 
 constexpr Real kMaxCellsPerStep = 2;  // velocity CFL hard limit [cells/step]
 
-std::string describe_non_finite(const SimState& s, size_t p, int64_t substep) {
+template <class S>
+std::string describe_non_finite(const SimStateOf<S>& s, size_t p, int64_t substep) {
     auto finite3 = [](const auto& m) { return m.allFinite(); };
     const char* what = nullptr;
     if (!finite3(s.x[p]))
@@ -191,7 +217,8 @@ std::string describe_non_finite(const SimState& s, size_t p, int64_t substep) {
 }
 
 // the smallest particle id with a non-finite state, described; empty if all are finite
-std::string find_non_finite(const SimState& s, int64_t substep) {
+template <class S>
+std::string find_non_finite(const SimStateOf<S>& s, int64_t substep) {
     size_t best = s.size();
     for (size_t p = 0; p < s.size(); ++p) {
         if (best < s.size() && s.id[p] >= s.id[best]) continue;
@@ -243,7 +270,8 @@ void check_initial_particles(const SimModel& model, const std::vector<Vec3>& X,
 }
 
 // the simulation box: given, or derived once from the particle bounds X
-void set_domain(const SimModel& model, const std::vector<Vec3>& X, SimState& s) {
+template <class S>
+void set_domain(const SimModel& model, const std::vector<Vec3>& X, SimStateOf<S>& s) {
     Vec3 lo = X[0], hi = X[0];
     for (const Vec3& x : X) {
         lo = lo.cwiseMin(x);
@@ -302,18 +330,21 @@ void set_domain(const SimModel& model, const std::vector<Vec3>& X, SimState& s) 
 
 }  // namespace
 
-SimState make_initial_state(const SimModel& model, const std::vector<Vec3>& X,
-                            const std::vector<Real>& V0, const std::vector<Real>& strength) {
+template <class S>
+SimStateOf<S> make_initial_state(const SimModel& model, const std::vector<Vec3>& X,
+                                 const std::vector<Real>& V0, const std::vector<Real>& strength) {
     check_initial_particles(model, X, V0, strength);
     const size_t n = X.size();
 
-    SimState s;
+    using StateMat3 = typename SimStateOf<S>::StateMat3;
+    SimStateOf<S> s;
     s.id.resize(n);
     for (size_t p = 0; p < n; ++p) s.id[p] = static_cast<int32_t>(p);
-    s.x = X;
-    s.v.assign(n, model.initial_velocity);
-    s.C.assign(n, Mat3::Zero());
-    s.Fe.assign(n, Mat3::Identity());
+    s.x.resize(n);
+    for (size_t p = 0; p < n; ++p) s.x[p] = X[p].template cast<S>();
+    s.v.assign(n, model.initial_velocity.template cast<S>());
+    s.C.assign(n, StateMat3::Zero());
+    s.Fe.assign(n, StateMat3::Identity());
     s.J.assign(n, 1);
     if (model.nacc) s.alpha.assign(n, model.nacc->alpha0);
     s.strength = strength;
@@ -340,19 +371,21 @@ SimState make_initial_state(const SimModel& model, const std::vector<Vec3>& X,
     return s;
 }
 
-void set_moisture_field(const SimModel& model, SimState& state,
+template <class S>
+void set_moisture_field(const SimModel& model, SimStateOf<S>& state,
                         const std::function<Real(const Vec3&)>& theta_of_x) {
     MC_CHECK(model.moisture.has_value());
     const MoistureParams& mp = *model.moisture;
     for (size_t p = 0; p < state.size(); ++p) {
-        state.theta[p] = std::clamp(theta_of_x(state.x[p]), Real(0), mp.eta);
+        state.theta[p] = std::clamp(theta_of_x(state.x[p].template cast<Real>()), Real(0), mp.eta);
         const Real sat = saturation_of(state.theta[p], mp.eta);
         state.Jw[p] = pore_jw(sat, mp.eta);
         state.mass[p] = moist_mass(state.V0[p], model.elastic.density, sat, mp);
     }
 }
 
-Real stable_dt(const SimModel& model, const SimState& state) {
+template <class S>
+Real stable_dt(const SimModel& model, const SimStateOf<S>& state) {
     if (model.time.dt_fixed > 0) return model.time.dt_fixed;
     Real dt = model.time.dt_max;
     // elastic wave bound; with moisture the lightest (dry) particles set the wave speed
@@ -363,13 +396,14 @@ Real stable_dt(const SimModel& model, const SimState& state) {
     // velocity bound
     const Real max_v2 = parallel_reduce(
         static_cast<int64_t>(state.size()), Real(0),
-        [&](int64_t p) { return state.v[p].squaredNorm(); },
+        [&](int64_t p) { return state.v[p].template cast<Real>().squaredNorm(); },
         [](Real a, Real b) { return std::max(a, b); });
     if (max_v2 > 0) dt = std::min(dt, model.time.cfl_velocity * model.h / std::sqrt(max_v2));
     return dt;
 }
 
-StepStats step(const SimModel& model, SimState& state, Real dt) {
+template <class S>
+StepStats step(const SimModel& model, SimStateOf<S>& state, Real dt) {
     const int64_t substep = state.step_count + 1;
     if (!(dt > 0) || !std::isfinite(dt)) {
         std::ostringstream os;
@@ -431,8 +465,8 @@ StepStats step(const SimModel& model, SimState& state, Real dt) {
         seal.seal_colliders = model.moisture->seal_colliders;
         seal.has_ground = model.ground.has_value();
         if (seal.has_ground) seal.ground_height = model.ground->height;
-        const MoistureParticles mp{state.x.data(), state.V0.data(), state.J.data(),
-                                   state.theta.data()};
+        const MoistureParticlesOf<S> mp{state.x.data(), state.V0.data(), state.J.data(),
+                                        state.theta.data()};
         const MoistureSolveStats ms =
             solve_moisture(*model.moisture, seal, ws.grid, mp, interval * dt, *mg,
                            state.moisture_flux, ws.windows);
@@ -487,14 +521,16 @@ StepStats step(const SimModel& model, SimState& state, Real dt) {
     return stats;
 }
 
-GridFrame state_grid_frame(const SimModel& model, const SimState& state) {
+template <class S>
+GridFrame state_grid_frame(const SimModel& model, const SimStateOf<S>& state) {
     GridFrame frame;
     frame.rotation = rotation_about_vertical(state_turn_angle(model, state.step_count));
     frame.centre = (state.domain_min + state.domain_max) / 2;
     return frame;
 }
 
-ParticleFrame state_to_frame(const SimModel& model, const SimState& state,
+template <class S>
+ParticleFrame state_to_frame(const SimModel& model, const SimStateOf<S>& state,
                              const CacheAttributes& attrs) {
     const GridFrame frame = state_grid_frame(model, state);
     const bool is_turned = frame.rotation != Mat3::Identity();
@@ -509,7 +545,7 @@ ParticleFrame state_to_frame(const SimModel& model, const SimState& state,
     for (size_t p = 0; p < n; ++p) {
         const int32_t id = state.id[p];
         MC_CHECK(id >= 0 && static_cast<size_t>(id) < n);
-        f.P[id] = state.x[p].cast<float>();
+        f.P[id] = state.x[p].template cast<float>();
 #define MC_FILL_CACHED(T, member, key, vdb, physics, policy, doc) \
     if (attrs.key) f.member[id] = cached_value::member(model, state, p);
         MC_CACHED_ATTRIBUTES(MC_FILL_CACHED)
@@ -517,15 +553,20 @@ ParticleFrame state_to_frame(const SimModel& model, const SimState& state,
         // a turned grid's state, back in the world's frame: the position, and the cached
         // attributes with a direction (the velocity, and Fe on its spatial side)
         if (is_turned) {
-            f.P[id] = frame.world_point(state.x[p]).cast<float>();
-            if (attrs.velocity) f.v[id] = frame.world_vector(state.v[p]).cast<float>();
-            if (attrs.Fe) f.Fe[id] = (frame.rotation.transpose() * state.Fe[p]).cast<float>();
+            f.P[id] = frame.world_point(state.x[p].template cast<Real>()).template cast<float>();
+            if (attrs.velocity)
+                f.v[id] =
+                    frame.world_vector(state.v[p].template cast<Real>()).template cast<float>();
+            if (attrs.Fe)
+                f.Fe[id] = (frame.rotation.transpose() * state.Fe[p].template cast<Real>())
+                               .template cast<float>();
         }
     }
     return f;
 }
 
-int64_t state_memory_bytes(const SimState& s) {
+template <class S>
+int64_t state_memory_bytes(const SimStateOf<S>& s) {
     int64_t total = 0;
     s.for_each_array(
         [&](const char*, const auto& array, ArrayPresence) { total += capacity_bytes(array); });
@@ -533,5 +574,40 @@ int64_t state_memory_bytes(const SimState& s) {
     if (s.workspace) total += s.workspace->memory_bytes();
     return total;
 }
+
+std::string float_state_range_problem(const SimModel& model, const Vec3& domain_min,
+                                      const Vec3& domain_max) {
+    const Real reach = std::max(domain_min.cwiseAbs().maxCoeff(), domain_max.cwiseAbs().maxCoeff());
+    const float r = static_cast<float>(reach);
+    const Real spacing = Real(std::nextafter(r, std::numeric_limits<float>::infinity()) - r);
+    if (spacing <= kFloatSpacingPerCell * model.h) return {};
+    std::ostringstream os;
+    os << "the simulation box reaches " << reach << " m from the origin, where a float's spacing ("
+       << spacing << " m) is over 2^-15 of the grid cell h = " << model.h
+       << " m: keep \"double\", or place the scene nearer the origin";
+    return os.str();
+}
+
+// the two precisions a state keeps its directional arrays in (SimStateOf)
+template SimStateOf<double> make_initial_state(const SimModel&, const std::vector<Vec3>&,
+                                               const std::vector<Real>&, const std::vector<Real>&);
+template void set_moisture_field(const SimModel&, SimStateOf<double>&,
+                                 const std::function<Real(const Vec3&)>&);
+template Real stable_dt(const SimModel&, const SimStateOf<double>&);
+template StepStats step(const SimModel&, SimStateOf<double>&, Real);
+template GridFrame state_grid_frame(const SimModel&, const SimStateOf<double>&);
+template ParticleFrame state_to_frame(const SimModel&, const SimStateOf<double>&,
+                                      const CacheAttributes&);
+template int64_t state_memory_bytes(const SimStateOf<double>&);
+template SimStateOf<float> make_initial_state(const SimModel&, const std::vector<Vec3>&,
+                                              const std::vector<Real>&, const std::vector<Real>&);
+template void set_moisture_field(const SimModel&, SimStateOf<float>&,
+                                 const std::function<Real(const Vec3&)>&);
+template Real stable_dt(const SimModel&, const SimStateOf<float>&);
+template StepStats step(const SimModel&, SimStateOf<float>&, Real);
+template GridFrame state_grid_frame(const SimModel&, const SimStateOf<float>&);
+template ParticleFrame state_to_frame(const SimModel&, const SimStateOf<float>&,
+                                      const CacheAttributes&);
+template int64_t state_memory_bytes(const SimStateOf<float>&);
 
 }  // namespace mudcrack

@@ -4,6 +4,7 @@
 /// Tu et al. 2023 Sections 4-5; the consolidated step of docs/physics.md §7.
 #include <cstdint>
 #include <functional>
+#include <string>
 #include <vector>
 
 #include "sim/core/particle_frame.h"
@@ -20,12 +21,14 @@ struct SimWorkspace;  // grid and scratch, rebuilt every step; carries nothing f
 // declaration, slot reordering, memory accounting and the checkpoint's save and load (a new
 // array changes what a checkpoint holds: bump kSimCheckpointVersion, sim_checkpoint.cpp).
 // X(element type, name, presence, doc); presence Always: n elements, Optional: n or none.
+// The directional arrays are stored in the state's precision (StateVec3, StateMat3); the scalars
+// are always double (see SimStateOf).
 #define MC_SIM_STATE_ARRAYS(X)                                                            \
     X(int32_t, id, Always, "particle id per slot")                                        \
-    X(Vec3, x, Always, "position [m]")                                                    \
-    X(Vec3, v, Always, "velocity [m/s]")                                                  \
-    X(Mat3, C, Always, "APIC affine velocity [1/s]")                                      \
-    X(Mat3, Fe, Always, "elastic deformation gradient")                                   \
+    X(StateVec3, x, Always, "position [m]")                                               \
+    X(StateVec3, v, Always, "velocity [m/s]")                                             \
+    X(StateMat3, C, Always, "APIC affine velocity [1/s]")                                 \
+    X(StateMat3, Fe, Always, "elastic deformation gradient")                              \
     X(Real, J, Always, "det of the total deformation gradient (volume tracking)")         \
     X(Real, alpha, Optional, "NACC hardening state (empty without plasticity)")           \
     X(Real, V0, Always, "rest volume [m^3]")                                              \
@@ -43,7 +46,19 @@ enum class ArrayPresence { Always, Optional };
 /// step processes particles in (grid block, id) order whatever the slot order, so a state saved
 /// and restored in any slot order (e.g. by id) continues bit for bit. Moisture arrays are empty
 /// when the model has no moisture section; alpha is empty without plasticity.
-struct SimState {
+///
+/// StateReal is the precision the directional arrays (x, v, C, Fe: 60 of a particle's 76 stored
+/// numbers) are kept in between steps: double (SimState), or float (SimStateFloat, a shot's
+/// /sim/precision "float"), which holds them in half the memory. The step computes in double
+/// either way, and the scalars stay double: J, alpha and theta are running sums of one increment
+/// per step, which a float would round to its resolution at the running value every step
+/// (docs/physics.md §7.1).
+template <class StateReal>
+struct SimStateOf {
+    using Scalar = StateReal;
+    using StateVec3 = Eigen::Matrix<StateReal, 3, 1>;
+    using StateMat3 = Eigen::Matrix<StateReal, 3, 3>;
+
     double time = 0;         // simulated time [s]
     int64_t step_count = 0;  // substeps taken since t = 0
 #define MC_STATE_ARRAY_MEMBER(T, name, presence, doc) std::vector<T> name;
@@ -71,6 +86,9 @@ struct SimState {
 #undef MC_STATE_ARRAY_VISIT
     }
 };
+
+using SimState = SimStateOf<double>;
+using SimStateFloat = SimStateOf<float>;
 
 /// Where a step's wall time went, phase by phase [s]: each phase from its first parallel loop's
 /// start to its last one's end on the calling thread, so on several threads it includes the wait
@@ -118,33 +136,53 @@ struct GridFrame {
 /// The frame `state` is held in (see GridFrame). A pure function of the model, the state's step
 /// count and its domain, so a run resumed from a checkpoint finds the frame its state was saved
 /// in.
-GridFrame state_grid_frame(const SimModel& model, const SimState& state);
+template <class S>
+GridFrame state_grid_frame(const SimModel& model, const SimStateOf<S>& state);
 
 /// Initial state: particles at rest positions X with rest volumes V0 (from the tet mesh), moving
 /// at model.initial_velocity, at theta_init when the model has moisture. `strength` (empty, or
 /// one positive p0 multiplier per particle) makes the soil heterogeneous; it needs model.nacc.
-SimState make_initial_state(const SimModel& model, const std::vector<Vec3>& X,
-                            const std::vector<Real>& V0, const std::vector<Real>& strength = {});
+template <class S = double>
+SimStateOf<S> make_initial_state(const SimModel& model, const std::vector<Vec3>& X,
+                                 const std::vector<Real>& V0,
+                                 const std::vector<Real>& strength = {});
 
 /// Sets every particle's water content to theta_of_x(x) (clamped to [0, eta]) with the matching
 /// pore determinant Jw and mass: a non-uniform initial moisture field (tests, the report).
 /// Requires model.moisture.
-void set_moisture_field(const SimModel& model, SimState& state,
+template <class S>
+void set_moisture_field(const SimModel& model, SimStateOf<S>& state,
                         const std::function<Real(const Vec3&)>& theta_of_x);
 
 /// The adaptive time step min(dt_max, C_v h / max|v|, C_E h / c_p), or dt_fixed when set.
-Real stable_dt(const SimModel& model, const SimState& state);
+template <class S>
+Real stable_dt(const SimModel& model, const SimStateOf<S>& state);
 
 /// Advances one substep of length dt. After the step every particle is checked for finite
 /// state; a failure throws RuntimeError naming the particle id and its state (theta, J, alpha).
-StepStats step(const SimModel& model, SimState& state, Real dt);
+template <class S>
+StepStats step(const SimModel& model, SimStateOf<S>& state, Real dt);
 
 /// The cacheable view of the state in particle-id order, with only the requested attributes, in
 /// the world's frame.
-ParticleFrame state_to_frame(const SimModel& model, const SimState& state,
+template <class S>
+ParticleFrame state_to_frame(const SimModel& model, const SimStateOf<S>& state,
                              const CacheAttributes& attrs);
 
+/// The coarsest float spacing, as a fraction of the grid cell h, that a float state may have at
+/// its domain's farthest coordinate: 2^-15. A float state's positions are rounded to that
+/// spacing every step; far from the origin the rounding grows with the distance, and past about
+/// this spacing a float run drifts from the double one faster than the double run itself drifts
+/// when its start is rounded to float (docs/physics.md §7.1, measured).
+constexpr Real kFloatSpacingPerCell = 0x1p-15;
+
+/// Why a float state cannot serve a run in the box [domain_min, domain_max] at the model's h (the
+/// numbers, in one sentence), or empty when it can.
+std::string float_state_range_problem(const SimModel& model, const Vec3& domain_min,
+                                      const Vec3& domain_max);
+
 /// Bytes held by the state's particle arrays and workspace (for bytes-per-particle reports).
-int64_t state_memory_bytes(const SimState& state);
+template <class S>
+int64_t state_memory_bytes(const SimStateOf<S>& state);
 
 }  // namespace mudcrack

@@ -9,22 +9,29 @@
 
 namespace mudcrack {
 
-RetryingStepper::RetryingStepper(const RetryPolicy& policy) : m_policy(policy) {}
+template <class S>
+RetryingStepperOf<S>::RetryingStepperOf(const RetryPolicy& policy) : m_policy(policy) {}
 
-void RetryingStepper::take_snapshot(const SimState& state) {
+template <class S>
+void RetryingStepperOf<S>::take_snapshot(const SimStateOf<S>& state) {
     // copy assignment reuses the arrays' capacity: no allocation after the first snapshot
     m_snapshot = state;  // the snapshot holds no workspace (a copy gets its own)
     m_accepted_since = 0;
 }
 
-void RetryingStepper::restart(const SimState& state) {
+template <class S>
+void RetryingStepperOf<S>::restart(const SimStateOf<S>& state) {
     take_snapshot(state);
     m_halvings = 0;
 }
 
-Real RetryingStepper::dt_scale() const { return std::ldexp(Real(1), -m_halvings); }
+template <class S>
+Real RetryingStepperOf<S>::dt_scale() const {
+    return std::ldexp(Real(1), -m_halvings);
+}
 
-StepAttempt RetryingStepper::attempt(const SimModel& model, SimState& state, Real dt) {
+template <class S>
+StepAttempt RetryingStepperOf<S>::attempt(const SimModel& model, SimStateOf<S>& state, Real dt) {
     StepAttempt a;
     try {
         a.stats = step(model, state, dt);
@@ -63,6 +70,12 @@ StepAttempt RetryingStepper::attempt(const SimModel& model, SimState& state, Rea
     return a;
 }
 
-int64_t RetryingStepper::memory_bytes() const { return state_memory_bytes(m_snapshot); }
+template <class S>
+int64_t RetryingStepperOf<S>::memory_bytes() const {
+    return state_memory_bytes(m_snapshot);
+}
+
+template class RetryingStepperOf<double>;
+template class RetryingStepperOf<float>;
 
 }  // namespace mudcrack

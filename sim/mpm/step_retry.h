@@ -40,13 +40,15 @@ struct StepAttempt {
 
 /// Steps a state with rollback and retry (see the file comment). One per run; restart() at
 /// each frame start makes a frame's steps independent of the frames before it, so a run
-/// resumed from a frame's checkpoint retries exactly as an uninterrupted one.
-class RetryingStepper {
+/// resumed from a frame's checkpoint retries exactly as an uninterrupted one. S: the state's
+/// precision (SimStateOf).
+template <class S>
+class RetryingStepperOf {
 public:
-    explicit RetryingStepper(const RetryPolicy& policy = {});
+    explicit RetryingStepperOf(const RetryPolicy& policy = {});
 
     /// Makes a copy of `state` the rollback point and forgets any reduced time step.
-    void restart(const SimState& state);
+    void restart(const SimStateOf<S>& state);
 
     /// The factor on the stable time step: 1, or 2^-k while k halvings are in force.
     Real dt_scale() const;
@@ -57,7 +59,7 @@ public:
     /// restores its own counters saved at the last is_rollback_point (or restart) and goes on.
     /// @throws RuntimeError with step()'s message and the retries it took, when the time step
     ///         is already at its floor
-    StepAttempt attempt(const SimModel& model, SimState& state, Real dt);
+    StepAttempt attempt(const SimModel& model, SimStateOf<S>& state, Real dt);
 
     /// Simulated time of the rollback point [s].
     double rollback_time() const { return m_snapshot.time; }
@@ -67,13 +69,15 @@ public:
     int64_t memory_bytes() const;
 
 private:
-    void take_snapshot(const SimState& state);
+    void take_snapshot(const SimStateOf<S>& state);
 
     RetryPolicy m_policy;
-    SimState m_snapshot;       // the rollback point (no workspace)
+    SimStateOf<S> m_snapshot;  // the rollback point (no workspace)
     int m_halvings = 0;        // dt = stable dt / 2^m_halvings
     int m_accepted_since = 0;  // accepted steps since the rollback point
     int64_t m_retries = 0;
 };
+
+using RetryingStepper = RetryingStepperOf<double>;
 
 }  // namespace mudcrack

@@ -21,12 +21,15 @@ namespace mudcrack::mpm {
 /// tau_p is read from `tau` (per slot, the Kirchhoff stress of Fe: what the last G2P left, or
 /// kirchhoff_stresses).
 /// @param dt time step [s]  @param windows per-thread scratch of 8 * 216 values
-void particle_to_grid(const SimState& state, const SymMat3* tau, SparseGrid& grid,
+template <class S>
+void particle_to_grid(const SimStateOf<S>& state, const SymMat3* tau, SparseGrid& grid,
                       MoistureGrid* moisture, Real dt, std::vector<std::vector<Real>>& windows);
 
 /// Each slot's Kirchhoff stress of its Fe, into `tau` (resized to n): P2G's input when the last
 /// G2P's is not at hand (the first step, after a checkpoint load, a rollback or a failed step).
-void kirchhoff_stresses(const SimModel& model, const SimState& state, std::vector<SymMat3>& tau);
+template <class S>
+void kirchhoff_stresses(const SimModel& model, const SimStateOf<S>& state,
+                        std::vector<SymMat3>& tau);
 
 /// Grid update v_i = (m v)_i / m_i + dt g, then the ground collider and the domain walls
 /// (docs/physics.md §1.3). Nodes without mass get v = 0.
@@ -52,7 +55,8 @@ struct MoistureUpdate {
 /// with the particle's strength and damage (when the model has plasticity), x += dt v clamped
 /// into the domain box. Checks every particle for a finite state. Writes each slot's Kirchhoff
 /// stress of its new Fe to `tau` (n entries), for the next step's P2G.
-G2PResult grid_to_particle(const SimModel& model, SimState& state, const SparseGrid& grid,
+template <class S>
+G2PResult grid_to_particle(const SimModel& model, SimStateOf<S>& state, const SparseGrid& grid,
                            const MoistureUpdate& moisture, bool pore_update, Real dt,
                            std::vector<std::vector<Real>>& windows, SymMat3* tau);
 

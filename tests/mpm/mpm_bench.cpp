@@ -1,6 +1,7 @@
 // The issue-3 reference scene: a 0.49 m cube of 125,000 NACC particles (2x2x2 per cell, h = 0.02)
 // falling at 2 m/s onto a sticky ground, dt = 2e-4 fixed, with and without moisture, on 1 and 2
-// threads, stepped as mc-sim steps (through sim/mpm/step_retry.h). Reports particle-steps/s,
+// threads, stepped as mc-sim steps (through sim/mpm/step_retry.h), with a double state and with
+// a float one (BM_ReferenceSceneFloat). Reports particle-steps/s,
 // bytes per particle of simulation state (grid and the rollback copy included), and the wall ns
 // per particle-step of each phase of the step (ns_bin ... ns_g2p, StepPhaseSeconds) and of the
 // loop's rest (ns_rest): the per-phase table, whose 1- and 2-thread columns show which phase
@@ -84,7 +85,8 @@ void reference_particles(std::vector<Vec3>& X, std::vector<Real>& V0) {
             }
 }
 
-void BM_ReferenceScene(benchmark::State& bs, int moisture_interval) {
+template <class S>
+void run_reference_scene(benchmark::State& bs, int moisture_interval) {
     const int threads = static_cast<int>(bs.range(0));
     set_thread_count(threads);
     const SimModel model = reference_model(moisture_interval);
@@ -97,12 +99,12 @@ void BM_ReferenceScene(benchmark::State& bs, int moisture_interval) {
     StepPhaseSeconds phases;  // of the accepted steps
     for (auto _ : bs) {
         bs.PauseTiming();
-        SimState state = make_initial_state(model, X, V0);
+        SimStateOf<S> state = make_initial_state<S>(model, X, V0);
         bs.ResumeTiming();
         const double cpu0 = process_cpu_seconds();
         const WallTimer loop;
         // mc-sim's step loop: through the rollback and retry of failed substeps
-        RetryingStepper stepper;
+        RetryingStepperOf<S> stepper;
         stepper.restart(state);
         int cg = 0;
         for (int i = 0; i < steps;) {
@@ -139,6 +141,14 @@ void BM_ReferenceScene(benchmark::State& bs, int moisture_interval) {
     bs.counters["ns_rest"] = ns(loop_seconds - phases.total());
 }
 
+void BM_ReferenceScene(benchmark::State& bs, int moisture_interval) {
+    run_reference_scene<double>(bs, moisture_interval);
+}
+// the same scene with a float state (/sim/precision "float"): its speed and bytes per particle
+void BM_ReferenceSceneFloat(benchmark::State& bs, int moisture_interval) {
+    run_reference_scene<float>(bs, moisture_interval);
+}
+
 // the rollback point of sim/mpm/step_retry.h: a copy of the reference state (moisture arrays
 // included), taken at every frame start and every 64 steps; its cost per particle against a
 // step's is what rollback and retry add to a run where nothing fails
@@ -168,6 +178,8 @@ void reference_scene_runs(benchmark::internal::Benchmark* b) {
 BENCHMARK_CAPTURE(BM_ReferenceScene, NoMoisture, 0)->Apply(reference_scene_runs);
 BENCHMARK_CAPTURE(BM_ReferenceScene, Moisture, 1)->Apply(reference_scene_runs);
 BENCHMARK_CAPTURE(BM_ReferenceScene, MoistureEvery4Steps, 4)->Apply(reference_scene_runs);
+BENCHMARK_CAPTURE(BM_ReferenceSceneFloat, NoMoisture, 0)->Apply(reference_scene_runs);
+BENCHMARK_CAPTURE(BM_ReferenceSceneFloat, Moisture, 1)->Apply(reference_scene_runs);
 
 }  // namespace
 }  // namespace mudcrack

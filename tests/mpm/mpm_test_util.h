@@ -68,7 +68,8 @@ inline Real total_mass(const SimState& s) {
 }
 
 /// Particle slot of each id.
-inline std::vector<size_t> slot_of_id(const SimState& s) {
+template <class S>
+inline std::vector<size_t> slot_of_id(const SimStateOf<S>& s) {
     std::vector<size_t> slot(s.size());
     for (size_t i = 0; i < s.size(); ++i) slot[s.id[i]] = i;
     return slot;

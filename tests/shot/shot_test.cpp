@@ -95,6 +95,7 @@ TEST_F(ShotTest, DefaultsFillEveryKeyOfPresentSections) {
     EXPECT_EQ(shot.sim.checkpoint_every, 10);
     EXPECT_EQ(shot.sim.grid_shift_interval, 0);  // a fixed grid
     EXPECT_EQ(shot.sim.grid_turn_interval, 0);   // along the world's axes
+    EXPECT_EQ(shot.sim.precision, StatePrecision::Double);
     // the slice records the defaults it ran with
     expect_contains(shot.slice(Stage::Sim), {"\"youngs_modulus\": 2000.0", "\"dt_max\": 0.001"});
 }
@@ -323,6 +324,17 @@ TEST_F(ShotTest, OutOfRangeNamesPointerValueAndUnits) {
         "sim": {"grid_shift": 200}})",
                                    "t.json");
     EXPECT_EQ(moving.sim.grid_shift_interval, 200);
+    // the state's precision: "double" or "float", nothing else
+    EXPECT_EQ(parse_shot(R"({"mudcrack": 1, "source": {"type": "box"}, "material": {},
+        "sim": {"precision": "float"}})",
+                         "t.json")
+                  .sim.precision,
+              StatePrecision::Float);
+    expect_contains(error_of(R"({"mudcrack": 1, "source": {"type": "box"}, "material": {},
+        "sim": {"precision": "half"}})",
+                             "shots/half.json"),
+                    {"shots/half.json: /sim/precision = \"half\": must be one of \"double\", "
+                     "\"float\""});
     // a turned grid: every k steps, an auto domain (its walls turn), a vertical gravity
     expect_contains(error_of(R"({"mudcrack": 1, "source": {"type": "box"}, "material": {},
         "sim": {"grid_turn": -20}})"),

@@ -320,4 +320,83 @@ TEST_F(McSimCli, MoistureLessShotCachesAndAllocatesNoMoisture) {
     }
 }
 
+// the block shot with its state kept in float (/sim/precision)
+std::string float_shot(std::string text) {
+    const std::string key = R"("checkpoint_every": 2)";
+    const size_t at = text.find(key);
+    EXPECT_NE(at, std::string::npos);
+    return text.replace(at, key.size(), key + R"(, "precision": "float")");
+}
+
+// A float shot runs, says so in its manifest, holds fewer bytes per particle than the same shot
+// in double, and resumes from its own checkpoint with the same bytes; a double run does not take
+// its checkpoints.
+TEST_F(McSimCli, FloatShotSavesMemoryAndResumesFromItsOwnCheckpoints) {
+    const std::string frames = R"({ "start": 1, "end": 4, "fps": 192 })";
+    const fs::path shot = write_shot("float", float_shot(block_shot(frames)));
+    const fs::path double_shot = write_shot("double", block_shot(frames));
+    const fs::path straight = m_dir / "straight", resumed = m_dir / "resumed",
+                   in_double = m_dir / "double";
+    init(shot, straight);
+    init(shot, resumed);
+    init(double_shot, in_double);
+    const std::string args = "--quiet --threads 2 --shot ";
+    ASSERT_EQ(run("mc-sim", args + shot.string() + " --out " + straight.string()), 0) << m_stderr;
+    ASSERT_EQ(run("mc-sim", args + double_shot.string() + " --out " + in_double.string()), 0)
+        << m_stderr;
+    const nlohmann::json m = nlohmann::json::parse(read_text(straight / "sim" / "manifest.json"));
+    const nlohmann::json md = nlohmann::json::parse(read_text(in_double / "sim" / "manifest.json"));
+    EXPECT_EQ(m["precision"], "float");
+    EXPECT_EQ(md["precision"], "double");
+    EXPECT_LT(m["bytes_per_particle"].get<double>(), md["bytes_per_particle"].get<double>() - 150)
+        << "x, v, C and Fe in float: 96 bytes fewer a particle in the state and as many in its "
+           "rollback copy";
+
+    // frames 1-2 and the frame-2 checkpoint, then --resume for frames 3-4
+    ASSERT_EQ(run("mc-sim", args + shot.string() + " --out " + resumed.string() + " --frames 1-2"),
+              0)
+        << m_stderr;
+    const std::string loud = "--threads 2 --shot ";  // "resuming from" is an info line
+    ASSERT_EQ(run("mc-sim", "--resume " + loud + shot.string() + " --out " + resumed.string()), 0)
+        << m_stderr;
+    EXPECT_NE(m_stderr.find("resuming from"), std::string::npos) << m_stderr;
+    expect_identical_caches(straight / "sim", resumed / "sim", 4);
+
+    // a float checkpoint is not a double run's: it skips it for its own older one
+    fs::remove(in_double / "sim" / "manifest.json");
+    fs::copy_file(straight / "sim" / "checkpoint.0004.bin",
+                  in_double / "sim" / "checkpoint.0004.bin", fs::copy_options::overwrite_existing);
+    ASSERT_EQ(
+        run("mc-sim", "--resume " + loud + double_shot.string() + " --out " + in_double.string()),
+        0)
+        << m_stderr;
+    EXPECT_NE(m_stderr.find("checkpoint.0004.bin: precision = \"float\": this run keeps a "
+                            "double state"),
+              std::string::npos)
+        << m_stderr;
+    EXPECT_NE(
+        m_stderr.find("resuming from " + (in_double / "sim" / "checkpoint.0002.bin").string()),
+        std::string::npos)
+        << m_stderr;
+}
+
+// float far from the origin: refused by key and value, before anything is written
+TEST_F(McSimCli, FloatFarFromTheOriginIsRefusedByKeyAndLeavesNothing) {
+    std::string text = float_shot(block_shot(R"({ "start": 1, "end": 2, "fps": 96 })"));
+    const std::string box = R"("min": [-0.1, 0.05, -0.1], "max": [0.1, 0.15, 0.1])";
+    const size_t at = text.find(box);
+    ASSERT_NE(at, std::string::npos);
+    text.replace(at, box.size(), R"("min": [4999.9, 0.05, -0.1], "max": [5000.1, 0.15, 0.1])");
+    const fs::path shot = write_shot("far", text);
+    const fs::path out = m_dir / "out";
+    init(shot, out);
+    EXPECT_EQ(run("mc-sim", "--shot " + shot.string() + " --out " + out.string()), 1);
+    EXPECT_NE(m_stderr.find(shot.string() + ": /sim/precision = \"float\": the simulation box "
+                                            "reaches"),
+              std::string::npos)
+        << m_stderr;
+    EXPECT_NE(m_stderr.find("h = 0.05 m"), std::string::npos) << m_stderr;
+    EXPECT_FALSE(fs::exists(out / "sim"));
+}
+
 }  // namespace

@@ -9,6 +9,7 @@
 #include <map>
 #include <random>
 
+#include "pipeline/io/checkpoint_io.h"
 #include "pipeline/stages/sim/sim_checkpoint.h"
 #include "pipeline/stages/sim/sim_frame_stepper.h"
 #include "sim/core/error.h"
@@ -34,12 +35,14 @@ bool same_bits(const std::vector<T>& a, const std::vector<T>& b) {
            (a.empty() || std::memcmp(a.data(), b.data(), a.size() * sizeof(T)) == 0);
 }
 
-bool same_bits(const Vec3& a, const Vec3& b) {
-    return std::memcmp(a.data(), b.data(), sizeof(Vec3)) == 0;
+template <class S>
+bool same_bits(const Eigen::Matrix<S, 3, 1>& a, const Eigen::Matrix<S, 3, 1>& b) {
+    return std::memcmp(a.data(), b.data(), sizeof(a)) == 0;
 }
 
 // every array and scalar of the state, bit for bit (the workspace is scratch)
-void expect_same_state(const SimState& a, const SimState& b) {
+template <class S>
+void expect_same_state(const SimStateOf<S>& a, const SimStateOf<S>& b) {
     EXPECT_EQ(std::memcmp(&a.time, &b.time, sizeof(double)), 0) << a.time << " vs " << b.time;
     EXPECT_EQ(a.step_count, b.step_count);
     EXPECT_TRUE(same_bits(a.id, b.id));
@@ -66,18 +69,19 @@ void expect_same_state(const SimState& a, const SimState& b) {
 }
 
 // a state with random bits in every array, including values a text format would round
-SimState random_state(size_t n, bool has_moisture, bool has_plasticity, unsigned seed) {
+template <class S = double>
+SimStateOf<S> random_state(size_t n, bool has_moisture, bool has_plasticity, unsigned seed) {
     std::mt19937_64 rng(seed);
     std::uniform_real_distribution<double> u(-1, 1);
-    SimState s;
+    SimStateOf<S> s;
     s.time = 0.1 + 1e-17;
     s.step_count = 12345;
     for (size_t i = 0; i < n; ++i) {
         s.id.push_back(int32_t((i * 7) % n));  // a permuted slot order
-        s.x.push_back(Vec3(u(rng), u(rng), u(rng)) / 3.0);
-        s.v.push_back(Vec3(u(rng), u(rng), u(rng)) * 1e-3);
-        s.C.push_back(Mat3::Random() / 7.0);
-        s.Fe.push_back(Mat3::Identity() + Mat3::Random() * 1e-9);
+        s.x.push_back((Vec3(u(rng), u(rng), u(rng)) / 3.0).cast<S>());
+        s.v.push_back((Vec3(u(rng), u(rng), u(rng)) * 1e-3).cast<S>());
+        s.C.push_back((Mat3::Random() / 7.0).cast<S>());
+        s.Fe.push_back((Mat3::Identity() + Mat3::Random() * 1e-9).cast<S>());
         s.J.push_back(1 + u(rng) * 1e-13);
         s.V0.push_back(1e-6 * (1 + u(rng)));
         s.mass.push_back(2e-6 * (1 + u(rng)));
@@ -96,12 +100,13 @@ SimState random_state(size_t n, bool has_moisture, bool has_plasticity, unsigned
     return s;
 }
 
-SimCheckpoint sample_checkpoint(bool has_moisture, bool has_plasticity) {
-    SimCheckpoint c;
+template <class S = double>
+SimCheckpointOf<S> sample_checkpoint(bool has_moisture, bool has_plasticity) {
+    SimCheckpointOf<S> c;
     c.frame = 42;
     c.slice_hash = "0123456789abcdef";
     c.threads = 2;
-    c.state = random_state(101, has_moisture, has_plasticity, 7);
+    c.state = random_state<S>(101, has_moisture, has_plasticity, 7);
     if (has_moisture) {  // a flux history on three blocks, one with a key above INT32_MAX
         MoistureFluxHistory& h = c.state.moisture_flux;
         h.count = 2;
@@ -139,7 +144,8 @@ SimModel small_model() {
     return model;
 }
 
-SimState small_state(const SimModel& model) {
+template <class S = double>
+SimStateOf<S> small_state(const SimModel& model) {
     std::vector<Vec3> X;
     std::vector<Real> V0;
     const double spacing = 0.025;
@@ -149,7 +155,7 @@ SimState small_state(const SimModel& model) {
                 X.push_back(Vec3(i, j + 2, k) * spacing);
                 V0.push_back(spacing * spacing * spacing);
             }
-    return make_initial_state(model, X, V0);
+    return make_initial_state<S>(model, X, V0);
 }
 
 }  // namespace
@@ -241,6 +247,38 @@ TEST(SimCheckpoint, EveryTableArrayRoundTripsBitForBit) {
             EXPECT_TRUE(actual.at(name) == bytes) << name << " differs after the round trip";
         }
         expect_same_state(saved.state, read.state);
+    }
+    fs::remove_all(dir);
+}
+
+TEST(SimCheckpoint, AFloatStateRoundTripsBitwiseAndOnlyIntoAFloatRun) {
+    const fs::path dir = temp_dir("float");
+    const SimCheckpointOf<float> saved = sample_checkpoint<float>(true, true);
+    const fs::path file = checkpoint_path(dir, saved.frame);
+    write_sim_checkpoint(file, saved);
+    expect_same_state(saved.state, read_sim_checkpoint<float>(file).state);
+    // a float state is not a double run's, nor a double state a float run's
+    try {
+        read_sim_checkpoint<double>(file);
+        ADD_FAILURE() << "a double run read a float checkpoint";
+    } catch (const InputError& e) {
+        EXPECT_NE(std::string(e.what()).find("precision = \"float\""), std::string::npos)
+            << e.what();
+    }
+    const fs::path double_file = checkpoint_path(dir, 43);
+    write_sim_checkpoint(double_file, sample_checkpoint<double>(true, true));
+    EXPECT_THROW(read_sim_checkpoint<float>(double_file), InputError);
+
+    // a float checkpoint whose arrays hold a value no float has (a damaged or forged file that
+    // passes its checksum) is refused by array and index, not rounded
+    Checkpoint raw = read_checkpoint(double_file);
+    raw.meta_string["precision"] = "float";
+    write_checkpoint(double_file, raw);
+    try {
+        read_sim_checkpoint<float>(double_file);
+        ADD_FAILURE() << "a double value was read into a float state";
+    } catch (const InputError& e) {
+        EXPECT_NE(std::string(e.what()).find(": x[0] = "), std::string::npos) << e.what();
     }
     fs::remove_all(dir);
 }
@@ -347,26 +385,28 @@ TEST_F(SimFrameStepper, CollapsedStepNamesFrameAndParticle) {
     }
 }
 
-// runs frames 1-3 straight and with a checkpoint after frame 1 read back into a fresh state
+// runs frames 1-3 straight and with a checkpoint after frame 1 read back into a fresh state, with
+// a state of precision S
+template <class S = double>
 void expect_bitwise_resume(const SimModel& model, const fs::path& dir) {
     // uninterrupted: frames 1-3
-    SimState straight = small_state(model);
+    SimStateOf<S> straight = small_state<S>(model);
     SimTotals straight_totals;
-    RetryingStepper straight_stepper;
+    RetryingStepperOf<S> straight_stepper;
     for (int frame = 1; frame <= 3; ++frame)
         advance_frame(model, straight, frame, straight_stepper, straight_totals);
 
     // interrupted after frame 1: saved, read back into a fresh state (no workspace), continued
-    SimState first_part = small_state(model);
-    SimCheckpoint saved;
-    RetryingStepper first_stepper;
+    SimStateOf<S> first_part = small_state<S>(model);
+    SimCheckpointOf<S> saved;
+    RetryingStepperOf<S> first_stepper;
     advance_frame(model, first_part, 1, first_stepper, saved.totals);
     saved.frame = 1;
     saved.state = first_part;
     write_sim_checkpoint(checkpoint_path(dir, 1), saved);
-    SimCheckpoint resumed = read_sim_checkpoint(checkpoint_path(dir, 1));
+    SimCheckpointOf<S> resumed = read_sim_checkpoint<S>(checkpoint_path(dir, 1));
     EXPECT_EQ(resumed.state.workspace, nullptr);
-    RetryingStepper resumed_stepper;
+    RetryingStepperOf<S> resumed_stepper;
     for (int frame = 2; frame <= 3; ++frame)
         advance_frame(model, resumed.state, frame, resumed_stepper, resumed.totals);
 
@@ -389,6 +429,8 @@ TEST_F(SimFrameStepper, ResumeFromCheckpointIsBitwiseIdentical) {
         // with moisture the CG's flux history carries from step to step outside the state
         if (moisture) model.moisture = MoistureParams{};
         expect_bitwise_resume(model, temp_dir(moisture ? "resume_moist" : "resume"));
+        expect_bitwise_resume<float>(model,
+                                     temp_dir(moisture ? "resume_moist_float" : "resume_float"));
     }
 }
 

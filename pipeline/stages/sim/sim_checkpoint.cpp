@@ -1,10 +1,12 @@
 #include "pipeline/stages/sim/sim_checkpoint.h"
 
 #include <algorithm>
+#include <cmath>
 #include <cstdio>
 #include <cstring>
 #include <regex>
 #include <string>
+#include <type_traits>
 
 #include "pipeline/io/checkpoint_io.h"
 #include "sim/core/error.h"
@@ -18,29 +20,50 @@ namespace {
 // 2: strength and damage arrays; 3: the moisture flux history
 constexpr int64_t kSimCheckpointVersion = 3;
 
-// Eigen fixed-size types are plain arrays of their scalar (column-major, no padding), so the
-// state's arrays are copied as raw doubles: a restored state is bitwise the saved one
-static_assert(sizeof(Vec3) == 3 * sizeof(double) && sizeof(Mat3) == 9 * sizeof(double),
-              "checkpoints store Vec3/Mat3 as packed doubles");
+// the number type an element is made of, and how many: a double or a float is one, a Vec3 or
+// Mat3 of either is its 3 or 9 packed entries (Eigen's fixed-size types are plain column-major
+// arrays of their scalar, no padding)
+template <class Element, class = void>
+struct Components {
+    using Scalar = Element;
+    static constexpr size_t kCount = 1;
+};
+template <class Element>
+struct Components<Element, std::void_t<typename Element::Scalar>> {
+    using Scalar = typename Element::Scalar;
+    static constexpr size_t kCount = sizeof(Element) / sizeof(Scalar);
+    static_assert(kCount * sizeof(Scalar) == sizeof(Element), "Eigen fixed-size types are packed");
+};
 
+// the elements' entries as doubles (a float's exactly): a restored state is bitwise the saved one
 template <class Element>
 std::vector<double> flatten(const std::vector<Element>& values) {
-    std::vector<double> flat(values.size() * (sizeof(Element) / sizeof(double)));
-    if (!flat.empty()) std::memcpy(flat.data(), values.data(), flat.size() * sizeof(double));
+    using C = Components<Element>;
+    std::vector<double> flat(values.size() * C::kCount);
+    const auto* entries = reinterpret_cast<const typename C::Scalar*>(values.data());
+    for (size_t i = 0; i < flat.size(); ++i) flat[i] = static_cast<double>(entries[i]);
     return flat;
 }
 
-// the named array as n elements of `Element` (n = 0 accepted for optional arrays)
+// the named array as n elements of `Element` (n = 0 accepted for optional arrays); a float
+// array's doubles must each be a float
 template <class Element>
 std::vector<Element> unflatten(const Checkpoint& c, const std::string& name, size_t n,
                                bool is_optional) {
-    constexpr size_t kWidth = sizeof(Element) / sizeof(double);
+    using C = Components<Element>;
+    using Scalar = typename C::Scalar;
     const std::vector<double>& flat = is_optional && c.f64.count(name) && c.f64.at(name).empty()
                                           ? c.f64.at(name)
-                                          : c.require_f64(name, n * kWidth);
-    std::vector<Element> values(flat.size() / kWidth);
-    if (!flat.empty())
-        std::memcpy(static_cast<void*>(values.data()), flat.data(), flat.size() * sizeof(double));
+                                          : c.require_f64(name, n * C::kCount);
+    std::vector<Element> values(flat.size() / C::kCount);
+    auto* entries = reinterpret_cast<Scalar*>(values.data());
+    for (size_t i = 0; i < flat.size(); ++i) {
+        entries[i] = static_cast<Scalar>(flat[i]);
+        if (static_cast<double>(entries[i]) != flat[i] && !std::isnan(flat[i]))
+            throw InputError(c.source + ": " + name + "[" + std::to_string(i) +
+                             "] = " + std::to_string(flat[i]) +
+                             ": not a float, but the checkpoint holds a float state");
+    }
     return values;
 }
 
@@ -82,6 +105,12 @@ void load_total(const Checkpoint& c, const std::string& key, TotalPresence prese
                 : c.require_double(key);
 }
 
+// the checkpoint's name for a state precision
+template <class S>
+const char* precision_name() {
+    return std::is_same_v<S, float> ? "float" : "double";
+}
+
 }  // namespace
 
 fs::path checkpoint_path(const fs::path& dir, int frame) {
@@ -103,8 +132,9 @@ std::vector<int> list_checkpoint_frames(const fs::path& dir) {
     return frames;
 }
 
-void write_sim_checkpoint(const fs::path& path, const SimCheckpoint& checkpoint) {
-    const SimState& s = checkpoint.state;
+template <class S>
+void write_sim_checkpoint(const fs::path& path, const SimCheckpointOf<S>& checkpoint) {
+    const SimStateOf<S>& s = checkpoint.state;
     const SimTotals& t = checkpoint.totals;
     Checkpoint c;
     // identity: what wrote it, for which shot slice, at which frame
@@ -113,6 +143,7 @@ void write_sim_checkpoint(const fs::path& path, const SimCheckpoint& checkpoint)
     c.meta_string["slice_hash"] = checkpoint.slice_hash;
     c.meta_int["frame"] = checkpoint.frame;
     c.meta_int["threads"] = checkpoint.threads;
+    c.meta_string["precision"] = precision_name<S>();
     // the state, slot order included (id maps slots to particles)
     c.meta_double["time"] = s.time;
     c.meta_int["step_count"] = s.step_count;
@@ -140,7 +171,8 @@ void write_sim_checkpoint(const fs::path& path, const SimCheckpoint& checkpoint)
     write_checkpoint(path, c);
 }
 
-SimCheckpoint read_sim_checkpoint(const fs::path& path) {
+template <class S>
+SimCheckpointOf<S> read_sim_checkpoint(const fs::path& path) {
     const Checkpoint c = read_checkpoint(path);
     if (c.meta_string.count("stage") == 0 || c.meta_string.at("stage") != "sim")
         throw InputError(path.string() + ": not a simulation checkpoint (no stage = \"sim\")");
@@ -153,12 +185,19 @@ SimCheckpoint read_sim_checkpoint(const fs::path& path) {
         throw InputError(path.string() + ": particles = " + std::to_string(n_signed) +
                          ": expected >= 0");
     const size_t n = size_t(n_signed);
+    // written before the key existed: double
+    const std::string precision =
+        c.meta_string.count("precision") ? c.meta_string.at("precision") : "double";
+    if (precision != precision_name<S>())
+        throw InputError(path.string() + ": precision = \"" + precision + "\": this run keeps a " +
+                         precision_name<S>() +
+                         " state (/sim/precision); the checkpoint is not used");
 
-    SimCheckpoint sc;
+    SimCheckpointOf<S> sc;
     sc.frame = int(c.require_int("frame"));
     sc.slice_hash = c.require_string("slice_hash");
     sc.threads = int(c.require_int("threads"));
-    SimState& s = sc.state;
+    SimStateOf<S>& s = sc.state;
     s.time = c.require_double("time");
     s.step_count = c.require_int("step_count");
     s.for_each_array([&](const char* name, auto& array, ArrayPresence presence) {
@@ -195,5 +234,10 @@ SimCheckpoint read_sim_checkpoint(const fs::path& path) {
     }
     return sc;
 }
+
+template void write_sim_checkpoint(const fs::path&, const SimCheckpointOf<double>&);
+template void write_sim_checkpoint(const fs::path&, const SimCheckpointOf<float>&);
+template SimCheckpointOf<double> read_sim_checkpoint(const fs::path&);
+template SimCheckpointOf<float> read_sim_checkpoint(const fs::path&);
 
 }  // namespace mudcrack

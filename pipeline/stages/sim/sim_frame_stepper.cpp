@@ -19,11 +19,12 @@ std::string step_context(int frame, int substep, double time, double dt) {
 }
 
 // "particle 17 moves at 3.2e+05 m/s": what made the velocity bound of dt collapse
-std::string fastest_particle(const SimState& state) {
+template <class S>
+std::string fastest_particle(const SimStateOf<S>& state) {
     size_t fastest = 0;
     double speed2 = -1;
     for (size_t i = 0; i < state.size(); ++i) {
-        const double s2 = state.v[i].squaredNorm();
+        const double s2 = state.v[i].template cast<double>().squaredNorm();
         if (!(s2 <= speed2)) {  // also catches NaN
             fastest = i;
             speed2 = s2;
@@ -42,8 +43,10 @@ std::string fastest_particle(const SimState& state) {
 
 double frame_end_time(const SimModel& model, int frame) { return double(frame) / model.time.fps; }
 
-int advance_frame(const SimModel& model, SimState& state, int frame, RetryingStepper& stepper,
-                  SimTotals& totals, const SubstepCallback& on_substep) {
+template <class S>
+int advance_frame(const SimModel& model, SimStateOf<S>& state, int frame,
+                  RetryingStepperOf<S>& stepper, SimTotals& totals,
+                  const SubstepCallback& on_substep) {
     const double t_end = frame_end_time(model, frame);
     const double frame_length = 1.0 / model.time.fps;
     int substeps = 0;
@@ -112,5 +115,10 @@ int advance_frame(const SimModel& model, SimState& state, int frame, RetryingSte
     }
     return substeps;
 }
+
+template int advance_frame(const SimModel&, SimStateOf<double>&, int, RetryingStepperOf<double>&,
+                           SimTotals&, const SubstepCallback&);
+template int advance_frame(const SimModel&, SimStateOf<float>&, int, RetryingStepperOf<float>&,
+                           SimTotals&, const SubstepCallback&);
 
 }  // namespace mudcrack

@@ -52,7 +52,9 @@ using SubstepCallback = std::function<void(int frame_substeps)>;
 /// @throws RuntimeError "frame K substep S (t = ..., dt = ...): <step's message>; retried ..."
 ///         when a substep still fails at the retries' floor, or when the stable dt collapses
 ///         (non-finite, or below 1e-9 of the frame length, which would never finish).
-int advance_frame(const SimModel& model, SimState& state, int frame, RetryingStepper& stepper,
-                  SimTotals& totals, const SubstepCallback& on_substep = {});
+template <class S>
+int advance_frame(const SimModel& model, SimStateOf<S>& state, int frame,
+                  RetryingStepperOf<S>& stepper, SimTotals& totals,
+                  const SubstepCallback& on_substep = {});
 
 }  // namespace mudcrack

@@ -8,6 +8,7 @@
 #include <optional>
 #include <regex>
 #include <string>
+#include <type_traits>
 #include <utility>
 #include <vector>
 
@@ -179,8 +180,9 @@ bool is_intact_frame(const fs::path& file, int frame,
 
 // the newest checkpoint that is intact, made from this shot's sim slice, for these particles,
 // not past the last frame, and whose in-range frames are all on disk
-std::optional<SimCheckpoint> find_resume_checkpoint(const fs::path& sim_dir, const Shot& shot,
-                                                    size_t n_particles, int first, int last) {
+template <class S>
+std::optional<SimCheckpointOf<S>> find_resume_checkpoint(const fs::path& sim_dir, const Shot& shot,
+                                                         size_t n_particles, int first, int last) {
     std::vector<int> frames = list_checkpoint_frames(sim_dir);
     std::reverse(frames.begin(), frames.end());
     for (const int c : frames) {
@@ -190,9 +192,9 @@ std::optional<SimCheckpoint> find_resume_checkpoint(const fs::path& sim_dir, con
                       ", not used");
             continue;
         }
-        SimCheckpoint checkpoint;
+        SimCheckpointOf<S> checkpoint;
         try {
-            checkpoint = read_sim_checkpoint(file);
+            checkpoint = read_sim_checkpoint<S>(file);
         } catch (const InputError& e) {
             log::warn("bad checkpoint", std::string(e.what()) + ": skipped");
             continue;
@@ -265,8 +267,9 @@ std::pair<int, int> frames_to_write(const Shot& shot, const StageOptions& option
 }
 
 // what a run carries from frame to frame, and what its manifest reports
+template <class S>
 struct SimRun {
-    SimState state;
+    SimStateOf<S> state;
     SimTotals totals;
     std::map<int, std::string> cache_crc32;  // of the frame caches on disk, by frame
     int done_frame = 0;                      // the state is at the end of this frame
@@ -278,21 +281,30 @@ struct SimRun {
     std::vector<std::string> cached_attributes;
 };
 
+// a float state's range (sim/mpm/simulation.h): refused by the shot's key, before any output
+template <class S>
+void check_state_precision(const Shot& shot, const SimStateOf<S>& state) {
+    if constexpr (std::is_same_v<S, float>) {
+        const std::string problem =
+            float_state_range_problem(shot.sim, state.domain_min, state.domain_max);
+        if (!problem.empty())
+            throw InputError(shot.path + ": /sim/precision = \"float\": " + problem);
+    }
+}
+
 // the starting state: a checkpoint (--resume) or the rest state at t = 0 (end of "frame 0");
 // clears what a run must not leave behind
-SimRun start_run(const Shot& shot, const SimStageOptions& sim_options, const InitParticles& init,
-                 const fs::path& sim_dir, int first, int last) {
-    std::error_code ec;
-    fs::create_directories(sim_dir, ec);
-    if (ec) throw RuntimeError(sim_dir.string() + ": cannot create: " + ec.message());
-    std::optional<SimCheckpoint> resumed;
+template <class S>
+SimRun<S> start_run(const Shot& shot, const SimStageOptions& sim_options, const InitParticles& init,
+                    const fs::path& sim_dir, int first, int last) {
+    std::optional<SimCheckpointOf<S>> resumed;
     if (sim_options.resume) {
-        resumed = find_resume_checkpoint(sim_dir, shot, init.X.size(), first, last);
+        resumed = find_resume_checkpoint<S>(sim_dir, shot, init.X.size(), first, last);
         if (!resumed)
             log::info("--resume: no usable checkpoint in " + sim_dir.string() +
                       ", starting from t = 0");
     }
-    SimRun run;
+    SimRun<S> run;
     if (resumed) {
         run.state = std::move(resumed->state);
         run.totals = resumed->totals;
@@ -301,8 +313,12 @@ SimRun start_run(const Shot& shot, const SimStageOptions& sim_options, const Ini
         run.resumed = true;
         log::info("resuming from " + checkpoint_path(sim_dir, run.done_frame).string());
     } else {
-        run.state = make_initial_state(shot.sim, init.X, init.V0, init.strength);
+        run.state = make_initial_state<S>(shot.sim, init.X, init.V0, init.strength);
     }
+    check_state_precision(shot, run.state);
+    std::error_code ec;
+    fs::create_directories(sim_dir, ec);
+    if (ec) throw RuntimeError(sim_dir.string() + ": cannot create: " + ec.message());
     // the old manifest goes first, so make sees an incomplete stage until this run succeeds;
     // stale frames and checkpoints (after the resumed one) and half-written temporaries too
     clear_sim_dir(sim_dir, run.resumed ? run.done_frame : -1);
@@ -313,7 +329,8 @@ SimRun start_run(const Shot& shot, const SimStageOptions& sim_options, const Ini
 }
 
 // the frame's cache; a failure (a full disk) keeps what is done for --resume
-void write_frame_cache(const SimModel& model, SimRun& run, const fs::path& sim_dir, int frame,
+template <class S>
+void write_frame_cache(const SimModel& model, SimRun<S>& run, const fs::path& sim_dir, int frame,
                        int frame_substeps, int first, SimProgress& progress) {
     ParticleFrame particles = state_to_frame(model, run.state, model.cache);
     particles.frame = frame;
@@ -332,9 +349,10 @@ void write_frame_cache(const SimModel& model, SimRun& run, const fs::path& sim_d
 }
 
 // a full-precision checkpoint of the state at the end of `frame`, then the oldest pruned
-void write_frame_checkpoint(const Shot& shot, SimRun& run, const fs::path& sim_dir, int frame,
+template <class S>
+void write_frame_checkpoint(const Shot& shot, SimRun<S>& run, const fs::path& sim_dir, int frame,
                             int first, SimProgress& progress) {
-    SimCheckpoint checkpoint;
+    SimCheckpointOf<S> checkpoint;
     checkpoint.frame = frame;
     checkpoint.slice_hash = shot.slice_hash(Stage::Sim);
     checkpoint.threads = thread_count();
@@ -353,18 +371,19 @@ void write_frame_checkpoint(const Shot& shot, SimRun& run, const fs::path& sim_d
 }
 
 // frames done_frame + 1 .. last: substeps, caches (from `first` on) and checkpoints
-void simulate_frames(const Shot& shot, const SimStageOptions& sim_options, SimRun& run,
+template <class S>
+void simulate_frames(const Shot& shot, const SimStageOptions& sim_options, SimRun<S>& run,
                      const fs::path& sim_dir, int first, int last, bool verbose) {
     const SimModel& model = shot.sim;
-    SimState& state = run.state;
+    SimStateOf<S>& state = run.state;
     SimProgress progress(int64_t(state.size()), first, last, state.time,
                          frame_end_time(model, last), verbose, stderr, is_terminal(stderr));
     WallTimer step_timer;
-    RetryingStepper stepper;
+    RetryingStepperOf<S> stepper;
     for (int frame = run.done_frame + 1; frame <= last; ++frame) {
         if (frame == sim_options.inject_nan_at_frame) {
             const auto slot = std::find(state.id.begin(), state.id.end(), 0) - state.id.begin();
-            state.v[size_t(slot)] = Vec3::Constant(std::numeric_limits<Real>::quiet_NaN());
+            state.v[size_t(slot)].setConstant(std::numeric_limits<S>::quiet_NaN());
         }
 
         // substep to the frame's end
@@ -398,14 +417,16 @@ void simulate_frames(const Shot& shot, const SimStageOptions& sim_options, SimRu
 }
 
 // the run's particle-steps per second of stepping
-double step_rate(const SimRun& run) {
+template <class S>
+double step_rate(const SimRun<S>& run) {
     const int64_t run_substeps = run.totals.substeps - run.substeps_before;
     return run.step_seconds > 0 ? double(run_substeps) * double(run.state.size()) / run.step_seconds
                                 : 0;
 }
 
+template <class S>
 json sim_manifest(const Shot& shot, const fs::path& out, const InitParticles& init,
-                  const SimRun& run, int first, int last, double wall_seconds) {
+                  const SimRun<S>& run, int first, int last, double wall_seconds) {
     const SimModel& model = shot.sim;
     const SimTotals& totals = run.totals;
     const fs::path sim_dir = out / "sim";
@@ -420,6 +441,7 @@ json sim_manifest(const Shot& shot, const fs::path& out, const InitParticles& in
         {"first", first}, {"last", last}, {"count", last - first + 1}, {"fps", model.time.fps}};
     m["particles"] = n;
     m["threads"] = thread_count();
+    m["precision"] = std::is_same_v<S, float> ? "float" : "double";
     m["resumed_from_frame"] = run.resumed ? json(run.done_frame) : json(nullptr);
     m["wall_seconds"] = wall_seconds;
     m["step_loop_seconds"] = run.step_seconds;
@@ -451,10 +473,10 @@ json sim_manifest(const Shot& shot, const fs::path& out, const InitParticles& in
     return m;
 }
 
-}  // namespace
-
-int run_sim_stage(const Shot& shot, const StageOptions& options,
-                  const SimStageOptions& sim_options) {
+// the stage with a state of precision S (/sim/precision)
+template <class S>
+int run_sim_stage_in(const Shot& shot, const StageOptions& options,
+                     const SimStageOptions& sim_options) {
     WallTimer wall;
     const SimModel& model = shot.sim;
     const fs::path out(options.out);
@@ -472,7 +494,7 @@ int run_sim_stage(const Shot& shot, const StageOptions& options,
             shot.path + " (/frames/start, /frames/end))");
     const InitParticles init = read_init(out / "init", shot);
     check_mesh_body(shot, out / "init", init.manifest);
-    SimRun run = start_run(shot, sim_options, init, sim_dir, first, last);
+    SimRun<S> run = start_run<S>(shot, sim_options, init, sim_dir, first, last);
 
     // the frames, then the manifest, last
     simulate_frames(shot, sim_options, run, sim_dir, first, last, !options.quiet);
@@ -491,6 +513,15 @@ int run_sim_stage(const Shot& shot, const StageOptions& options,
         double(run.state_bytes) / double(n));
     log::info(line);
     return 0;
+}
+
+}  // namespace
+
+int run_sim_stage(const Shot& shot, const StageOptions& options,
+                  const SimStageOptions& sim_options) {
+    if (shot.sim.precision == StatePrecision::Float)
+        return run_sim_stage_in<float>(shot, options, sim_options);
+    return run_sim_stage_in<double>(shot, options, sim_options);
 }
 
 }  // namespace mudcrack
