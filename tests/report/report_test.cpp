@@ -7,6 +7,7 @@
 #include <cmath>
 #include <string>
 
+#include "sim/core/error.h"
 #include "sim/core/parallel.h"
 #include "tolerance.h"
 #include "tools/report/accuracy.h"
@@ -44,35 +45,39 @@ TEST(ReportFit, LogLogSlopeRecoversAPowerLaw) {
     EXPECT_TRUE(std::isnan(log_log_slope({0.1}, {1.0})));
 }
 
-TEST(ReportAccuracy, Diffusion1dConvergesInHAndDt) {
-    const Sweep h = sweep_diffusion_1d_h(Scale::Reduced);
+// every accuracy claim holds with a double and with a float particle state
+class ReportAccuracy : public ::testing::TestWithParam<StatePrecision> {};
+
+TEST_P(ReportAccuracy, Diffusion1dConvergesInHAndDt) {
+    const Sweep h = sweep_diffusion_1d_h(Scale::Reduced, GetParam());
     EXPECT_GE(h.order, kMinDiffusion1dOrderInH);
     EXPECT_LT(last_error(h), 1e-3);  // of a jump of 0.25
-    const Sweep dt = sweep_diffusion_1d_dt(Scale::Reduced);
+    const Sweep dt = sweep_diffusion_1d_dt(Scale::Reduced, GetParam());
     EXPECT_GE(dt.order, kMinDiffusionOrderInDt);
     EXPECT_LE(dt.order, kMaxDiffusionOrderInDt);
 }
 
-TEST(ReportAccuracy, Diffusion3dConvergesInH) {
-    const Sweep s = sweep_diffusion_3d_h(Scale::Reduced);
+TEST_P(ReportAccuracy, Diffusion3dConvergesInH) {
+    const Sweep s = sweep_diffusion_3d_h(Scale::Reduced, GetParam());
     EXPECT_GE(s.order, kMinDiffusion3dOrderInH);
     EXPECT_LT(last_error(s), s.points.front().error);
 }
 
-TEST(ReportAccuracy, FreeDryingBlockEndsAtDryVolume) {
-    for (const Sweep& s : {sweep_shrinkage_h(Scale::Reduced), sweep_shrinkage_ppc(Scale::Reduced)})
+TEST_P(ReportAccuracy, FreeDryingBlockEndsAtDryVolume) {
+    for (const Sweep& s : {sweep_shrinkage_h(Scale::Reduced, GetParam()),
+                           sweep_shrinkage_ppc(Scale::Reduced, GetParam())})
         for (const SweepPoint& p : s.points)
             EXPECT_LT(p.error, kMaxShrinkageError) << s.id << " knob " << p.knob;
 }
 
-TEST(ReportAccuracy, ColumnSettlementConvergesInH) {
-    const Sweep s = sweep_column_h(Scale::Reduced);
+TEST_P(ReportAccuracy, ColumnSettlementConvergesInH) {
+    const Sweep s = sweep_column_h(Scale::Reduced, GetParam());
     EXPECT_GE(s.order, kMinColumnOrderInH);
     EXPECT_LT(last_error(s), kMaxColumnErrorFinest);
 }
 
-TEST(ReportAccuracy, FiveCgIterationsSufficeInThePapersRegime) {
-    const std::vector<Sweep> sweeps = sweep_cg_caps(Scale::Reduced);
+TEST_P(ReportAccuracy, FiveCgIterationsSufficeInThePapersRegime) {
+    const std::vector<Sweep> sweeps = sweep_cg_caps(Scale::Reduced, GetParam());
     ASSERT_FALSE(sweeps.empty());
     for (const Sweep& s : sweeps) {
         // more iterations never move further from the converged solve
@@ -89,6 +94,27 @@ TEST(ReportAccuracy, FiveCgIterationsSufficeInThePapersRegime) {
         EXPECT_LT(p.error, kCgClaimTolerance);
     }
     EXPECT_TRUE(has_cap5);
+}
+
+INSTANTIATE_TEST_SUITE_P(Precisions, ReportAccuracy,
+                         ::testing::Values(StatePrecision::Double, StatePrecision::Float),
+                         [](const ::testing::TestParamInfo<StatePrecision>& info) {
+                             return std::string(info.param == StatePrecision::Float ? "Float"
+                                                                                    : "Double");
+                         });
+
+// a float sweep is its double twin's knobs with the state in float, named to be drawn beside it
+TEST(ReportSweeps, AFloatSweepIsItsTwinInFloat) {
+    const Sweep d = sweep_column_h(Scale::Reduced, StatePrecision::Double);
+    const Sweep f = sweep_column_h(Scale::Reduced, StatePrecision::Float);
+    EXPECT_EQ(d.precision, "double");
+    EXPECT_EQ(f.precision, "float");
+    EXPECT_EQ(f.id, d.id + kFloatSweepSuffix);
+    ASSERT_EQ(f.points.size(), d.points.size());
+    for (size_t i = 0; i < d.points.size(); ++i) {
+        EXPECT_EQ(f.points[i].knob, d.points[i].knob);
+        EXPECT_NE(f.points[i].error, d.points[i].error) << "the same error: not a float run";
+    }
 }
 
 class StabilityMatrix : public ::testing::TestWithParam<std::string> {};
@@ -140,6 +166,22 @@ TEST(StabilityRecovery, InvertingCasesCompleteThroughRetries) {
         EXPECT_EQ(r.outcome, Outcome::Completed) << name << ": " << r.message;
         EXPECT_GT(r.retries, 0) << name;
     }
+}
+
+// every case also runs as "<case>/float", with its state in float
+TEST(StabilityPrecision, EachCaseRunsInBothPrecisions) {
+    const std::vector<StabilityCase> cases = stability_cases();
+    ASSERT_EQ(cases.size() % 2, 0u);
+    for (size_t i = 0; i < cases.size(); i += 2)
+        EXPECT_EQ(cases[i + 1].name, cases[i].name + kFloatCaseSuffix);
+    const StabilityLimits limits = stability_limits(Scale::Reduced);
+    const StabilityResult d = run_stability_case("nu_0.45", Scale::Reduced, limits);
+    const StabilityResult f = run_stability_case("nu_0.45/float", Scale::Reduced, limits);
+    EXPECT_EQ(f.name, "nu_0.45/float");
+    EXPECT_EQ(d.outcome, Outcome::Completed) << d.message;
+    EXPECT_EQ(f.outcome, Outcome::Completed) << f.message;
+    EXPECT_NE(f.energy_drift, d.energy_drift) << "the same drift to the bit: not a float run";
+    EXPECT_THROW(run_stability_case("no_such_case/float", Scale::Reduced, limits), InputError);
 }
 
 TEST(StabilityRefusals, FixedDtPastTheElasticBoundIsRefusedByTheShotLoader) {

@@ -611,5 +611,25 @@ TEST_F(ShotTest, EveryShippedShotLoads) {
     EXPECT_EQ(c.sim.moisture->eps, 1);
 }
 
+// A float twin (shots/*_float.json) is its shot with /sim/precision "float" and nothing else: the
+// README's stills of the two compare float with double, so an edit to one must reach the other.
+TEST(ShotFiles, FloatTwinsDifferFromTheirShotOnlyInPrecision) {
+    const std::string shots = std::string(MUDCRACK_SOURCE_DIR) + "/shots/";
+    for (const std::string base : {"demo", "fig7_mossy_ground"}) {
+        SCOPED_TRACE(base);
+        const Shot double_shot = load_shot(shots + base + ".json");
+        const Shot float_shot = load_shot(shots + base + "_float.json");
+        EXPECT_EQ(double_shot.sim.precision, StatePrecision::Double);
+        EXPECT_EQ(float_shot.sim.precision, StatePrecision::Float);
+        EXPECT_EQ(float_shot.slice(Stage::Init), double_shot.slice(Stage::Init));
+        std::string twin = float_shot.slice(Stage::Render);
+        const std::string key = R"("precision": "float")";
+        const size_t at = twin.find(key);
+        ASSERT_NE(at, std::string::npos) << twin;
+        twin.replace(at, key.size(), R"("precision": "double")");
+        EXPECT_EQ(twin, double_shot.slice(Stage::Render));
+    }
+}
+
 }  // namespace
 }  // namespace mudcrack

@@ -7,6 +7,7 @@
 #include <cstdio>
 #include <functional>
 #include <string>
+#include <type_traits>
 #include <vector>
 
 #include "sim/core/check.h"
@@ -56,6 +57,7 @@ struct DiffusionRun {
 };
 
 // the 1D bar [-L, L] x 2h x 2h, 2 particles per cell per axis, erfc step from t0 to t1
+template <class S>
 DiffusionRun run_diffusion_1d(Real h, int steps) {
     const Real D = 0.01, t0 = 0.25, t1 = 0.5, L = 0.5;
     const WallClock clock;
@@ -63,7 +65,7 @@ DiffusionRun run_diffusion_1d(Real h, int steps) {
     const Real eta = model.moisture->eta;
     const int n_along = static_cast<int>(std::lround(2 * L / h)) * 2;
     const ParticleBlock b = lattice_block(Vec3(-L, 0, 0), Vec3i(n_along, 4, 4), h / 2);
-    SimState s = make_initial_state(model, b.X, b.V0);
+    SimStateOf<S> s = make_initial_state<S>(model, b.X, b.V0);
     auto exact = [&](Real x, Real t) { return eta / 2 * std::erfc(x / (2 * std::sqrt(D * t))); };
     set_moisture_field(model, s, [&](const Vec3& x) { return exact(x.x(), t0); });
     const Real dt = (t1 - t0) / steps;
@@ -83,6 +85,7 @@ DiffusionRun run_diffusion_1d(Real h, int steps) {
 }
 
 // the cube [0, L]^3 with one cosine mode per axis and zero-flux faces
+template <class S>
 DiffusionRun run_diffusion_3d(int cells_per_side) {
     const Real L = 0.5, D = 0.01;
     const Real h = L / cells_per_side;
@@ -94,7 +97,7 @@ DiffusionRun run_diffusion_3d(int cells_per_side) {
     const Real eta = model.moisture->eta, A = eta / 4;
     const int n = 2 * cells_per_side;
     const ParticleBlock b = lattice_block(Vec3::Zero(), Vec3i(n, n, n), h / 2);
-    SimState s = make_initial_state(model, b.X, b.V0);
+    SimStateOf<S> s = make_initial_state<S>(model, b.X, b.V0);
     auto mode = [&](const Vec3& x) {
         return std::cos(kPi * x.x() / L) * std::cos(kPi * x.y() / L) * std::cos(kPi * x.z() / L);
     };
@@ -106,7 +109,8 @@ DiffusionRun run_diffusion_3d(int cells_per_side) {
     Real err2 = 0;
     const Real amplitude = A * std::exp(-decay_rate * t1);
     for (size_t p = 0; p < s.size(); ++p)
-        err2 += std::pow(s.theta[p] - (eta / 2 + amplitude * mode(s.x[p])), 2);
+        err2 +=
+            std::pow(s.theta[p] - (eta / 2 + amplitude * mode(s.x[p].template cast<Real>())), 2);
     r.error = std::sqrt(err2 / s.size()) / A;
     r.steps = steps;
     r.particles = s.size();
@@ -126,11 +130,12 @@ struct ShrinkageRun {
 };
 
 // product of the particle extents along the three axes
-Real extent_volume(const SimState& s) {
-    Vec3 lo = s.x[0], hi = s.x[0];
-    for (const Vec3& x : s.x) {
-        lo = lo.cwiseMin(x);
-        hi = hi.cwiseMax(x);
+template <class S>
+Real extent_volume(const SimStateOf<S>& s) {
+    Vec3 lo = s.x[0].template cast<Real>(), hi = lo;
+    for (const auto& x : s.x) {
+        lo = lo.cwiseMin(x.template cast<Real>());
+        hi = hi.cwiseMax(x.template cast<Real>());
     }
     const Vec3 e = hi - lo;
     return e.x() * e.y() * e.z();
@@ -142,6 +147,7 @@ constexpr Real kDryTheta = 1e-6;
 // a free block of side 0.4 m, no gravity and no plasticity, drying to theta = 0 through its
 // six faces; once every particle is dry (Jw = 1 - eta) the volumes are averaged over a settle
 // window of several elastic periods so the remaining oscillation cancels
+template <class S>
 ShrinkageRun run_shrinkage(Real h, int particles_per_axis_per_cell, int64_t max_steps) {
     const Real side = 0.4, settle_time = 0.3;
     const WallClock clock;
@@ -157,7 +163,7 @@ ShrinkageRun run_shrinkage(Real h, int particles_per_axis_per_cell, int64_t max_
     const Real eta = model.moisture->eta, dry_jw = 1 - eta;
     const int n = static_cast<int>(std::lround(side / h)) * particles_per_axis_per_cell;
     const ParticleBlock b = lattice_block(Vec3::Zero(), Vec3i(n, n, n), side / n);
-    SimState s = make_initial_state(model, b.X, b.V0);
+    SimStateOf<S> s = make_initial_state<S>(model, b.X, b.V0);
     const Real extent0 = extent_volume(s);
     Real tracked0 = 0;
     for (Real v : s.V0) tracked0 += v;
@@ -213,6 +219,7 @@ struct ColumnRun {
 // modulus lambda + 2 mu) have the same modulus E and the same settlement. Gravity is ramped in
 // smoothly over 4 periods T = 4 H / c of the fixed-free bar (a quasi-static load leaves almost
 // no oscillation) and the top displacement is averaged over the following 4 periods.
+template <class S>
 ColumnRun run_column(Real h, Real youngs_modulus) {
     const Real H = 0.5, rho = 1000;
     const WallClock clock;
@@ -221,7 +228,7 @@ ColumnRun run_column(Real h, Real youngs_modulus) {
     model.ground->mode = ColliderMode::Sticky;
     const int n_across = 4, n_up = static_cast<int>(std::lround(H / h)) * 2;
     const ParticleBlock b = lattice_block(Vec3::Zero(), Vec3i(n_across, n_up, n_across), h / 2);
-    SimState s = make_initial_state(model, b.X, b.V0);
+    SimStateOf<S> s = make_initial_state<S>(model, b.X, b.V0);
     // the top layer by particle id (slots are reordered by the sim)
     const Real y_top = b.X.back().y();
     std::vector<int32_t> top_ids;
@@ -270,6 +277,7 @@ struct DryingRun {
 
 // a slab on a sticky ground drying from its top and sides (paper defaults: E = 2000, nu = 0.35,
 // rho = 1, eta = 0.5, lambda = 0.1) at a fixed dt, D set from the wanted D dt / h^2
+template <class S>
 DryingRun run_drying_slab(Real h, int steps, Real diffusion_number, int cg_cap, Real cg_tolerance) {
     const WallClock clock;
     SimModel model = bare_model(h, 2000, 0.35, 1);
@@ -290,7 +298,7 @@ DryingRun run_drying_slab(Real h, int steps, Real diffusion_number, int cg_cap, 
     const Vec3 size(0.4, 0.1, 0.4);
     const Vec3i n = (size / (h / 2)).array().round().cast<int>();
     const ParticleBlock b = lattice_block(Vec3::Zero(), n, h / 2);
-    SimState s = make_initial_state(model, b.X, b.V0);
+    SimStateOf<S> s = make_initial_state<S>(model, b.X, b.V0);
     int64_t cg = 0;
     for (int i = 0; i < steps; ++i) cg += step(model, s, dt).cg_iterations;
     DryingRun r;
@@ -298,7 +306,7 @@ DryingRun run_drying_slab(Real h, int steps, Real diffusion_number, int cg_cap, 
     r.x_by_id.resize(s.size());
     for (size_t p = 0; p < s.size(); ++p) {
         r.theta_by_id[s.id[p]] = s.theta[p];
-        r.x_by_id[s.id[p]] = s.x[p];
+        r.x_by_id[s.id[p]] = s.x[p].template cast<Real>();
     }
     r.mean_cg = static_cast<double>(cg) / steps;
     r.dt = dt;
@@ -306,20 +314,23 @@ DryingRun run_drying_slab(Real h, int steps, Real diffusion_number, int cg_cap, 
     return r;
 }
 
+template <class S>
 Sweep cg_cap_sweep(Scale scale, Real diffusion_number) {
     const bool full = scale == Scale::Full;
     const Real h = full ? 0.025 : 0.05;
     const int steps = full ? 300 : 60;
     const Real eta = 0.5;
     Sweep sw;
-    sw.id = format("cg_caps_r%g", diffusion_number);
-    sw.title = format("CG iteration cap, drying slab, D dt/h^2 = %g", diffusion_number);
+    sw.id = format("cg_caps_r%g", diffusion_number) + precision_suffix<S>();
+    sw.title = format("CG iteration cap, drying slab, D dt/h^2 = %g", diffusion_number) +
+               precision_title<S>();
+    sw.precision = precision_name<S>();
     sw.knob = "CG iteration cap";
     sw.error_measure =
         format("RMS theta difference from the converged solve after %d steps, / eta", steps);
-    const DryingRun ref = run_drying_slab(h, steps, diffusion_number, 2000, 1e-13);
+    const DryingRun ref = run_drying_slab<S>(h, steps, diffusion_number, 2000, 1e-13);
     for (int cap : {1, 2, 5, 10}) {
-        const DryingRun r = run_drying_slab(h, steps, diffusion_number, cap, 1e-13);
+        const DryingRun r = run_drying_slab<S>(h, steps, diffusion_number, cap, 1e-13);
         Real e2 = 0, dx2 = 0;
         for (size_t i = 0; i < r.theta_by_id.size(); ++i) {
             e2 += std::pow(r.theta_by_id[i] - ref.theta_by_id[i], 2);
@@ -351,38 +362,43 @@ Sweep cg_cap_sweep(Scale scale, Real diffusion_number) {
 }
 
 // one table row of a sweep from one knob value
+template <class S>
 SweepPoint diffusion_1d_h_point(Real h) {
     const Real D = 0.01, span = 0.25;
     const int steps = static_cast<int>(std::lround(span / (0.4 * h * h / D)));
-    const DiffusionRun r = run_diffusion_1d(h, steps);
+    const DiffusionRun r = run_diffusion_1d<S>(h, steps);
     return {h, r.error, r.wall_s,
             format("%d steps, %zu particles, mean CG %.1f", r.steps, r.particles, r.mean_cg)};
 }
 
+template <class S>
 SweepPoint diffusion_3d_h_point(Real cells_per_side) {
     const int n = static_cast<int>(cells_per_side);
-    const DiffusionRun r = run_diffusion_3d(n);
+    const DiffusionRun r = run_diffusion_3d<S>(n);
     return {0.5 / n, r.error, r.wall_s,
             format("%d steps, %zu particles, mean CG %.1f", r.steps, r.particles, r.mean_cg)};
 }
 
+template <class S>
 SweepPoint shrinkage_h_point(Real h) {
-    const ShrinkageRun r = run_shrinkage(h, 2, 20000);
+    const ShrinkageRun r = run_shrinkage<S>(h, 2, 20000);
     return {h, r.error_extent, r.wall_s,
             format("tracked-volume error %.2e; %lld steps, %zu particles", r.error_tracked,
                    static_cast<long long>(r.steps), r.particles)};
 }
 
+template <class S>
 SweepPoint shrinkage_ppc_point(Real per_axis) {
     const int k = static_cast<int>(per_axis);
-    const ShrinkageRun r = run_shrinkage(0.1, k, 20000);
+    const ShrinkageRun r = run_shrinkage<S>(0.1, k, 20000);
     return {Real(k * k * k), r.error_extent, r.wall_s,
             format("%d per axis; tracked-volume error %.2e; %lld steps, %zu particles", k,
                    r.error_tracked, static_cast<long long>(r.steps), r.particles)};
 }
 
+template <class S>
 SweepPoint column_h_point(Real h) {
-    const ColumnRun r = run_column(h, 1e6);
+    const ColumnRun r = run_column<S>(h, 1e6);
     return {
         h, r.error, r.wall_s,
         format("u/u_exact - 1 = %+.2e; u_exact %.3e m, strain %.1e; %lld steps, %zu particles",
@@ -395,7 +411,8 @@ struct SweepPlan {
     std::string id, title, knob, error_measure, order_note;
     std::vector<Real> knobs;
     std::vector<Real> full_only_knobs;
-    std::function<SweepPoint(Real)> run;
+    std::function<SweepPoint(Real)> run;        // with a double state
+    std::function<SweepPoint(Real)> run_float;  // the same run with a float state
 };
 
 const char* const kShrinkageError =
@@ -411,7 +428,8 @@ const SweepPlan& plan(const std::string& id) {
          "quadratic B-splines with lumped mass, dt ~ h^2: 2 expected",
          {0.04, 0.02, 0.01},
          {0.005},
-         diffusion_1d_h_point},
+         diffusion_1d_h_point<double>,
+         diffusion_1d_h_point<float>},
         {"diffusion_3d_h",
          "3D moisture diffusion (cosine mode in a cube, zero flux) over h, dt ~ 0.4 h^2/D",
          "h [m]",
@@ -419,7 +437,8 @@ const SweepPlan& plan(const std::string& id) {
          "2 expected in the interior; the material boundary sits within a B-spline support of the faces",
          {4, 6, 8},
          {12, 16},
-         diffusion_3d_h_point},
+         diffusion_3d_h_point<double>,
+         diffusion_3d_h_point<float>},
         {"shrinkage_h",
          "Free drying shrinkage to (1-eta) V0 over h, 2x2x2 particles per cell",
          "h [m]",
@@ -428,7 +447,8 @@ const SweepPlan& plan(const std::string& id) {
          "oscillation",
          {0.2, 0.1},
          {0.05},
-         shrinkage_h_point},
+         shrinkage_h_point<double>,
+         shrinkage_h_point<float>},
         {"shrinkage_ppc",
          "Free drying shrinkage to (1-eta) V0 over particles per cell, h = 0.1 m",
          "particles per cell",
@@ -436,7 +456,8 @@ const SweepPlan& plan(const std::string& id) {
          "slope against particles per cell (not a spatial order)",
          {1, 2},
          {3, 4},
-         shrinkage_ppc_point},
+         shrinkage_ppc_point<double>,
+         shrinkage_ppc_point<float>},
         {"column_h",
          "Elastic column settling under gravity (E = 1e6 Pa, nu = 0, H = 0.5 m) over h",
          "h [m]",
@@ -444,7 +465,8 @@ const SweepPlan& plan(const std::string& id) {
          "the free top surface is resolved to O(h) by the B-spline mass: about 1 expected",
          {0.1, 0.05, 0.025},
          {0.0125, 0.00625},
-         column_h_point},
+         column_h_point<double>,
+         column_h_point<float>},
     };
     const auto it =
         std::find_if(plans.begin(), plans.end(), [&](const SweepPlan& p) { return p.id == id; });
@@ -453,41 +475,53 @@ const SweepPlan& plan(const std::string& id) {
 }
 
 // runs the plan's knobs in order and fits the log-log slope of error against the recorded knob
+template <class S>
 Sweep run_sweep(const SweepPlan& plan, Scale scale) {
     Sweep sw;
-    sw.id = plan.id;
-    sw.title = plan.title;
+    sw.id = plan.id + precision_suffix<S>();
+    sw.title = plan.title + precision_title<S>();
+    sw.precision = precision_name<S>();
     sw.knob = plan.knob;
     sw.error_measure = plan.error_measure;
     std::vector<Real> knobs = plan.knobs;
     if (scale == Scale::Full)
         knobs.insert(knobs.end(), plan.full_only_knobs.begin(), plan.full_only_knobs.end());
-    for (Real k : knobs) sw.points.push_back(plan.run(k));
+    const auto& run = std::is_same_v<S, float> ? plan.run_float : plan.run;
+    for (Real k : knobs) sw.points.push_back(run(k));
     fit_order(sw);
     sw.order_note = plan.order_note;
     return sw;
 }
 
-}  // namespace
-
-Sweep sweep_diffusion_1d_h(Scale scale) { return run_sweep(plan("diffusion_1d_h"), scale); }
+// one row of the column's E sweep at a fixed h
+template <class S>
+std::function<SweepPoint(Real)> column_E_point(Real h) {
+    return [h](Real E) {
+        const ColumnRun r = run_column<S>(h, E);
+        return SweepPoint{E, r.error, r.wall_s,
+                          format("u/u_exact - 1 = %+.2e; strain rho g H/E = %.1e; %lld steps",
+                                 r.signed_error, r.strain, static_cast<long long>(r.steps))};
+    };
+}
 
 // not a run_sweep: its order is fitted on the time error against a fine-step reference, not on
 // the table's error against the exact solution
-Sweep sweep_diffusion_1d_dt(Scale scale) {
+template <class S>
+Sweep diffusion_1d_dt_sweep(Scale scale) {
     Sweep sw;
-    sw.id = "diffusion_1d_dt";
-    sw.title = "1D moisture diffusion (erfc) over dt, h fixed";
+    sw.id = "diffusion_1d_dt" + std::string(precision_suffix<S>());
+    sw.title = "1D moisture diffusion (erfc) over dt, h fixed" + std::string(precision_title<S>());
+    sw.precision = precision_name<S>();
     sw.knob = "dt [s]";
     const Real h = scale == Scale::Full ? 0.005 : 0.01;
     sw.error_measure = format("RMS theta error at t1 (h = %g m)", h);
     std::vector<int> step_counts = {2, 4, 8, 16};
     if (scale == Scale::Full) step_counts.push_back(32);
     // the time error alone: against the same h with 8x the finest step count
-    const DiffusionRun ref = run_diffusion_1d(h, 8 * step_counts.back());
+    const DiffusionRun ref = run_diffusion_1d<S>(h, 8 * step_counts.back());
     std::vector<Real> dts, time_errors;
     for (int steps : step_counts) {
-        const DiffusionRun r = run_diffusion_1d(h, steps);
+        const DiffusionRun r = run_diffusion_1d<S>(h, steps);
         Real e2 = 0;
         for (size_t i = 0; i < r.theta_by_id.size(); ++i)
             e2 += std::pow(r.theta_by_id[i] - ref.theta_by_id[i], 2);
@@ -506,16 +540,9 @@ Sweep sweep_diffusion_1d_dt(Scale scale) {
     return sw;
 }
 
-Sweep sweep_diffusion_3d_h(Scale scale) { return run_sweep(plan("diffusion_3d_h"), scale); }
-
-Sweep sweep_shrinkage_h(Scale scale) { return run_sweep(plan("shrinkage_h"), scale); }
-
-Sweep sweep_shrinkage_ppc(Scale scale) { return run_sweep(plan("shrinkage_ppc"), scale); }
-
-Sweep sweep_column_h(Scale scale) { return run_sweep(plan("column_h"), scale); }
-
 // over E the title names the scale's h and the full scale adds E between the reduced ones
-Sweep sweep_column_E(Scale scale) {
+template <class S>
+Sweep column_E_sweep(Scale scale) {
     const bool full = scale == Scale::Full;
     const Real h = full ? 0.025 : 0.05;
     SweepPlan p{
@@ -528,37 +555,87 @@ Sweep sweep_column_E(Scale scale) {
         "theory with the opposite sign",
         full ? std::vector<Real>{1e5, 3e5, 1e6, 3e6, 1e7} : std::vector<Real>{1e5, 1e6, 1e7},
         {},
-        [h](Real E) {
-            const ColumnRun r = run_column(h, E);
-            return SweepPoint{E, r.error, r.wall_s,
-                              format("u/u_exact - 1 = %+.2e; strain rho g H/E = %.1e; %lld steps",
-                                     r.signed_error, r.strain, static_cast<long long>(r.steps))};
-        }};
-    return run_sweep(p, scale);
+        column_E_point<double>(h),
+        column_E_point<float>(h)};
+    return run_sweep<S>(p, scale);
 }
 
-std::vector<Sweep> sweep_cg_caps(Scale scale) {
+template <class S>
+Sweep planned_sweep(const std::string& id, Scale scale) {
+    return run_sweep<S>(plan(id), scale);
+}
+
+template <class S>
+std::vector<Sweep> cg_cap_sweeps(Scale scale) {
     std::vector<Sweep> out;
-    out.push_back(cg_cap_sweep(scale, 0.01));
-    out.push_back(cg_cap_sweep(scale, 1));
-    if (scale == Scale::Full) out.push_back(cg_cap_sweep(scale, 30));
+    out.push_back(cg_cap_sweep<S>(scale, 0.01));
+    out.push_back(cg_cap_sweep<S>(scale, 1));
+    if (scale == Scale::Full) out.push_back(cg_cap_sweep<S>(scale, 30));
     return out;
 }
 
+}  // namespace
+
+Sweep sweep_diffusion_1d_h(Scale scale, StatePrecision precision) {
+    return with_state_precision(
+        precision, [&](auto s) { return planned_sweep<decltype(s)>("diffusion_1d_h", scale); });
+}
+
+Sweep sweep_diffusion_1d_dt(Scale scale, StatePrecision precision) {
+    return with_state_precision(precision,
+                                [&](auto s) { return diffusion_1d_dt_sweep<decltype(s)>(scale); });
+}
+
+Sweep sweep_diffusion_3d_h(Scale scale, StatePrecision precision) {
+    return with_state_precision(
+        precision, [&](auto s) { return planned_sweep<decltype(s)>("diffusion_3d_h", scale); });
+}
+
+Sweep sweep_shrinkage_h(Scale scale, StatePrecision precision) {
+    return with_state_precision(
+        precision, [&](auto s) { return planned_sweep<decltype(s)>("shrinkage_h", scale); });
+}
+
+Sweep sweep_shrinkage_ppc(Scale scale, StatePrecision precision) {
+    return with_state_precision(
+        precision, [&](auto s) { return planned_sweep<decltype(s)>("shrinkage_ppc", scale); });
+}
+
+Sweep sweep_column_h(Scale scale, StatePrecision precision) {
+    return with_state_precision(
+        precision, [&](auto s) { return planned_sweep<decltype(s)>("column_h", scale); });
+}
+
+Sweep sweep_column_E(Scale scale, StatePrecision precision) {
+    return with_state_precision(precision,
+                                [&](auto s) { return column_E_sweep<decltype(s)>(scale); });
+}
+
+std::vector<Sweep> sweep_cg_caps(Scale scale, StatePrecision precision) {
+    return with_state_precision(precision,
+                                [&](auto s) { return cg_cap_sweeps<decltype(s)>(scale); });
+}
+
+// each sweep in double, then in float: the writer plots the two on one figure
 std::vector<Sweep> all_sweeps(Scale scale, const std::function<void(const Sweep&)>& on_done) {
     std::vector<Sweep> out;
     auto add = [&](Sweep s) {
         if (on_done) on_done(s);
         out.push_back(std::move(s));
     };
-    add(sweep_diffusion_1d_h(scale));
-    add(sweep_diffusion_1d_dt(scale));
-    add(sweep_diffusion_3d_h(scale));
-    add(sweep_shrinkage_h(scale));
-    add(sweep_shrinkage_ppc(scale));
-    add(sweep_column_h(scale));
-    add(sweep_column_E(scale));
-    for (Sweep& s : sweep_cg_caps(scale)) add(std::move(s));
+    using Run = Sweep (*)(Scale, StatePrecision);
+    for (const Run run : {Run(sweep_diffusion_1d_h), Run(sweep_diffusion_1d_dt),
+                          Run(sweep_diffusion_3d_h), Run(sweep_shrinkage_h),
+                          Run(sweep_shrinkage_ppc), Run(sweep_column_h), Run(sweep_column_E)}) {
+        add(run(scale, StatePrecision::Double));
+        add(run(scale, StatePrecision::Float));
+    }
+    std::vector<Sweep> in_double = sweep_cg_caps(scale, StatePrecision::Double),
+                       in_float = sweep_cg_caps(scale, StatePrecision::Float);
+    for (size_t i = 0; i < in_double.size(); ++i) {
+        add(std::move(in_double[i]));
+        add(std::move(in_float[i]));
+    }
     return out;
 }
 

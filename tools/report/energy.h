@@ -17,6 +17,7 @@ struct EnergyBreakdown {
 /// The energy of `state` under `model`. Elastic energy is +infinity if some Fe is inverted.
 /// @note With moisture the particle masses change and evaporated water takes its momentum with
 /// it, so the total is not conserved even by an exact integrator; the drift is still reported.
-EnergyBreakdown state_energy(const SimModel& model, const SimState& state);
+template <class S>
+EnergyBreakdown state_energy(const SimModel& model, const SimStateOf<S>& state);
 
 }  // namespace mudcrack::report

@@ -2,9 +2,11 @@
 /// Results of the accuracy sweeps and the stability matrix of `make report`.
 #include <cstdint>
 #include <string>
+#include <type_traits>
 #include <vector>
 
 #include "sim/core/types.h"
+#include "sim/model.h"
 
 namespace mudcrack::report {
 
@@ -21,6 +23,30 @@ struct SweepPoint {
     std::string note;  // extra measured numbers of this run (steps, particles, secondary error)
 };
 
+/// The suffix of a float sweep's id ("" in double): the writer plots "<id>" and "<id>_float" on
+/// one figure.
+inline constexpr const char* kFloatSweepSuffix = "_float";
+
+template <class S>
+const char* precision_name() {
+    return std::is_same_v<S, float> ? "float" : "double";
+}
+template <class S>
+const char* precision_suffix() {
+    return std::is_same_v<S, float> ? kFloatSweepSuffix : "";
+}
+template <class S>
+const char* precision_title() {
+    return std::is_same_v<S, float> ? " (float state)" : "";
+}
+
+/// Calls fn(S{}) with S the number type `precision` names (double or float), returning its result.
+template <class Fn>
+decltype(auto) with_state_precision(StatePrecision precision, Fn&& fn) {
+    if (precision == StatePrecision::Float) return fn(float{});
+    return fn(double{});
+}
+
 /// One knob swept against one analytic solution.
 struct Sweep {
     std::string id;             // file stem of its data and plot, e.g. "diffusion_1d_h"
@@ -28,8 +54,9 @@ struct Sweep {
     std::string knob;           // knob name with units, e.g. "h [m]"
     std::string error_measure;  // what `error` is
     std::vector<SweepPoint> points;
-    Real order = 0;          // least-squares slope of log(error) against log(knob)
-    std::string order_note;  // how to read the slope (expected order, what limits it)
+    std::string precision = "double";  // of the particle state: "double" or "float"
+    Real order = 0;                    // least-squares slope of log(error) against log(knob)
+    std::string order_note;            // how to read the slope (expected order, what limits it)
 };
 
 /// What a stability case ended with. The last three are failures of the product.

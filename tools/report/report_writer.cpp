@@ -25,9 +25,23 @@ std::string gp_quote(const std::string& s) {
     return out + "'";
 }
 
-std::string gnuplot_script(const Sweep& sw, const std::string& dat, const std::string& png) {
+// the sweep's data file, relative to the report folder
+std::string data_file(const Sweep& sw) { return (fs::path("data") / (sw.id + ".dat")).string(); }
+
+// one sweep's series on a Pareto plot: its points (errors of 0, a converged reference, cannot sit
+// on a log axis) and their knob labels
+std::string plot_series(const Sweep& sw, int point_type) {
+    return gp_quote(data_file(sw)) + " using 3:($2 > 0 ? $2 : 1/0) with linespoints pt " +
+           std::to_string(point_type) + " ps 1.5 title " +
+           gp_quote(sw.precision + " state, " + sw.knob) + ", \\\n     " + gp_quote(data_file(sw)) +
+           " using 3:($2 > 0 ? $2 : 1/0):(sprintf('%g', $1)) with labels offset 1.5,0.8 notitle";
+}
+
+// the Pareto plot of a sweep, with its float twin's series beside it when there is one
+std::string gnuplot_script(const Sweep& sw, const Sweep* float_twin, const std::string& png) {
     std::ostringstream os;
     os << "# Pareto plot of the sweep " << sw.id
+       << (float_twin ? " and " + float_twin->id : std::string())
        << ": error against wall time, each point labelled with its knob.\n"
        << "if (strstrt(GPVAL_TERMINALS, 'pngcairo') > 0) {\n"
        << "    set terminal pngcairo noenhanced size 900,600\n"
@@ -43,11 +57,9 @@ std::string gnuplot_script(const Sweep& sw, const std::string& dat, const std::s
        << "set grid\n"
        << "set key top right\n"
        << "set offsets graph 0.05, graph 0.15, graph 0.1, graph 0.1\n"
-       << "# errors of 0 (a converged reference) cannot sit on a log axis\n"
-       << "plot " << gp_quote(dat)
-       << " using 3:($2 > 0 ? $2 : 1/0) with linespoints pt 7 ps 1.5 title " << gp_quote(sw.knob)
-       << ", \\\n"
-       << "     '' using 3:($2 > 0 ? $2 : 1/0):(sprintf('%g', $1)) with labels offset 1.5,0.8 notitle\n";
+       << "plot " << plot_series(sw, 7);
+    if (float_twin) os << ", \\\n     " << plot_series(*float_twin, 5);
+    os << "\n";
     return os.str();
 }
 
@@ -61,6 +73,14 @@ std::string sci(Real v) {
 std::string table_cell(std::string s) {
     for (size_t i = 0; (i = s.find('|', i)) != std::string::npos; i += 2) s.replace(i, 1, "\\|");
     return s;
+}
+
+// the id of a float sweep's double twin
+std::string double_twin_id(const Sweep& sw) {
+    const std::string suffix = kFloatSweepSuffix;
+    const bool has_suffix = sw.id.size() > suffix.size() &&
+                            sw.id.compare(sw.id.size() - suffix.size(), suffix.size(), suffix) == 0;
+    return has_suffix ? sw.id.substr(0, sw.id.size() - suffix.size()) : sw.id;
 }
 
 // the error at cap 5 of a CG sweep, NaN if absent
@@ -114,6 +134,12 @@ void write_text_file(const fs::path& path, const std::string& text) {
     fs::rename(tmp, path);
 }
 
+const Sweep* find_sweep(const std::vector<Sweep>& sweeps, const std::string& id) {
+    for (const Sweep& sw : sweeps)
+        if (sw.id == id) return &sw;
+    return nullptr;
+}
+
 std::vector<Figure> write_figures(const fs::path& dir, const std::vector<Sweep>& sweeps) {
     fs::create_directories(dir / "data");
     fs::create_directories(dir / "plots");
@@ -125,14 +151,16 @@ std::vector<Figure> write_figures(const fs::path& dir, const std::vector<Sweep>&
             << "\n# knob error wall_s\n";
         for (const SweepPoint& p : sw.points)
             dat << format("%.10g %.10g %.6g\n", p.knob, p.error, p.wall_s);
-        write_text_file(dir / "data" / (sw.id + ".dat"), dat.str());
+        write_text_file(dir / data_file(sw), dat.str());
+        // a float sweep is drawn on its double twin's figure
+        if (sw.precision == "float" && find_sweep(sweeps, double_twin_id(sw))) continue;
         Figure f;
         f.sweep_id = sw.id;
         f.script = fs::path("plots") / (sw.id + ".gp");
         f.png = sw.id + ".png";
         write_text_file(
             dir / f.script,
-            gnuplot_script(sw, (fs::path("data") / (sw.id + ".dat")).string(), f.png.string()));
+            gnuplot_script(sw, find_sweep(sweeps, sw.id + kFloatSweepSuffix), f.png.string()));
         f.command = "gnuplot " + f.script.string();
         if (can_plot) {
             const std::string cmd = "cd '" + dir.string() + "' && " + f.command + " 2>&1";
@@ -197,7 +225,12 @@ std::string report_markdown(const ReportContent& c, const std::vector<Figure>& f
        << c.command << "` wrote the data.\n\n";
     for (size_t i = 0; i < c.sweeps.size(); ++i) {
         const Sweep& sw = c.sweeps[i];
-        const Figure* fig = i < figures.size() ? &figures[i] : nullptr;
+        // a sweep's figure follows its float twin's table when the twin comes next (it holds both)
+        const bool twin_is_next =
+            i + 1 < c.sweeps.size() && c.sweeps[i + 1].id == sw.id + kFloatSweepSuffix;
+        const Figure* fig = nullptr;
+        for (const Figure& f : figures)
+            if (f.sweep_id == double_twin_id(sw) && !twin_is_next) fig = &f;
         md << "### " << sw.title << " <a name=\"" << sw.id << "\"></a>\n\n"
            << "Error: " << sw.error_measure << ". Fitted order: **" << format("%.2f", sw.order)
            << "** (" << sw.order_note << ").\n\n"

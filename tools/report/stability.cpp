@@ -252,7 +252,8 @@ const std::vector<CaseEntry>& case_table() {
 }
 
 // any non-finite value in the state; what the sim's own check must have reported
-bool has_non_finite(const SimState& s) {
+template <class S>
+bool has_non_finite(const SimStateOf<S>& s) {
     for (size_t p = 0; p < s.size(); ++p) {
         if (!s.x[p].allFinite() || !s.v[p].allFinite() || !s.Fe[p].allFinite() ||
             !s.C[p].allFinite() || !std::isfinite(s.J[p]) || !std::isfinite(s.mass[p]))
@@ -299,7 +300,11 @@ StabilityLimits stability_limits(Scale scale) {
 
 std::vector<StabilityCase> stability_cases() {
     std::vector<StabilityCase> out;
-    for (const CaseEntry& e : case_table()) out.push_back(e.info);
+    for (const CaseEntry& e : case_table()) {
+        out.push_back(e.info);
+        out.push_back(
+            {e.info.name + kFloatCaseSuffix, e.info.group, e.info.description + " (float state)"});
+    }
     return out;
 }
 
@@ -313,7 +318,8 @@ struct Tally {
     Real e_scale = 0, e_max = 0, e_last = 0;  // energy: largest |total| seen, largest, last
 };
 
-void sample_energy(const SimModel& model, const SimState& s, Tally& tally) {
+template <class S>
+void sample_energy(const SimModel& model, const SimStateOf<S>& s, Tally& tally) {
     tally.e_last = state_energy(model, s).total();
     tally.e_max = std::max(tally.e_max, tally.e_last);
     tally.e_scale = std::max(tally.e_scale, std::abs(tally.e_last));
@@ -322,8 +328,10 @@ void sample_energy(const SimModel& model, const SimState& s, Tally& tally) {
 // steps the case until the step limit, the wall-time limit, a non-finite state or an error;
 // failed substeps are retried as in mc-sim (sim/mpm/step_retry.h), from the state at t = 0.
 // Sets r's outcome and message.
-void step_case(const SimModel& model, SimState& s, const StabilityLimits& limits,
-               const WallClock& clock, Tally& tally, RetryingStepper& stepper, StabilityResult& r) {
+template <class S>
+void step_case(const SimModel& model, SimStateOf<S>& s, const StabilityLimits& limits,
+               const WallClock& clock, Tally& tally, RetryingStepperOf<S>& stepper,
+               StabilityResult& r) {
     stepper.restart(s);
     Tally at_rollback_point = tally;
     r.outcome = Outcome::Completed;
@@ -367,38 +375,36 @@ void step_case(const SimModel& model, SimState& s, const StabilityLimits& limits
 
 }  // namespace
 
-StabilityResult run_stability_case(const std::string& name, Scale scale,
-                                   const StabilityLimits& limits) {
-    const auto& table = case_table();
-    const auto it = std::find_if(table.begin(), table.end(),
-                                 [&](const CaseEntry& e) { return e.info.name == name; });
-    if (it == table.end())
-        throw InputError("--case " + name + ": no such stability case (see --list-cases)");
-    const WallClock clock;
-    StabilityResult r;
-    r.name = name;
-    CaseSetup c = it->setup(scale);
+namespace {
 
+// the case from its initial state on, with a state of precision S; r holds its name
+template <class S>
+StabilityResult run_case_in(CaseSetup& c, const StabilityLimits& limits, const WallClock& clock,
+                            StabilityResult r) {
     // refusals at load: the shot loader, then the initial state
-    std::optional<SimState> state;
+    std::optional<SimStateOf<S>> state;
     try {
-        if (!c.shot_json.empty()) c.model = parse_shot(c.shot_json, "stability_case.json").sim;
-        state.emplace(make_initial_state(c.model, c.particles.X, c.particles.V0));
+        if (!c.shot_json.empty()) {
+            const StatePrecision precision = c.model.precision;
+            c.model = parse_shot(c.shot_json, "stability_case.json").sim;
+            c.model.precision = precision;
+        }
+        state.emplace(make_initial_state<S>(c.model, c.particles.X, c.particles.V0));
     } catch (const InputError& e) {
         r.outcome = Outcome::Refused;
         r.message = one_line(e.what());
         r.wall_s = clock.seconds();
         return r;
     }
-    SimState& s = *state;
+    SimStateOf<S>& s = *state;
 
     // the steps, with the energy sampled along the way
     Tally tally;
     const Real e0 = state_energy(c.model, s).total();  // gravity from the ground, so >= 0
     tally.e_scale = std::abs(e0);
     tally.e_max = tally.e_last = e0;
-    for (const Vec3& v : s.v) tally.max_speed = std::max(tally.max_speed, v.norm());
-    RetryingStepper stepper;
+    for (const auto& v : s.v) tally.max_speed = std::max<Real>(tally.max_speed, v.norm());
+    RetryingStepperOf<S> stepper;
     step_case(c.model, s, limits, clock, tally, stepper, r);
     r.steps = tally.steps;
     r.retries = stepper.retries();
@@ -419,7 +425,7 @@ StabilityResult run_stability_case(const std::string& name, Scale scale,
     if (r.outcome == Outcome::Completed && !(r.energy_growth <= kDivergedEnergyGrowth)) {
         r.outcome = Outcome::Diverged;
         int inverted = 0;
-        for (const Mat3& Fe : s.Fe) inverted += !(Fe.determinant() > 0);
+        for (const auto& Fe : s.Fe) inverted += !(Fe.template cast<Real>().determinant() > 0);
         r.message =
             is_energy_finite
                 ? format("energy grew to %.3g x its scale with no error", r.energy_growth)
@@ -428,6 +434,29 @@ StabilityResult run_stability_case(const std::string& name, Scale scale,
     }
     r.wall_s = clock.seconds();
     return r;
+}
+
+}  // namespace
+
+StabilityResult run_stability_case(const std::string& name, Scale scale,
+                                   const StabilityLimits& limits) {
+    // "<case>/float": the case with a float state
+    const std::string suffix = kFloatCaseSuffix;
+    const bool in_float = name.size() > suffix.size() &&
+                          name.compare(name.size() - suffix.size(), suffix.size(), suffix) == 0;
+    const std::string base = in_float ? name.substr(0, name.size() - suffix.size()) : name;
+    const auto& table = case_table();
+    const auto it = std::find_if(table.begin(), table.end(),
+                                 [&](const CaseEntry& e) { return e.info.name == base; });
+    if (it == table.end())
+        throw InputError("--case " + name + ": no such stability case (see --list-cases)");
+    const WallClock clock;
+    StabilityResult r;
+    r.name = name;
+    CaseSetup c = it->setup(scale);
+    c.model.precision = in_float ? StatePrecision::Float : StatePrecision::Double;
+    if (in_float) return run_case_in<float>(c, limits, clock, r);
+    return run_case_in<double>(c, limits, clock, r);
 }
 
 std::string serialize_result(const StabilityResult& r) {

@@ -25,7 +25,10 @@ struct StabilityLimits {
 /// The limits used at each scale.
 StabilityLimits stability_limits(Scale scale);
 
-/// Every case of the matrix, in report order.
+/// The suffix of a case's name that runs it with a float particle state (/sim/precision).
+inline constexpr const char* kFloatCaseSuffix = "/float";
+
+/// Every case of the matrix, in report order: each in double, then as "<name>/float".
 std::vector<StabilityCase> stability_cases();
 
 /// Runs one case in this process. A hang inside a single step cannot be interrupted here; use

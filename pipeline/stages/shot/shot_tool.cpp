@@ -57,6 +57,7 @@ std::string shot_summary(const Shot& shot) {
                     : "; no ground";
     s += sim.domain.is_auto ? "; domain auto" : "; domain fixed";
     s += "; h " + number(sim.h) + " m";
+    if (sim.precision == StatePrecision::Float) s += "; state float";
     s += "; frames " + std::to_string(sim.time.frame_start) + "-" +
          std::to_string(sim.time.frame_end) + " at " + number(sim.time.fps) + " fps";
     s += sim.time.dt_fixed > 0 ? "; dt fixed " + number(sim.time.dt_fixed) + " s"
