@@ -30,11 +30,14 @@ std::string data_file(const Sweep& sw) { return (fs::path("data") / (sw.id + ".d
 
 // one sweep's series on a Pareto plot: its points (errors of 0, a converged reference, cannot sit
 // on a log axis) and their knob labels
+// (a float twin's labels go below its points, the double's above)
 std::string plot_series(const Sweep& sw, int point_type) {
+    const char* label_offset = sw.precision == "float" ? "1.5,-0.8" : "1.5,0.8";
     return gp_quote(data_file(sw)) + " using 3:($2 > 0 ? $2 : 1/0) with linespoints pt " +
            std::to_string(point_type) + " ps 1.5 title " +
            gp_quote(sw.precision + " state, " + sw.knob) + ", \\\n     " + gp_quote(data_file(sw)) +
-           " using 3:($2 > 0 ? $2 : 1/0):(sprintf('%g', $1)) with labels offset 1.5,0.8 notitle";
+           " using 3:($2 > 0 ? $2 : 1/0):(sprintf('%g', $1)) with labels offset " + label_offset +
+           " notitle";
 }
 
 // the Pareto plot of a sweep, with its float twin's series beside it when there is one
@@ -144,7 +147,7 @@ std::vector<Figure> write_figures(const fs::path& dir, const std::vector<Sweep>&
     fs::create_directories(dir / "data");
     fs::create_directories(dir / "plots");
     const bool can_plot = has_gnuplot();
-    std::vector<Figure> figures;
+    // every data file first: a figure draws its float twin's too
     for (const Sweep& sw : sweeps) {
         std::ostringstream dat;
         dat << "# " << sw.title << "\n# knob: " << sw.knob << "\n# error: " << sw.error_measure
@@ -152,6 +155,9 @@ std::vector<Figure> write_figures(const fs::path& dir, const std::vector<Sweep>&
         for (const SweepPoint& p : sw.points)
             dat << format("%.10g %.10g %.6g\n", p.knob, p.error, p.wall_s);
         write_text_file(dir / data_file(sw), dat.str());
+    }
+    std::vector<Figure> figures;
+    for (const Sweep& sw : sweeps) {
         // a float sweep is drawn on its double twin's figure
         if (sw.precision == "float" && find_sweep(sweeps, double_twin_id(sw))) continue;
         Figure f;
