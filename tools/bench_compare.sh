@@ -9,12 +9,17 @@
 #       default: 5 pairs of NoMoisture/1 Moisture/1 NoMoisture/2 Moisture/2
 #
 # A ratio of 1.02 means the new build's step takes 2 % more time.
+# OLD_BENCH and NEW_BENCH (default BM_ReferenceScene) name each side's benchmark: a float state
+# against a double one in the same build is
+#   OLD_BENCH=BM_ReferenceScene NEW_BENCH=BM_ReferenceSceneFloat tools/bench_compare.sh build build 3
 set -euo pipefail
 
 [[ $# -ge 2 ]] || { echo "usage: $0 OLD_BUILD NEW_BUILD [PAIRS] [CONFIG/THREADS...]" >&2; exit 2; }
 OLD=$1/bin/mpm_bench
 NEW=$2/bin/mpm_bench
 PAIRS=${3:-5}
+OLD_BENCH=${OLD_BENCH:-BM_ReferenceScene}
+NEW_BENCH=${NEW_BENCH:-BM_ReferenceScene}
 shift $(( $# < 3 ? $# : 3 ))
 CONFIGS=("$@")
 [[ ${#CONFIGS[@]} -gt 0 ]] || CONFIGS=(NoMoisture/1 Moisture/1 NoMoisture/2 Moisture/2)
@@ -22,9 +27,9 @@ for b in "$OLD" "$NEW"; do
     [[ -x $b ]] || { echo "bench_compare.sh: $b is not built" >&2; exit 1; }
 done
 
-# one run of a build on a configuration -> "particle-steps/s particle-steps/CPU-s"
+# one run of a build's benchmark on a configuration -> "particle-steps/s particle-steps/CPU-s"
 rates() {
-    MUDCRACK_BENCH_REPETITIONS=1 "$1" --benchmark_filter="^BM_ReferenceScene/$2/" --benchmark_format=csv 2>/dev/null |
+    MUDCRACK_BENCH_REPETITIONS=1 "$1" --benchmark_filter="^$3/$2/" --benchmark_format=csv 2>/dev/null |
         awk -F, 'NR == 1 { for (i = 1; i <= NF; ++i) { if ($i == "\"particle_steps_per_s\"") w = i
                                                        if ($i == "\"particle_steps_per_cpu_s\"") c = i } }
                  NR == 2 && w && c { print $w, $c }'
@@ -37,8 +42,8 @@ printf '%-14s %-5s %-14s %-14s %-12s %-14s %-14s %s\n' config pair "old [M/s]" "
 for config in "${CONFIGS[@]}"; do
     wall=() cpu=()
     for ((i = 1; i <= PAIRS; ++i)); do
-        read -r ow oc <<<"$(rates "$OLD" "$config")"
-        read -r nw nc <<<"$(rates "$NEW" "$config")"
+        read -r ow oc <<<"$(rates "$OLD" "$config" "$OLD_BENCH")"
+        read -r nw nc <<<"$(rates "$NEW" "$config" "$NEW_BENCH")"
         [[ -n ${ow:-} && -n ${nw:-} ]] || { echo "bench_compare.sh: no particle_steps_per_s for $config" >&2; exit 1; }
         wall+=("$(awk -v o="$ow" -v n="$nw" 'BEGIN { print o / n }')")
         cpu+=("$(awk -v o="$oc" -v n="$nc" 'BEGIN { print o / n }')")

@@ -22,8 +22,9 @@ THREADS=${THREADS:-2}
 DEST=$ROOT/docs/gallery
 README=$ROOT/README.md
 GALLERY=$ROOT/docs/gallery.md
-kShotOrder=(demo fig4_bunny fig5_riverbed fig6_eps_0.2 fig6_eps_0.5 fig6_eps_1.0 fig7_mossy_ground
-            fig8_a fig8_b fig8_c fig9 fig10_ours fig10_wang2019)
+kShotOrder=(demo demo_float fig4_bunny fig5_riverbed fig6_eps_0.2 fig6_eps_0.5 fig6_eps_1.0
+            fig7_mossy_ground fig7_mossy_ground_float fig8_a fig8_b fig8_c fig9 fig10_ours
+            fig10_wang2019)
 
 die() { echo "gallery.sh: $*" >&2; exit 1; }
 [[ $# -ge 2 ]] || { echo "usage: tools/gallery.sh OUT SHOT[@FRAME]..." >&2; exit 2; }
@@ -42,10 +43,12 @@ done
 paper_says() {
     case $1 in
         demo) echo "(ours, what \`make demo\` runs) wet mud that dries, cracks into plates, and whose rims curl and peel off the wetter mud below." ;;
+        demo_float) echo "(ours) the demo with its particle state kept in float (/sim/precision): to hold against the demo's still." ;;
         fig4_bunny) echo "Fig. 4: a bunny made with wet soil gradually breaks into a pile of pieces." ;;
         fig5_riverbed) echo "Fig. 5: a riverbed dried in the sun shows deep cracks." ;;
         fig6_eps_*) echo "Fig. 6 (eps = ${1#fig6_eps_}): the larger the hardening rate eps, the more the soil curls and the larger its fragments." ;;
         fig7_mossy_ground) echo "Fig. 7: a mossy ground shrinks, cracks into polygons and curls." ;;
+        fig7_mossy_ground_float) echo "Fig. 7 with its particle state kept in float (/sim/precision): to hold against fig7_mossy_ground's still." ;;
         fig8_a) echo "Fig. 8(a), eta = 0: without porous shrinkage the soil neither shrinks nor cracks." ;;
         fig8_b) echo "Fig. 8(b), eps = 0: NACC alone cracks vertically only, without curling." ;;
         fig8_c) echo "Fig. 8(c), the full model: the crust curls up through horizontal fractures." ;;

@@ -589,25 +589,19 @@ std::string float_state_range_problem(const SimModel& model, const Vec3& domain_
 }
 
 // the two precisions a state keeps its directional arrays in (SimStateOf)
-template SimStateOf<double> make_initial_state(const SimModel&, const std::vector<Vec3>&,
-                                               const std::vector<Real>&, const std::vector<Real>&);
-template void set_moisture_field(const SimModel&, SimStateOf<double>&,
-                                 const std::function<Real(const Vec3&)>&);
-template Real stable_dt(const SimModel&, const SimStateOf<double>&);
-template StepStats step(const SimModel&, SimStateOf<double>&, Real);
-template GridFrame state_grid_frame(const SimModel&, const SimStateOf<double>&);
-template ParticleFrame state_to_frame(const SimModel&, const SimStateOf<double>&,
-                                      const CacheAttributes&);
-template int64_t state_memory_bytes(const SimStateOf<double>&);
-template SimStateOf<float> make_initial_state(const SimModel&, const std::vector<Vec3>&,
-                                              const std::vector<Real>&, const std::vector<Real>&);
-template void set_moisture_field(const SimModel&, SimStateOf<float>&,
-                                 const std::function<Real(const Vec3&)>&);
-template Real stable_dt(const SimModel&, const SimStateOf<float>&);
-template StepStats step(const SimModel&, SimStateOf<float>&, Real);
-template GridFrame state_grid_frame(const SimModel&, const SimStateOf<float>&);
-template ParticleFrame state_to_frame(const SimModel&, const SimStateOf<float>&,
-                                      const CacheAttributes&);
-template int64_t state_memory_bytes(const SimStateOf<float>&);
+#define MC_INSTANTIATE_FOR_STATE(S)                                                                \
+    template SimStateOf<S> make_initial_state(const SimModel&, const std::vector<Vec3>&,           \
+                                              const std::vector<Real>&, const std::vector<Real>&); \
+    template void set_moisture_field(const SimModel&, SimStateOf<S>&,                              \
+                                     const std::function<Real(const Vec3&)>&);                     \
+    template Real stable_dt(const SimModel&, const SimStateOf<S>&);                                \
+    template StepStats step(const SimModel&, SimStateOf<S>&, Real);                                \
+    template GridFrame state_grid_frame(const SimModel&, const SimStateOf<S>&);                    \
+    template ParticleFrame state_to_frame(const SimModel&, const SimStateOf<S>&,                   \
+                                          const CacheAttributes&);                                 \
+    template int64_t state_memory_bytes(const SimStateOf<S>&);
+MC_INSTANTIATE_FOR_STATE(double)
+MC_INSTANTIATE_FOR_STATE(float)
+#undef MC_INSTANTIATE_FOR_STATE
 
 }  // namespace mudcrack

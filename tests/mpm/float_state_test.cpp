@@ -92,10 +92,7 @@ TEST(FloatState, ACopyContinuesBitForBit) {
     step_in_place(b.model, a, 10);  // with the stress its last step cached
     step_in_place(b.model, c, 10);
     ASSERT_EQ(a.size(), c.size());
-    auto same_bytes = [](const auto& u, const auto& v) {
-        return u.size() == v.size() &&
-               std::memcmp(u.data(), v.data(), u.size() * sizeof(u[0])) == 0;
-    };
+    using test::same_bytes;
     EXPECT_TRUE(same_bytes(a.x, c.x));
     EXPECT_TRUE(same_bytes(a.v, c.v));
     EXPECT_TRUE(same_bytes(a.Fe, c.Fe));

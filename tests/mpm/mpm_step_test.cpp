@@ -139,15 +139,11 @@ TEST(MpmStep, SameThreadCountIsBitwiseIdenticalAndThreadCountsAgree) {
     const SimState a = run(2), b = run(2), c = run(1);
     set_thread_count(saved);
     ASSERT_EQ(a.size(), b.size());
-    auto bytes_equal = [](const auto& u, const auto& v) {
-        return u.size() == v.size() &&
-               std::memcmp(u.data(), v.data(), u.size() * sizeof(u[0])) == 0;
-    };
-    EXPECT_TRUE(bytes_equal(a.x, b.x));
-    EXPECT_TRUE(bytes_equal(a.Fe, b.Fe));
-    EXPECT_TRUE(bytes_equal(a.theta, b.theta));
-    EXPECT_TRUE(bytes_equal(a.alpha, b.alpha));
-    EXPECT_TRUE(bytes_equal(a.id, b.id));
+    EXPECT_TRUE(test::same_bytes(a.x, b.x));
+    EXPECT_TRUE(test::same_bytes(a.Fe, b.Fe));
+    EXPECT_TRUE(test::same_bytes(a.theta, b.theta));
+    EXPECT_TRUE(test::same_bytes(a.alpha, b.alpha));
+    EXPECT_TRUE(test::same_bytes(a.id, b.id));
     // other thread counts: the fixed colour partition makes even these equal, but the contract is
     // round-off
     for (size_t p = 0; p < a.size(); ++p) {

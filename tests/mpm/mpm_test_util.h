@@ -1,6 +1,7 @@
 #pragma once
 // Small scenes for the MPM tests: lattice blocks of particles and a minimal model.
 #include <cmath>
+#include <cstring>
 #include <vector>
 
 #include "sim/core/types.h"
@@ -65,6 +66,13 @@ inline Real total_mass(const SimState& s) {
     Real m = 0;
     for (Real v : s.mass) m += v;
     return m;
+}
+
+/// Whether two arrays hold the same bytes.
+template <class T>
+bool same_bytes(const std::vector<T>& a, const std::vector<T>& b) {
+    return a.size() == b.size() &&
+           (a.empty() || std::memcmp(a.data(), b.data(), a.size() * sizeof(T)) == 0);
 }
 
 /// Particle slot of each id.

@@ -560,9 +560,10 @@ Sweep column_E_sweep(Scale scale) {
     return run_sweep<S>(p, scale);
 }
 
-template <class S>
-Sweep planned_sweep(const std::string& id, Scale scale) {
-    return run_sweep<S>(plan(id), scale);
+// the plan's sweep with the state in `precision`
+Sweep planned_sweep(const std::string& id, Scale scale, StatePrecision precision) {
+    return with_state_precision(precision,
+                                [&](auto s) { return run_sweep<decltype(s)>(plan(id), scale); });
 }
 
 template <class S>
@@ -577,8 +578,7 @@ std::vector<Sweep> cg_cap_sweeps(Scale scale) {
 }  // namespace
 
 Sweep sweep_diffusion_1d_h(Scale scale, StatePrecision precision) {
-    return with_state_precision(
-        precision, [&](auto s) { return planned_sweep<decltype(s)>("diffusion_1d_h", scale); });
+    return planned_sweep("diffusion_1d_h", scale, precision);
 }
 
 Sweep sweep_diffusion_1d_dt(Scale scale, StatePrecision precision) {
@@ -587,23 +587,19 @@ Sweep sweep_diffusion_1d_dt(Scale scale, StatePrecision precision) {
 }
 
 Sweep sweep_diffusion_3d_h(Scale scale, StatePrecision precision) {
-    return with_state_precision(
-        precision, [&](auto s) { return planned_sweep<decltype(s)>("diffusion_3d_h", scale); });
+    return planned_sweep("diffusion_3d_h", scale, precision);
 }
 
 Sweep sweep_shrinkage_h(Scale scale, StatePrecision precision) {
-    return with_state_precision(
-        precision, [&](auto s) { return planned_sweep<decltype(s)>("shrinkage_h", scale); });
+    return planned_sweep("shrinkage_h", scale, precision);
 }
 
 Sweep sweep_shrinkage_ppc(Scale scale, StatePrecision precision) {
-    return with_state_precision(
-        precision, [&](auto s) { return planned_sweep<decltype(s)>("shrinkage_ppc", scale); });
+    return planned_sweep("shrinkage_ppc", scale, precision);
 }
 
 Sweep sweep_column_h(Scale scale, StatePrecision precision) {
-    return with_state_precision(
-        precision, [&](auto s) { return planned_sweep<decltype(s)>("column_h", scale); });
+    return planned_sweep("column_h", scale, precision);
 }
 
 Sweep sweep_column_E(Scale scale, StatePrecision precision) {
