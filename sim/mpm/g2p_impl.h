@@ -230,6 +230,7 @@ G2PResult g2p_impl(const SimModel& model, SimStateOf<S>& state, const SparseGrid
                     state.alpha[p] = r.alpha;
                 }
             }
+            bool is_inverted = false;  // the stored Fe (checked in float only: see below)
             if constexpr (std::is_same_v<S, Real>) {
                 if (is_elastic) state.Fe[p] = Fe_trial;
                 tau[p] = neo_hookean_kirchhoff(
@@ -244,7 +245,12 @@ G2PResult g2p_impl(const SimModel& model, SimStateOf<S>& state, const SparseGrid
                 const volatile S* stored = state.Fe[p].data();
                 Mat3 Fe_stored;
                 for (int k = 0; k < 9; ++k) Fe_stored(k) = static_cast<Real>(stored[k]);
-                tau[p] = neo_hookean_kirchhoff(neo_hookean_terms(Fe_stored, lame), lame);
+                const NeoHookeanTerms stored_terms = neo_hookean_terms(Fe_stored, lame);
+                tau[p] = neo_hookean_kirchhoff(stored_terms, lame);
+                // rounding a nearly singular Fe can invert it (a 200 m/s impact in the stability
+                // matrix: 305 particles with det Fe <= 0 and no error, while J, kept in double,
+                // stayed > 0): the step fails its checks and is retried, as for J <= 0
+                is_inverted = !(stored_terms.J > 0);
             }
 
             // advect, clamped into the domain box
@@ -261,7 +267,8 @@ G2PResult g2p_impl(const SimModel& model, SimStateOf<S>& state, const SparseGrid
                          state.J[p];
             if constexpr (kNacc) check += state.alpha[p];
             if constexpr (kPore) check += state.theta[p];
-            if ((!std::isfinite(check) || !(state.J[p] > 0)) && (bad[t] < 0 || p < bad[t]))
+            if ((!std::isfinite(check) || !(state.J[p] > 0) || is_inverted) &&
+                (bad[t] < 0 || p < bad[t]))
                 bad[t] = p;
             speed2 = std::max(speed2, vp.squaredNorm());
         }

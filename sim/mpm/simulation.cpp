@@ -202,6 +202,8 @@ std::string describe_non_finite(const SimStateOf<S>& s, size_t p, int64_t subste
         what = "non-finite volume ratio J";
     else if (!(s.J[p] > 0))
         what = "an inverted volume, J <= 0 (the step is unstable)";
+    else if (!(s.Fe[p].template cast<Real>().determinant() > 0))
+        what = "an inverted elastic deformation gradient, det Fe <= 0 (the step is unstable)";
     else if (!s.alpha.empty() && !std::isfinite(s.alpha[p]))
         what = "non-finite hardening state alpha";
     else if (!s.theta.empty() && !std::isfinite(s.theta[p]))

@@ -184,6 +184,17 @@ TEST(StabilityPrecision, EachCaseRunsInBothPrecisions) {
     EXPECT_THROW(run_stability_case("no_such_case/float", Scale::Reduced, limits), InputError);
 }
 
+// a float state rounds a nearly singular Fe: at full scale the 200 m/s corner impact left 305
+// particles with det Fe <= 0 and no error (J, kept in double, stayed > 0) before the step checked
+// the stored Fe; now such a step is retried like any inverted one
+TEST(StabilityRecovery, AFloatStateRetriesAnInvertedFeInsteadOfKeepingIt) {
+    const StabilityResult r =
+        run_stability_case("wall_impact_200/float", Scale::Full, stability_limits(Scale::Full));
+    EXPECT_EQ(r.outcome, Outcome::Completed) << r.message;
+    EXPECT_GT(r.retries, 0);
+    EXPECT_TRUE(std::isfinite(r.energy_growth));
+}
+
 TEST(StabilityRefusals, FixedDtPastTheElasticBoundIsRefusedByTheShotLoader) {
     const StabilityResult r =
         run_stability_case("dt_past_bound_shot", Scale::Reduced, stability_limits(Scale::Reduced));
