@@ -47,12 +47,12 @@ enum class ArrayPresence { Always, Optional };
 /// and restored in any slot order (e.g. by id) continues bit for bit. Moisture arrays are empty
 /// when the model has no moisture section; alpha is empty without plasticity.
 ///
-/// StateReal is the precision the directional arrays (x, v, C, Fe: 60 of a particle's 76 stored
-/// numbers) are kept in between steps: double (SimState), or float (SimStateFloat, a shot's
-/// /sim/precision "float"), which holds them in half the memory. The step computes in double
-/// either way, and the scalars stay double: J, alpha and theta are running sums of one increment
-/// per step, which a float would round to its resolution at the running value every step
-/// (docs/physics.md §7.1).
+/// StateReal is the precision the directional arrays (x, v, C, Fe: 24 of a particle's up to 32
+/// numbers, 192 of its 256 bytes in double) are kept in between steps: double (SimState), or float
+/// (SimStateFloat, a shot's /sim/precision "float"), which holds them in half the memory. The step
+/// computes in double either way, and the scalars stay double: J, alpha and theta are running sums
+/// of one increment per step, which a float would round to its resolution at the running value
+/// every step (docs/physics.md §7.1).
 template <class StateReal>
 struct SimStateOf {
     using Scalar = StateReal;
