@@ -3,7 +3,9 @@
 /// MuJoCo's mjtNum): change `Real` here and nowhere else.
 #include <Eigen/Core>
 #include <array>
+#include <cstddef>
 #include <cstdint>
+#include <type_traits>
 
 namespace mudcrack {
 
@@ -28,6 +30,27 @@ struct SymMat3 {
         m << xx, xy, xz, xy, yy, yz, xz, yz, zz;
         return m;
     }
+};
+
+/// What an array element is made of, for code that moves arrays as plain numbers (reordering,
+/// checkpoints): Scalar, kCount of them, packed. A number is one of itself; an Eigen fixed-size
+/// matrix is its entries (column-major, no padding); SymMat3 is its six Reals.
+template <class T, class = void>
+struct PackedNumbers {
+    using Scalar = T;
+    static constexpr size_t kCount = 1;
+};
+template <class T>
+struct PackedNumbers<T, std::void_t<typename T::Scalar>> {
+    using Scalar = typename T::Scalar;
+    static constexpr size_t kCount = sizeof(T) / sizeof(Scalar);
+    static_assert(kCount * sizeof(Scalar) == sizeof(T), "Eigen fixed-size types are packed");
+};
+template <>
+struct PackedNumbers<SymMat3> {
+    using Scalar = Real;
+    static constexpr size_t kCount = 6;
+    static_assert(kCount * sizeof(Scalar) == sizeof(SymMat3), "SymMat3 is six packed Reals");
 };
 
 using Tet = std::array<int32_t, 4>;  // particle ids of a tetrahedron's corners

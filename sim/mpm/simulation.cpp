@@ -29,21 +29,6 @@ constexpr int kAutoDomainCellsBelow = 3;
 // auto domain: fraction of the particles' extent added above and around them
 constexpr Real kAutoDomainMargin = 0.5;
 
-// the number type an element is made of: itself for a number, the scalar of an Eigen matrix or
-// of a symmetric one
-template <class T, class = void>
-struct ComponentOf {
-    using type = T;
-};
-template <class T>
-struct ComponentOf<T, std::void_t<typename T::Scalar>> {
-    using type = typename T::Scalar;
-};
-template <>
-struct ComponentOf<SymMat3> {  // the stress cache's element: six Reals
-    using type = Real;
-};
-
 // reorders an array of float- or double-component elements (a number, Vec3, Mat3) so slot i
 // takes slot order[i], one component at a time through an n-Real buffer (a double holds either
 // exactly)
@@ -51,10 +36,9 @@ template <class T>
 void permute_components(std::vector<T>& a, const std::vector<int32_t>& order,
                         std::vector<Real>& buf) {
     if (a.empty()) return;
-    using Component = typename ComponentOf<T>::type;
+    using Component = typename PackedNumbers<T>::Scalar;
     static_assert(std::is_floating_point_v<Component>, "element must be made of numbers");
-    constexpr int kComp = static_cast<int>(sizeof(T) / sizeof(Component));
-    static_assert(kComp * sizeof(Component) == sizeof(T), "element must be packed components");
+    constexpr int kComp = static_cast<int>(PackedNumbers<T>::kCount);
     Component* data = reinterpret_cast<Component*>(a.data());
     const int64_t n = static_cast<int64_t>(a.size());
     for (int k = 0; k < kComp; ++k) {

@@ -5,6 +5,7 @@
 #include <cstdint>
 #include <functional>
 #include <string>
+#include <type_traits>
 #include <vector>
 
 #include "sim/core/particle_frame.h"
@@ -55,7 +56,6 @@ enum class ArrayPresence { Always, Optional };
 /// every step (docs/physics.md §7.1).
 template <class StateReal>
 struct SimStateOf {
-    using Scalar = StateReal;
     using StateVec3 = Eigen::Matrix<StateReal, 3, 1>;
     using StateMat3 = Eigen::Matrix<StateReal, 3, 3>;
 
@@ -89,6 +89,12 @@ struct SimStateOf {
 
 using SimState = SimStateOf<double>;
 using SimStateFloat = SimStateOf<float>;
+
+/// The name /sim/precision, the checkpoints and the report give a state precision S.
+template <class S>
+constexpr const char* state_precision_name() {
+    return std::is_same_v<S, float> ? "float" : "double";
+}
 
 /// Where a step's wall time went, phase by phase [s]: each phase from its first parallel loop's
 /// start to its last one's end on the calling thread, so on several threads it includes the wait

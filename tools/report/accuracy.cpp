@@ -324,7 +324,7 @@ Sweep cg_cap_sweep(Scale scale, Real diffusion_number) {
     sw.id = format("cg_caps_r%g", diffusion_number) + precision_suffix<S>();
     sw.title = format("CG iteration cap, drying slab, D dt/h^2 = %g", diffusion_number) +
                precision_title<S>();
-    sw.precision = precision_name<S>();
+    sw.precision = state_precision_name<S>();
     sw.knob = "CG iteration cap";
     sw.error_measure =
         format("RMS theta difference from the converged solve after %d steps, / eta", steps);
@@ -480,7 +480,7 @@ Sweep run_sweep(const SweepPlan& plan, Scale scale) {
     Sweep sw;
     sw.id = plan.id + precision_suffix<S>();
     sw.title = plan.title + precision_title<S>();
-    sw.precision = precision_name<S>();
+    sw.precision = state_precision_name<S>();
     sw.knob = plan.knob;
     sw.error_measure = plan.error_measure;
     std::vector<Real> knobs = plan.knobs;
@@ -511,7 +511,7 @@ Sweep diffusion_1d_dt_sweep(Scale scale) {
     Sweep sw;
     sw.id = "diffusion_1d_dt" + std::string(precision_suffix<S>());
     sw.title = "1D moisture diffusion (erfc) over dt, h fixed" + std::string(precision_title<S>());
-    sw.precision = precision_name<S>();
+    sw.precision = state_precision_name<S>();
     sw.knob = "dt [s]";
     const Real h = scale == Scale::Full ? 0.005 : 0.01;
     sw.error_measure = format("RMS theta error at t1 (h = %g m)", h);

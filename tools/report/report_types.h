@@ -7,6 +7,7 @@
 
 #include "sim/core/types.h"
 #include "sim/model.h"
+#include "sim/mpm/simulation.h"
 
 namespace mudcrack::report {
 
@@ -27,10 +28,6 @@ struct SweepPoint {
 /// one figure.
 inline constexpr const char* kFloatSweepSuffix = "_float";
 
-template <class S>
-const char* precision_name() {
-    return std::is_same_v<S, float> ? "float" : "double";
-}
 template <class S>
 const char* precision_suffix() {
     return std::is_same_v<S, float> ? kFloatSweepSuffix : "";

@@ -20,25 +20,10 @@ namespace {
 // 2: strength and damage arrays; 3: the moisture flux history
 constexpr int64_t kSimCheckpointVersion = 3;
 
-// the number type an element is made of, and how many: a double or a float is one, a Vec3 or
-// Mat3 of either is its 3 or 9 packed entries (Eigen's fixed-size types are plain column-major
-// arrays of their scalar, no padding)
-template <class Element, class = void>
-struct Components {
-    using Scalar = Element;
-    static constexpr size_t kCount = 1;
-};
-template <class Element>
-struct Components<Element, std::void_t<typename Element::Scalar>> {
-    using Scalar = typename Element::Scalar;
-    static constexpr size_t kCount = sizeof(Element) / sizeof(Scalar);
-    static_assert(kCount * sizeof(Scalar) == sizeof(Element), "Eigen fixed-size types are packed");
-};
-
 // the elements' entries as doubles (a float's exactly): a restored state is bitwise the saved one
 template <class Element>
 std::vector<double> flatten(const std::vector<Element>& values) {
-    using C = Components<Element>;
+    using C = PackedNumbers<Element>;
     std::vector<double> flat(values.size() * C::kCount);
     const auto* entries = reinterpret_cast<const typename C::Scalar*>(values.data());
     for (size_t i = 0; i < flat.size(); ++i) flat[i] = static_cast<double>(entries[i]);
@@ -50,7 +35,7 @@ std::vector<double> flatten(const std::vector<Element>& values) {
 template <class Element>
 std::vector<Element> unflatten(const Checkpoint& c, const std::string& name, size_t n,
                                bool is_optional) {
-    using C = Components<Element>;
+    using C = PackedNumbers<Element>;
     using Scalar = typename C::Scalar;
     const std::vector<double>& flat = is_optional && c.f64.count(name) && c.f64.at(name).empty()
                                           ? c.f64.at(name)
@@ -105,12 +90,6 @@ void load_total(const Checkpoint& c, const std::string& key, TotalPresence prese
                 : c.require_double(key);
 }
 
-// the checkpoint's name for a state precision
-template <class S>
-const char* precision_name() {
-    return std::is_same_v<S, float> ? "float" : "double";
-}
-
 }  // namespace
 
 fs::path checkpoint_path(const fs::path& dir, int frame) {
@@ -143,7 +122,7 @@ void write_sim_checkpoint(const fs::path& path, const SimCheckpointOf<S>& checkp
     c.meta_string["slice_hash"] = checkpoint.slice_hash;
     c.meta_int["frame"] = checkpoint.frame;
     c.meta_int["threads"] = checkpoint.threads;
-    c.meta_string["precision"] = precision_name<S>();
+    c.meta_string["precision"] = state_precision_name<S>();
     // the state, slot order included (id maps slots to particles)
     c.meta_double["time"] = s.time;
     c.meta_int["step_count"] = s.step_count;
@@ -188,9 +167,9 @@ SimCheckpointOf<S> read_sim_checkpoint(const fs::path& path) {
     // written before the key existed: double
     const std::string precision =
         c.meta_string.count("precision") ? c.meta_string.at("precision") : "double";
-    if (precision != precision_name<S>())
+    if (precision != state_precision_name<S>())
         throw InputError(path.string() + ": precision = \"" + precision + "\": this run keeps a " +
-                         precision_name<S>() +
+                         state_precision_name<S>() +
                          " state (/sim/precision); the checkpoint is not used");
 
     SimCheckpointOf<S> sc;

@@ -441,7 +441,7 @@ json sim_manifest(const Shot& shot, const fs::path& out, const InitParticles& in
         {"first", first}, {"last", last}, {"count", last - first + 1}, {"fps", model.time.fps}};
     m["particles"] = n;
     m["threads"] = thread_count();
-    m["precision"] = std::is_same_v<S, float> ? "float" : "double";
+    m["precision"] = state_precision_name<S>();
     m["resumed_from_frame"] = run.resumed ? json(run.done_frame) : json(nullptr);
     m["wall_seconds"] = wall_seconds;
     m["step_loop_seconds"] = run.step_seconds;
