@@ -119,31 +119,34 @@ StateGap state_gap(const SimStateOf<A>& a, const SimStateOf<B>& b) {
     return g;
 }
 
-// How far a float state drifts from the double one in a run that falls, lands, yields and dries,
-// against how far the double run itself moves when its start moves by float's roundoff (the
-// lattice rounded to float): a drying soil amplifies any roundoff (a particle crosses the
-// evaporating layer's edge or the yield surface a step earlier), so that is the scale to judge a
-// float run by, not float's epsilon.
-TEST(FloatState, ADryingRunDriftsNoMoreThanTheDoubleRunUnderFloatRoundoff) {
+// How far a float state drifts from the double one in a run that falls 0.2 m, lands, yields and
+// dries (200 steps). The bounds sit between what the float run gives and what a broken float path
+// gives, measured 2026-11-27 in the release build (-O3 -march=native) and the sanitizer build
+// (-Og): the largest position gap 4.55e-5 and 4.45e-5 m, J 2.0e-4 in both; with C stored 1 %
+// short in float, 2.35e-3 m and 5.6e-3. theta and alpha are bounded loosely: a particle that
+// crosses the evaporating layer's edge a step earlier or later changes its theta by a few 1e-3
+// (2.3e-3 here), whatever the precision. A double run started from the lattice rounded to float
+// is no steadier yardstick: it drifted 7.2e-5 m in the release build and 4.3e-6 m in the
+// sanitizer build, as such crossings happened or did not.
+TEST(FloatState, ADryingRunStaysWithinItsMeasuredDriftFromTheDoubleRun) {
     const DryingBlock b;
     const int steps = 200;
     const SimState d = run(b.model, make_initial_state(b.model, b.lattice.X, b.lattice.V0), steps);
-    const SimState d_rounded = run(
-        b.model, make_initial_state(b.model, rounded_to_float(b.lattice.X), b.lattice.V0), steps);
     const SimStateFloat f =
         run(b.model, make_initial_state<float>(b.model, b.lattice.X, b.lattice.V0), steps);
-    const StateGap float_gap = state_gap(f, d), roundoff_gap = state_gap(d_rounded, d);
-    std::printf(
-        "after %d steps, float - double: |x| %.3g m, J %.3g, theta %.3g, alpha %.3g; "
-        "double from the rounded start - double: |x| %.3g m, J %.3g, theta %.3g, "
-        "alpha %.3g\n",
-        steps, float_gap.x, float_gap.J, float_gap.theta, float_gap.alpha, roundoff_gap.x,
-        roundoff_gap.J, roundoff_gap.theta, roundoff_gap.alpha);
-    EXPECT_GT(roundoff_gap.x, 0);  // the two starts differ
-    EXPECT_LT(float_gap.x, 10 * roundoff_gap.x);
-    EXPECT_LT(float_gap.J, 10 * roundoff_gap.J);
-    EXPECT_LT(float_gap.theta, 10 * roundoff_gap.theta);
-    EXPECT_LT(float_gap.alpha, 10 * roundoff_gap.alpha);
+    const StateGap gap = state_gap(f, d);
+    std::printf("after %d steps, float - double: |x| %.3g m, J %.3g, theta %.3g, alpha %.3g\n",
+                steps, gap.x, gap.J, gap.theta, gap.alpha);
+    Real moved = 0;  // the block fell and landed: the gap is not that of a state at rest
+    const std::vector<size_t> slot = test::slot_of_id(d);
+    for (size_t id = 0; id < d.size(); ++id)
+        moved = std::max(moved, (d.x[slot[id]] - b.lattice.X[id]).norm());
+    EXPECT_GT(moved, 0.1);
+    EXPECT_GT(gap.x, 0);  // a float run, not the double one
+    EXPECT_LT(gap.x, 2e-4);
+    EXPECT_LT(gap.J, 1e-3);
+    EXPECT_LT(gap.theta, 1e-2);
+    EXPECT_LT(gap.alpha, 1e-2);
 }
 
 }  // namespace
