@@ -90,6 +90,14 @@ struct SimStateOf {
 using SimState = SimStateOf<double>;
 using SimStateFloat = SimStateOf<float>;
 
+/// Calls fn(S{}) with S the number type `precision` names (double or float), returning its result:
+/// the one place a run picks its state's instantiation.
+template <class Fn>
+decltype(auto) with_state_precision(StatePrecision precision, Fn&& fn) {
+    if (precision == StatePrecision::Float) return fn(float{});
+    return fn(double{});
+}
+
 /// The name /sim/precision, the checkpoints and the report give a state precision S.
 template <class S>
 constexpr const char* state_precision_name() {

@@ -37,13 +37,6 @@ const char* precision_title() {
     return std::is_same_v<S, float> ? " (float state)" : "";
 }
 
-/// Calls fn(S{}) with S the number type `precision` names (double or float), returning its result.
-template <class Fn>
-decltype(auto) with_state_precision(StatePrecision precision, Fn&& fn) {
-    if (precision == StatePrecision::Float) return fn(float{});
-    return fn(double{});
-}
-
 /// One knob swept against one analytic solution.
 struct Sweep {
     std::string id;             // file stem of its data and plot, e.g. "diffusion_1d_h"

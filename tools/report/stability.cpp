@@ -455,8 +455,8 @@ StabilityResult run_stability_case(const std::string& name, Scale scale,
     r.name = name;
     CaseSetup c = it->setup(scale);
     c.model.precision = in_float ? StatePrecision::Float : StatePrecision::Double;
-    if (in_float) return run_case_in<float>(c, limits, clock, r);
-    return run_case_in<double>(c, limits, clock, r);
+    return with_state_precision(
+        c.model.precision, [&](auto s) { return run_case_in<decltype(s)>(c, limits, clock, r); });
 }
 
 std::string serialize_result(const StabilityResult& r) {

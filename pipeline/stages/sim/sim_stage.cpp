@@ -519,9 +519,9 @@ int run_sim_stage_in(const Shot& shot, const StageOptions& options,
 
 int run_sim_stage(const Shot& shot, const StageOptions& options,
                   const SimStageOptions& sim_options) {
-    if (shot.sim.precision == StatePrecision::Float)
-        return run_sim_stage_in<float>(shot, options, sim_options);
-    return run_sim_stage_in<double>(shot, options, sim_options);
+    return with_state_precision(shot.sim.precision, [&](auto s) {
+        return run_sim_stage_in<decltype(s)>(shot, options, sim_options);
+    });
 }
 
 }  // namespace mudcrack
