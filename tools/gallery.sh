@@ -140,7 +140,8 @@ for arg in "$@"; do
             (if $m.oriented_crack_points > 0 then "\($m.axis_aligned_fraction | pct) of the crack length along the grid axes" else empty end),
             (if $m.junctions > 0 then "\($m.junctions) junctions (\($m.t_junction_fraction | pct) T, \($m.y_junction_fraction | pct) Y)" else empty end),
             (if ($m.cracked_top_fraction // 0) > 0 then "\($m.cracked_top_fraction | pct) of the top cracked, \($m.crack_depth_p90 * 100 | round / 100) m deep at the 90th percentile (\($m.crack_depth_max * 100 | round / 100) m at most)" else empty end),
-            "surface \($m.surface_stretched_fraction | pct) stretched, \($m.surface_compressed_fraction | pct) compressed"
+            "surface \($m.surface_stretched_fraction | pct) stretched, \($m.surface_compressed_fraction | pct) compressed",
+            (if $m.mesh_surface_polygons != null then "as the plates meshes cut the top: \($m.mesh_pieces) piece\(if $m.mesh_pieces == 1 then "" else "s" end), \($m.mesh_surface_polygons) polygons (\($m.mesh_effective_surface_polygons * 100 | round / 100) effective plates, the largest \($m.mesh_largest_polygon_fraction | pct))" + (if $m.mesh_oriented_crack_points > 0 then ", \($m.mesh_axis_aligned_fraction | pct) of the wall line along the grid axes" else "" end) else empty end)
           ] | join("; ")' "$dir/measure.json") || die "$dir/measure.json: cannot read frame $measure_frame"
     # how the pieces grew: the fragment count at five frames across the shot
     growth=$(jq -r '.frames as $fs | ($fs | length) as $n

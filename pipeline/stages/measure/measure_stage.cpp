@@ -36,12 +36,12 @@ constexpr const char* kProgram = "mc-measure";
 /// ground's nodes hold the particles whose quadratic stencil reaches them, 1.5 cells deep.
 constexpr Real kGroundBandCells = 1.5;
 
-/// The edges broken at frame n by the break history (broken at or before n).
-std::vector<uint8_t> broken_at(const BreakHistory& history, int n) {
-    std::vector<uint8_t> is_broken(history.first_break.size());
-    for (size_t e = 0; e < is_broken.size(); ++e)
-        is_broken[e] = history.first_break[e] <= n ? 1 : 0;
-    return is_broken;
+/// The edges parted at frame n: per edge, the first frame it parts (kNeverBroken: never), so
+/// parted at or before n. From the break history, or from the plates mode's fracture.
+std::vector<uint8_t> parted_at(const std::vector<int32_t>& first_frame, int n) {
+    std::vector<uint8_t> is_parted(first_frame.size());
+    for (size_t e = 0; e < is_parted.size(); ++e) is_parted[e] = first_frame[e] <= n ? 1 : 0;
+    return is_parted;
 }
 
 /// The typical polygon's side, the square root of its area weighted by area, over the cracked
@@ -128,6 +128,18 @@ json mesh_fields(const MeshPieces& m) {
             {"crack_area_per_metre", m.crack_area_per_metre}};
 }
 
+/// The plates mode's top polygons and crack directions, measured on the edges its meshes cut
+/// (the shot's fracture) where the fields without the prefix read the broken ones.
+json cut_fields(const SurfacePolygons& polygons, const CrackNetwork& network) {
+    return {{"mesh_surface_polygons", polygons.count},
+            {"mesh_effective_surface_polygons", polygons.effective_count},
+            {"mesh_largest_polygon_fraction", polygons.largest_fraction},
+            {"mesh_weighted_mean_polygon_area", polygons.weighted_mean_area},
+            {"mesh_oriented_crack_points", network.oriented_points},
+            {"mesh_axis_aligned_fraction", network.axis_aligned_fraction},
+            {"mesh_crack_direction_histogram", network.direction_histogram}};
+}
+
 json motion_fields(const SurfaceMotion& m) {
     return {{"vertices_compared", m.vertices_compared},
             {"vertex_jump_max_cells", m.jump_max_cells},
@@ -169,17 +181,30 @@ private:
     ParticleFrame m_previous_frame;
 };
 
-void print_mesh_row(int n, const std::optional<MeshPieces>& mesh,
-                    const std::optional<SurfaceMotion>& motion) {
+// what the mesh table prints of one frame
+struct MeshRow {
+    std::optional<MeshPieces> meshes;
+    std::optional<SurfacePolygons> cut_polygons;
+    std::optional<CrackNetwork> cut_network;
+    std::optional<SurfaceMotion> motion;
+};
+
+void print_mesh_row(int n, const MeshRow& row) {
     std::printf("%6d", n);
-    if (mesh)
+    if (const auto& mesh = row.meshes)
         std::printf(" %7d %6d %6lld %6lld %10.2f %11.4f", mesh->pieces, mesh->chips,
                     static_cast<long long>(mesh->open_edges),
                     static_cast<long long>(mesh->hole_edges), mesh->crack_roughness_deg,
                     mesh->crack_area_per_metre);
     else
         std::printf(" %7s %6s %6s %6s %10s %11s", "-", "-", "-", "-", "-", "-");
-    if (motion)
+    if (row.cut_polygons && row.cut_network)
+        std::printf(" %9d %7.2f %8.1f %8.1f", row.cut_polygons->count,
+                    row.cut_polygons->effective_count, 100 * row.cut_polygons->largest_fraction,
+                    100 * row.cut_network->axis_aligned_fraction);
+    else
+        std::printf(" %9s %7s %8s %8s", "-", "-", "-", "-");
+    if (const auto& motion = row.motion)
         std::printf(" %9.3f %9.3f %9lld\n", motion->jump_max_cells, motion->jump_p99_cells,
                     static_cast<long long>(motion->piece_changes));
     else
@@ -227,6 +252,8 @@ struct SurfaceOutputs {
     int min_particles = 1;
     json manifest;
     RecordedChecksums files;
+    // the plates mode's fracture of the shot, as mc-surface plans it (empty in the other modes)
+    std::optional<ShotFracture> fracture;
 };
 
 void read_surface_outputs(const Shot& shot, const fs::path& surface_dir, const TetMesh& mesh,
@@ -248,6 +275,24 @@ void read_surface_outputs(const Shot& shot, const fs::path& surface_dir, const T
                          ": re-run mc-surface");
 }
 
+// A sim frame, verified against the sim manifest's checksum.
+ParticleFrame load_sim_frame(const fs::path& sim_dir, const RecordedChecksums& sim_files, int n) {
+    const fs::path path = frame_path(sim_dir, "particles", n, "vdb");
+    sim_files.verify(path);
+    return points_to_frame(read_points(path), path.string());
+}
+
+// The plates mode's fracture of the shot, planned as mc-surface plans it: from the break history's
+// last frame. The mesh_ measures of the top read its cuts, the edges the meshes part
+// (docs/measures.md), and --motion surfaces each frame with it.
+void plan_surfacing_fracture(const Shot& shot, const fs::path& sim_dir,
+                             const RecordedChecksums& sim_files, SurfaceOutputs& surfacing) {
+    if (!surfacing.topo || !shot.surface || shot.surface->mode != SurfaceMode::Plates) return;
+    surfacing.fracture = plan_shot_fracture(
+        *surfacing.topo, load_sim_frame(sim_dir, sim_files, surfacing.history->last_frame),
+        surfacing.history->first_break, *shot.surface);
+}
+
 // --motion: the tracker that surfaces each frame again, with the shot's fracture in the plates mode
 std::optional<MotionTracker> make_motion_tracker(const Shot& shot, const SurfaceOutputs& surfacing,
                                                  const fs::path& sim_dir,
@@ -256,21 +301,13 @@ std::optional<MotionTracker> make_motion_tracker(const Shot& shot, const Surface
     if (!surfacing.topo || !shot.surface)
         throw InputError("--motion: " + shot.path + " has no surfacing output in " +
                          surface_dir.string() + ": run mc-surface first");
-    std::optional<ShotFracture> fracture;
-    if (shot.surface->mode == SurfaceMode::Plates) {
-        auto load = [&](int n) {
-            const fs::path path = frame_path(sim_dir, "particles", n, "vdb");
-            sim_files.verify(path);
-            return points_to_frame(read_points(path), path.string());
-        };
-        fracture = plan_shot_fracture(*surfacing.topo, load(surfacing.history->last_frame),
-                                      surfacing.history->first_break, *shot.surface);
-        // where each cut edge's particles stood the frame before it, as mc-surface records it
-        if (shot.surface->open_speed > 0)
-            record_cut_edges_for(*surfacing.topo, *fracture, surfacing.history->first_frame,
-                                 surfacing.history->first_frame, surfacing.history->last_frame,
-                                 easing_frames(*shot.surface), load);
-    }
+    std::optional<ShotFracture> fracture = surfacing.fracture;
+    // where each cut edge's particles stood the frame before it, as mc-surface records it
+    if (fracture && shot.surface->open_speed > 0)
+        record_cut_edges_for(*surfacing.topo, *fracture, surfacing.history->first_frame,
+                             surfacing.history->first_frame, surfacing.history->last_frame,
+                             easing_frames(*shot.surface),
+                             [&](int n) { return load_sim_frame(sim_dir, sim_files, n); });
     return std::make_optional<MotionTracker>(*surfacing.topo, *surfacing.history, *shot.surface,
                                              shot.sim.h, std::move(fracture));
 }
@@ -286,6 +323,8 @@ struct FrameMeasures {
     SurfacePolygons polygons;
     CrackNetwork network;
     std::optional<MeshPieces> meshes;
+    std::optional<SurfacePolygons> cut_polygons;  // the plates mode's, on the edges it cuts
+    std::optional<CrackNetwork> cut_network;
     std::optional<SurfaceMotion> motion;
 };
 
@@ -324,7 +363,7 @@ FrameMeasures measure_frame(const Shot& shot, const RestSetup& rest,
     if (!surfacing.topo) return f;
     const CoreTopology& topo = *surfacing.topo;
     f.broken = count_broken_edges(surfacing.history->first_break, n);
-    const std::vector<uint8_t> is_broken = broken_at(*surfacing.history, n);
+    const std::vector<uint8_t> is_broken = parted_at(surfacing.history->first_break, n);
     f.sizes = measure_fragment_sizes(find_fragments(topo, is_broken, surfacing.min_particles),
                                      rest.rest_volume);
     f.polygons = measure_surface_polygons(topo, is_broken, rest.columns, surfacing.min_particles);
@@ -340,6 +379,15 @@ FrameMeasures measure_frame(const Shot& shot, const RestSetup& rest,
     f.meshes =
         measure_frame_meshes(surface_dir, surfacing.manifest, surfacing.files, n, shot.sim.h);
     if (f.meshes) f.row.update(mesh_fields(*f.meshes));
+    if (surfacing.fracture) {
+        // the top as the plates meshes part it: a torn band's broken edges that the mode welds
+        // into one side join, and an unbroken edge between its two sides parts
+        const std::vector<uint8_t> is_cut = parted_at(surfacing.fracture->cut_frame, n);
+        f.cut_polygons =
+            measure_surface_polygons(topo, is_cut, rest.columns, surfacing.min_particles);
+        f.cut_network = measure_crack_network(topo, is_cut, rest.columns, surfacing.min_particles);
+        f.row.update(cut_fields(*f.cut_polygons, *f.cut_network));
+    }
     if (motion_tracker) f.motion = motion_tracker->step(frame);
     if (f.motion) f.row.update(motion_fields(*f.motion));
     return f;
@@ -385,21 +433,21 @@ void print_pace(const CrackPace& pace, int last) {
         100 * pace.half_broken_range_fraction);
 }
 
-using MeshRow = std::pair<std::optional<MeshPieces>, std::optional<SurfaceMotion>>;
-
 void print_mesh_table(const json& surface_manifest, bool has_motion, int first,
                       const std::vector<MeshRow>& rows) {
     std::printf(
         "\nsurfacing meshes (%s): pieces, chips under 2 h, edges not shared by two triangles and those of "
-        "an odd number (holes), crack-wall roughness, crack area per metre of top crack line%s\n",
+        "an odd number (holes), crack-wall roughness, crack area per metre of top crack line; in "
+        "the plates mode the top's polygons, effective plates, largest polygon and axis share as "
+        "its meshes cut it%s\n",
         surface_manifest.value("mode", "?").c_str(),
         has_motion
             ? "; vertex jumps beyond the particles' moves (cells) and particles changing piece"
             : "");
-    std::printf("%6s %7s %6s %6s %6s %10s %11s %9s %9s %9s\n", "frame", "pieces", "chips", "open",
-                "holes", "rough[deg]", "wall[m2/m]", "jump_max", "jump_p99", "changes");
-    for (size_t i = 0; i < rows.size(); ++i)
-        print_mesh_row(first + int(i), rows[i].first, rows[i].second);
+    std::printf("%6s %7s %6s %6s %6s %10s %11s %9s %7s %8s %8s %9s %9s %9s\n", "frame", "pieces",
+                "chips", "open", "holes", "rough[deg]", "wall[m2/m]", "polygons", "plates",
+                "largest", "axis[%]", "jump_max", "jump_p99", "changes");
+    for (size_t i = 0; i < rows.size(); ++i) print_mesh_row(first + int(i), rows[i]);
 }
 
 }  // namespace
@@ -420,6 +468,7 @@ int run_measure_stage(const StageOptions& options, const MeasureStageOptions& me
     const RestSetup rest = read_rest_setup(shot, init_dir, init_manifest);
     SurfaceOutputs surfacing;
     read_surface_outputs(shot, surface_dir, rest.mesh, last, surfacing);
+    plan_surfacing_fracture(shot, sim_dir, sim_files, surfacing);
     if (!options.quiet) print_frame_header(shot, rest);
     std::optional<MotionTracker> motion_tracker =
         measure_options.motion
@@ -432,7 +481,8 @@ int run_measure_stage(const StageOptions& options, const MeasureStageOptions& me
     for (int n = first; n <= last; ++n) {
         FrameMeasures f = measure_frame(shot, rest, surfacing, init_dir, sim_dir, surface_dir,
                                         sim_files, motion_tracker, n);
-        if (surfacing.topo) mesh_rows.emplace_back(f.meshes, f.motion);
+        if (surfacing.topo)
+            mesh_rows.push_back({f.meshes, f.cut_polygons, f.cut_network, f.motion});
         if (!options.quiet) print_frame_row(n, f, surfacing.topo.has_value());
         table.push_back(std::move(f.row));
     }
