@@ -252,8 +252,9 @@ struct SurfaceOutputs {
     int min_particles = 1;
     json manifest;
     RecordedChecksums files;
-    // the plates mode's fracture of the shot, as mc-surface plans it (empty in the other modes)
-    std::optional<ShotFracture> fracture;
+    // per edge, the frame the plates mode's fracture cuts it (none in the other modes): all the
+    // mesh_ measures need of it, so --motion's tracker can take the fracture itself
+    std::optional<std::vector<int32_t>> cut_frame;
 };
 
 void read_surface_outputs(const Shot& shot, const fs::path& surface_dir, const TetMesh& mesh,
@@ -284,24 +285,26 @@ ParticleFrame load_sim_frame(const fs::path& sim_dir, const RecordedChecksums& s
 
 // The plates mode's fracture of the shot, planned as mc-surface plans it: from the break history's
 // last frame. The mesh_ measures of the top read its cuts, the edges the meshes part
-// (docs/measures.md), and --motion surfaces each frame with it.
-void plan_surfacing_fracture(const Shot& shot, const fs::path& sim_dir,
-                             const RecordedChecksums& sim_files, SurfaceOutputs& surfacing) {
-    if (!surfacing.topo || !shot.surface || shot.surface->mode != SurfaceMode::Plates) return;
-    surfacing.fracture = plan_shot_fracture(
-        *surfacing.topo, load_sim_frame(sim_dir, sim_files, surfacing.history->last_frame),
-        surfacing.history->first_break, *shot.surface);
+// (docs/measures.md), and --motion surfaces each frame with it. None in the other modes.
+std::optional<ShotFracture> plan_surfacing_fracture(const Shot& shot, const fs::path& sim_dir,
+                                                    const RecordedChecksums& sim_files,
+                                                    const SurfaceOutputs& surfacing) {
+    if (!surfacing.topo || !shot.surface || shot.surface->mode != SurfaceMode::Plates)
+        return std::nullopt;
+    return plan_shot_fracture(*surfacing.topo,
+                              load_sim_frame(sim_dir, sim_files, surfacing.history->last_frame),
+                              surfacing.history->first_break, *shot.surface);
 }
 
 // --motion: the tracker that surfaces each frame again, with the shot's fracture in the plates mode
 std::optional<MotionTracker> make_motion_tracker(const Shot& shot, const SurfaceOutputs& surfacing,
                                                  const fs::path& sim_dir,
                                                  const fs::path& surface_dir,
-                                                 const RecordedChecksums& sim_files) {
+                                                 const RecordedChecksums& sim_files,
+                                                 std::optional<ShotFracture> fracture) {
     if (!surfacing.topo || !shot.surface)
         throw InputError("--motion: " + shot.path + " has no surfacing output in " +
                          surface_dir.string() + ": run mc-surface first");
-    std::optional<ShotFracture> fracture = surfacing.fracture;
     // where each cut edge's particles stood the frame before it, as mc-surface records it
     if (fracture && shot.surface->open_speed > 0)
         record_cut_edges_for(*surfacing.topo, *fracture, surfacing.history->first_frame,
@@ -379,10 +382,10 @@ FrameMeasures measure_frame(const Shot& shot, const RestSetup& rest,
     f.meshes =
         measure_frame_meshes(surface_dir, surfacing.manifest, surfacing.files, n, shot.sim.h);
     if (f.meshes) f.row.update(mesh_fields(*f.meshes));
-    if (surfacing.fracture) {
+    if (surfacing.cut_frame) {
         // the top as the plates meshes part it: a torn band's broken edges that the mode welds
         // into one side join, and an unbroken edge between its two sides parts
-        const std::vector<uint8_t> is_cut = parted_at(surfacing.fracture->cut_frame, n);
+        const std::vector<uint8_t> is_cut = parted_at(*surfacing.cut_frame, n);
         f.cut_polygons =
             measure_surface_polygons(topo, is_cut, rest.columns, surfacing.min_particles);
         f.cut_network = measure_crack_network(topo, is_cut, rest.columns, surfacing.min_particles);
@@ -468,12 +471,14 @@ int run_measure_stage(const StageOptions& options, const MeasureStageOptions& me
     const RestSetup rest = read_rest_setup(shot, init_dir, init_manifest);
     SurfaceOutputs surfacing;
     read_surface_outputs(shot, surface_dir, rest.mesh, last, surfacing);
-    plan_surfacing_fracture(shot, sim_dir, sim_files, surfacing);
+    std::optional<ShotFracture> fracture =
+        plan_surfacing_fracture(shot, sim_dir, sim_files, surfacing);
+    if (fracture) surfacing.cut_frame = fracture->cut_frame;
     if (!options.quiet) print_frame_header(shot, rest);
     std::optional<MotionTracker> motion_tracker =
-        measure_options.motion
-            ? make_motion_tracker(shot, surfacing, sim_dir, surface_dir, sim_files)
-            : std::nullopt;
+        measure_options.motion ? make_motion_tracker(shot, surfacing, sim_dir, surface_dir,
+                                                     sim_files, std::move(fracture))
+                               : std::nullopt;
 
     // the frames, in order (the motion tracker carries one frame to the next)
     json table = json::array();
