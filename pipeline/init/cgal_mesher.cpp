@@ -104,13 +104,18 @@ TetMesh run_mesh_3(Domain& domain, const MesherOptions& o) {
 
 TetMesh tetrahedralize_surface(const InputSurface& surface, const MesherOptions& options) {
     MC_CHECK_GT(options.edge_length, 0);  // mesher_options derives 0 from /sim/h > 0
-    // Mesh_3 draws its initial points from the default random generator: reseed for
-    // reproducible meshes
+    // Mesh_3 draws from two generators: the default one, and the domain's own for its initial
+    // points, which is CGAL::Random(0) unless the domain is given one (so reseeding the default
+    // alone left every seed with the same mesh: a bunny's particles were the same bytes for seeds
+    // 1 and 2). Seed both; the domain's with seed - 1, so the default seed 1 keeps the meshes
+    // CGAL's Random(0) gave before the seed reached the domain.
     CGAL::get_default_random() = CGAL::Random(options.seed);
+    CGAL::Random domain_random(options.seed - 1u);
     TetMesh mesh;
     try {
         const SurfaceMesh sm = to_surface_mesh(surface);
         Domain domain(sm);
+        domain.set_random_generator(&domain_random);
         if (options.feature_angle > 0) domain.detect_features(options.feature_angle);
         if (options.parallel) {
             // honour --threads for TBB as parallel_for does for OpenMP

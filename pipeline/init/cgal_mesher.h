@@ -33,7 +33,7 @@ struct MesherOptions {
     /// on thread scheduling, so two runs may give different meshes. Sequential_tag with the
     /// seed below is reproducible bit for bit.
     bool parallel = false;
-    unsigned seed = 1;  // CGAL::get_default_random() is reset to this
+    unsigned seed = 1;  // CGAL's default generator is reset to this, the domain's to seed - 1
     /// Sliver perturbation and exudation (Mesh_3's optimisers). Off by default: slivers only
     /// give a few particles a tiny share of volume, which MPM does not mind, and removing them
     /// costs more than the meshing itself (see tools/bench_init.sh).

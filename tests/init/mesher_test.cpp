@@ -126,6 +126,20 @@ TEST(InitMesher, SameSeedGivesTheSameMesh) {
     EXPECT_EQ(a.tets, b.tets);
 }
 
+// /init/seed draws another mesh: Mesh_3's domain takes its initial points from a generator of
+// its own, which a reseeded default generator does not reach (every seed gave one mesh)
+TEST(InitMesher, AnotherSeedGivesAnotherMesh) {
+    const InputSurface sphere = test::icosphere(0.5, 2);
+    MesherOptions o;
+    o.edge_length = 0.12;
+    const TetMesh one = tetrahedralize_surface(sphere, o);
+    o.seed = 2;
+    const TetMesh two = tetrahedralize_surface(sphere, o);
+    EXPECT_FALSE(one.X == two.X) << "seed 2 gave seed 1's mesh";
+    // both are meshes of the sphere all the same
+    EXPECT_NEAR(static_cast<double>(two.X.size()) / one.X.size(), 1.0, 0.2);
+}
+
 TEST(InitMesher, CubeKeepsItsSharpCornersAndVolume) {
     MesherOptions o;
     o.edge_length = 0.2;
