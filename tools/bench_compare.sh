@@ -5,7 +5,7 @@
 # Prints each pair's particle-steps/s (wall, and per CPU second: what an idle machine would give on
 # 1 thread) and the time ratio new/old, then the medians.
 #
-#   tools/bench_compare.sh OLD_BUILD NEW_BUILD [PAIRS] [CONFIG/THREADS...]
+#   tools/bench_compare.sh OLD_BUILD NEW_BUILD [PAIRS] [CONFIG/THREADS[:CONFIG/THREADS]...]
 #       default: 5 pairs of NoMoisture/1 Moisture/1 NoMoisture/2 Moisture/2
 #
 # A ratio of 1.02 means the new build's step takes 2 % more time.
@@ -18,7 +18,7 @@
 # (a time ratio of 0.52 there is a speed-up of 1 / 0.52 = 1.92x).
 set -euo pipefail
 
-[[ $# -ge 2 ]] || { echo "usage: $0 OLD_BUILD NEW_BUILD [PAIRS] [CONFIG/THREADS...]" >&2; exit 2; }
+[[ $# -ge 2 ]] || { echo "usage: $0 OLD_BUILD NEW_BUILD [PAIRS] [CONFIG/THREADS[:CONFIG/THREADS]...]" >&2; exit 2; }
 OLD=$1/bin/mpm_bench
 NEW=$2/bin/mpm_bench
 PAIRS=${3:-5}
