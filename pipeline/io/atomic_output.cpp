@@ -1,11 +1,13 @@
 #include "pipeline/io/atomic_output.h"
 
 #include <cerrno>
+#include <chrono>
 #include <cstring>
 #include <fstream>
 #include <mutex>
 #include <set>
 #include <system_error>
+#include <thread>
 
 #include "sim/core/error.h"
 
@@ -43,9 +45,23 @@ void run_interrupt_cleanup() {
     // the lock is kept: the process exits next, and a thread about to start a temporary file
     // waits in add_interrupt_cleanup instead of leaving it behind
     g_cleanup_mutex.lock();
-    for (const fs::path& p : cleanup_paths()) {
-        std::error_code ec;
-        fs::remove_all(p, ec);
+    // A thread that registered its temporary file just before the lock can still create it, or
+    // rename it into place, while remove_all empties its folder; the folder's removal then fails
+    // (not empty) and an empty .partial/ stays behind. So the removal is repeated until nothing
+    // registered exists: once a folder is gone nothing can be created in it, and each thread
+    // creates at most its one registered file before it waits on the lock. A folder's files come
+    // after it in the set, so the reverse walk removes them first.
+    constexpr int kRemovalRounds = 200;  // 1 ms apart: far longer than a file's creation
+    const std::set<fs::path>& paths = cleanup_paths();
+    for (int round = 0; round < kRemovalRounds; ++round) {
+        bool any_left = false;
+        for (auto it = paths.rbegin(); it != paths.rend(); ++it) {
+            std::error_code ec;
+            fs::remove_all(*it, ec);
+            any_left = any_left || fs::exists(fs::symlink_status(*it, ec));
+        }
+        if (!any_left) break;
+        std::this_thread::sleep_for(std::chrono::milliseconds(1));
     }
     cleanup_paths().clear();
 }
