@@ -59,6 +59,18 @@ struct MoistureParams {
     enum class Evaporation { Grid, Surface } evaporation = Evaporation::Grid;
     int interval = 1;             // solve moisture every k MPM steps with dt_m = k dt
     Real max_log_jw_step = 1e-3;  // cap on |log(Jw^n/Jw^{n+1})| per step (docs/physics.md §3.2)
+    /// When the drying starts (docs/physics.md §6.3): no evaporation until ramp_start, then
+    /// lambda rising linearly to its full value at ramp_end; ramp_end <= ramp_start: lambda from
+    /// the start [s]
+    Real evaporation_ramp_start = 0;
+    Real evaporation_ramp_end = 0;
+    /// The evaporation coefficient at time t: lambda scaled by the ramp [m/s]
+    Real lambda_at(Real t) const {
+        if (!(evaporation_ramp_end > evaporation_ramp_start)) return lambda;
+        const Real ramp =
+            (t - evaporation_ramp_start) / (evaporation_ramp_end - evaporation_ramp_start);
+        return lambda * std::clamp(ramp, Real(0), Real(1));
+    }
     /// The particles' starting moisture: theta_init, or eta (fully saturated, paper Section 7.1)
     /// when theta_init < 0; clamped to [0, eta] (min, then max: no precondition on eta, which the
     /// shot loader reads before it reports a bad one).

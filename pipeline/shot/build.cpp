@@ -261,6 +261,20 @@ void build_moisture(json& tree, SimModel& model, Issues& issues) {
             "/moisture/implicit_robin", issues.value_of(tree, "/moisture/implicit_robin"),
             "must be false with /moisture/evaporation = \"surface\" (the surface layer's decay is "
             "exact; the implicit Robin term belongs to the grid evaporation)");
+    // the ramp's frames as times: frame f ends at f / fps
+    if (has(tree, "/moisture/evaporation_ramp") && !issues.has("/moisture/evaporation_ramp") &&
+        !issues.has("/frames/fps")) {
+        const json& ramp = tree.at(json::json_pointer("/moisture/evaporation_ramp"));
+        const Real start = ramp[0].get<double>(), full = ramp[1].get<double>();
+        const Real fps = number(tree, "/frames/fps");
+        if (!(full > start))
+            issues.add("/moisture/evaporation_ramp",
+                       issues.value_of(tree, "/moisture/evaporation_ramp"),
+                       "must be [start, full] with full > start (the frame by which evaporation "
+                       "reaches lambda comes after the one where it begins)");
+        m.evaporation_ramp_start = start / fps;
+        m.evaporation_ramp_end = full / fps;
+    }
     // particles start fully saturated unless told otherwise (MoistureParams::initial_theta); the
     // slice records the value they start at, unclamped so the range check below still sees it
     m.theta_init = has(tree, "/moisture/theta_init") ? number(tree, "/moisture/theta_init")

@@ -175,6 +175,10 @@ std::vector<KeySpec> build_fixed_table() {
         .doc("grid: the paper's r term, from particles whose stencil touches a surface node (a drying "
              "front about 2 cells deep); surface: the exposed particle layer loses water itself, so a "
              "crust can be one particle layer thin when D is small (docs/physics.md §6.3)"),
+    Key("/moisture/evaporation_ramp", T::Vec2).optional().ge(0).units("frames")
+        .doc("[start, full]: when the drying begins, in the shot's own frames: no evaporation until "
+             "the end of frame start, then lambda rising linearly to its full value at the end of "
+             "frame full; full > start (docs/physics.md §6.3); omit: lambda from the first step"),
     Key("/moisture/interval", T::Integer).def(1).ge(1).units("steps").doc("solve moisture every k MPM steps with dt_m = k dt"),
     Key("/moisture/max_log_jw_step", T::Number).def(1e-3).gt(0).units("-")
         .doc("cap on |log(Jw^n / Jw^n+1)| per step (docs/physics.md §3.2)"),

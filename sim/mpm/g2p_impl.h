@@ -137,7 +137,7 @@ G2PResult g2p_impl(const SimModel& model, SimStateOf<S>& state, const SparseGrid
     // layer, with S_p = c V_p^(2/3) (particle_area), so the rate is lambda c V_p^(-1/3)
     const uint8_t* evaporating = kTheta ? moisture.evaporating : nullptr;
     const Real evaporation_rate_dt =
-        evaporating ? moist.lambda * moisture.dt * particle_area(1) : Real(0);
+        evaporating ? moisture.lambda * moisture.dt * particle_area(1) : Real(0);
     // particles stay inside the box with a full stencil on the grid
     const Vec3 lo = geo.origin + Vec3::Constant(h);
     const Vec3 hi = geo.origin + (geo.cells.cast<Real>() - Vec3::Ones()) * h;

@@ -444,8 +444,12 @@ StepStats step(const SimModel& model, SimStateOf<S>& state, Real dt) {
     mpm::update_grid_velocity(model, ws.grid, dt);
     stats.seconds.grid = phase.seconds();
 
-    // 3. implicit moisture diffusion with evaporation, dt_m = k dt
+    // 3. implicit moisture diffusion with evaporation, dt_m = k dt; the evaporation as the
+    // shot's ramp has it at this step's start
+    MoistureParams drying;
     if (solve_moisture_now) {
+        drying = *model.moisture;
+        drying.lambda = drying.lambda_at(state.time);
         phase.reset();
         MoistureSeal seal;
         seal.seal_colliders = model.moisture->seal_colliders;
@@ -453,9 +457,8 @@ StepStats step(const SimModel& model, SimStateOf<S>& state, Real dt) {
         if (seal.has_ground) seal.ground_height = model.ground->height;
         const MoistureParticlesOf<S> mp{state.x.data(), state.V0.data(), state.J.data(),
                                         state.theta.data()};
-        const MoistureSolveStats ms =
-            solve_moisture(*model.moisture, seal, ws.grid, mp, interval * dt, *mg,
-                           state.moisture_flux, ws.windows);
+        const MoistureSolveStats ms = solve_moisture(drying, seal, ws.grid, mp, interval * dt, *mg,
+                                                     state.moisture_flux, ws.windows);
         stats.cg_iterations = ms.iterations;
         stats.cg_residual = ms.residual;
         stats.seconds.moisture = phase.seconds();
@@ -467,8 +470,8 @@ StepStats step(const SimModel& model, SimStateOf<S>& state, Real dt) {
     if (mg) {
         moisture_update.dtheta = mg->x.data();
         moisture_update.dt = interval * dt;
-        if (model.moisture->evaporation == MoistureParams::Evaporation::Surface &&
-            model.moisture->lambda > 0)
+        moisture_update.lambda = drying.lambda;
+        if (drying.evaporation == MoistureParams::Evaporation::Surface && drying.lambda > 0)
             moisture_update.evaporating = mg->particle_is_boundary.data();
     }
     const mpm::G2PResult g2p = mpm::grid_to_particle(model, state, ws.grid, moisture_update,

@@ -576,6 +576,49 @@ TEST(SurfaceEvaporation, AtZeroDiffusivityOnlyTheExposedLayerDriesExactly) {
     EXPECT_LT(expected_top, eta - 0.05) << "the test must dry the top layer visibly";
 }
 
+// The evaporation ramp (docs/physics.md §6.3): no water leaves before the ramp starts, and the
+// exposed layer then decays at lambda scaled by the ramp at each step's start, exactly.
+TEST(SurfaceEvaporation, TheRampHoldsTheWaterThenScalesTheRate) {
+    SimModel model = still_model(0.1);
+    model.ground = GroundParams{};
+    model.moisture->D = 0;
+    model.moisture->lambda = 0.2;
+    model.moisture->evaporation = MoistureParams::Evaporation::Surface;
+    const Real dt = 2e-3;
+    model.moisture->evaporation_ramp_start = 10.5 * dt;
+    model.moisture->evaporation_ramp_end = 30.5 * dt;
+    const Real spacing = 0.05;
+    const test::Lattice l = make_lattice(Vec3::Zero(), Vec3i(12, 10, 12), spacing);
+    SimState s = make_initial_state(model, l.X, l.V0);
+    const Real eta = model.moisture->eta;
+    const auto is_inner_top = [&](const Vec3& x) {
+        return std::abs(x.y() - spacing * 9.5) < spacing / 4 && x.x() > 2 * spacing &&
+               x.x() < 9 * spacing && x.z() > 2 * spacing && x.z() < 9 * spacing;
+    };
+    // the rate each step applies: lambda at the step's start, as the state's clock has it
+    Real exposure = 0;  // sum of lambda_at(t) dt [m]
+    for (int i = 0; i < 50; ++i) {
+        exposure += model.moisture->lambda_at(s.time) * dt;
+        step(model, s, dt);
+        if (i == 9)
+            for (size_t p = 0; p < s.size(); ++p)
+                ASSERT_EQ(s.theta[p], eta) << "particle " << s.id[p] << " dried before the ramp";
+    }
+    const Real V = spacing * spacing * spacing;
+    const Real expected_top = eta * std::exp(-particle_area(V) / V * exposure);
+    int top = 0;
+    for (size_t p = 0; p < s.size(); ++p) {
+        if (!is_inner_top(s.x[p])) continue;
+        EXPECT_NEAR(s.theta[p], expected_top, kEvaporatedTop) << "top-layer particle " << s.id[p];
+        ++top;
+    }
+    EXPECT_GT(top, 20);
+    EXPECT_LT(expected_top, eta - 0.05) << "the test must dry the top layer visibly";
+    // 19 steps at full lambda after the ramp, and the ramp's 20 steps at 0.025 to 0.975 of it,
+    // which make 10 more: 29 steps' worth
+    EXPECT_NEAR(exposure / (dt * model.moisture->lambda), 29, 1e-9);
+}
+
 // The same with D > 0: the water the top layer loses is replaced from below, so the front moves
 // in; the total water lost equals what the exposed particles' decay removed (no grid r term).
 TEST(SurfaceEvaporation, DiffusionCarriesTheFrontInward) {

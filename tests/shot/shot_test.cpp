@@ -458,6 +458,28 @@ TEST_F(ShotTest, CrossKeyChecks) {
     EXPECT_EQ(line_count(msg), 3) << msg;
 }
 
+// The evaporation ramp is given in the shot's frames and kept as times (frame f ends at f / fps);
+// a ramp whose full frame does not come after its start is refused by key and value.
+TEST_F(ShotTest, EvaporationRampFramesBecomeTimes) {
+    const Shot shot = parse_shot(R"({"mudcrack": 1,
+        "source": {"type": "box", "box": {"min": [0, 0, 0], "max": [1, 0.1, 1]}},
+        "material": {}, "frames": {"fps": 24},
+        "moisture": {"evaporation_ramp": [6, 18]}})",
+                                 "t.json");
+    ASSERT_TRUE(shot.sim.moisture);
+    EXPECT_DOUBLE_EQ(shot.sim.moisture->evaporation_ramp_start, 6.0 / 24);
+    EXPECT_DOUBLE_EQ(shot.sim.moisture->evaporation_ramp_end, 18.0 / 24);
+    const std::string msg = error_of(R"({"mudcrack": 1,
+        "source": {"type": "box", "box": {"min": [0, 0, 0], "max": [1, 0.1, 1]}},
+        "material": {}, "moisture": {"evaporation_ramp": [12, 12]}})");
+    expect_contains(
+        msg, {"/moisture/evaporation_ramp = [12,12]: must be [start, full] with full > start"});
+    expect_contains(error_of(R"({"mudcrack": 1,
+        "source": {"type": "box", "box": {"min": [0, 0, 0], "max": [1, 0.1, 1]}},
+        "material": {}, "moisture": {"evaporation_ramp": [-1, 12]}})"),
+                    {"/moisture/evaporation_ramp"});
+}
+
 TEST_F(ShotTest, MissingMeshFileIsAnError) {
     const std::string msg =
         error_of(R"({"mudcrack": 1, "source": {"type": "mesh", "mesh": {"path": "assets/none.obj"}},
