@@ -535,15 +535,22 @@ TEST(Moisture, SolvingEveryKStepsCountsItsIterations) {
 namespace mudcrack {
 namespace {
 
+// the still model on a ground, its exposed particle layer evaporating itself (surface mode) at
+// lambda 0.2, with diffusivity D
+SimModel surface_evaporation_model(Real D) {
+    SimModel model = still_model(0.1);
+    model.ground = GroundParams{};
+    model.moisture->D = D;
+    model.moisture->lambda = 0.2;
+    model.moisture->evaporation = MoistureParams::Evaporation::Surface;
+    return model;
+}
+
 // Surface evaporation at D = 0: only the exposed particle layer dries, exactly as
 // theta0 + (theta - theta0) exp(-lambda S_p t / V_p); the layer under it keeps every drop.
 TEST(SurfaceEvaporation, AtZeroDiffusivityOnlyTheExposedLayerDriesExactly) {
-    SimModel model = still_model(0.1);
-    model.ground = GroundParams{};
-    model.moisture->D = 0;
-    model.moisture->lambda = 0.2;
+    SimModel model = surface_evaporation_model(0);
     model.moisture->theta0 = 0.05;
-    model.moisture->evaporation = MoistureParams::Evaporation::Surface;
     const Real spacing = 0.05;  // 2 particles per cell and axis
     const test::Lattice l = make_lattice(Vec3::Zero(), Vec3i(12, 10, 12), spacing);
     SimState s = make_initial_state(model, l.X, l.V0);
@@ -579,11 +586,7 @@ TEST(SurfaceEvaporation, AtZeroDiffusivityOnlyTheExposedLayerDriesExactly) {
 // The evaporation ramp (docs/physics.md §6.3): no water leaves before the ramp starts, and the
 // exposed layer then decays at lambda scaled by the ramp at each step's start, exactly.
 TEST(SurfaceEvaporation, TheRampHoldsTheWaterThenScalesTheRate) {
-    SimModel model = still_model(0.1);
-    model.ground = GroundParams{};
-    model.moisture->D = 0;
-    model.moisture->lambda = 0.2;
-    model.moisture->evaporation = MoistureParams::Evaporation::Surface;
+    SimModel model = surface_evaporation_model(0);
     const Real dt = 2e-3;
     model.moisture->evaporation_ramp_start = 10.5 * dt;
     model.moisture->evaporation_ramp_end = 30.5 * dt;
@@ -600,9 +603,11 @@ TEST(SurfaceEvaporation, TheRampHoldsTheWaterThenScalesTheRate) {
     for (int i = 0; i < 50; ++i) {
         exposure += model.moisture->lambda_at(s.time) * dt;
         step(model, s, dt);
-        if (i == 9)
-            for (size_t p = 0; p < s.size(); ++p)
+        if (i == 9) {
+            for (size_t p = 0; p < s.size(); ++p) {
                 ASSERT_EQ(s.theta[p], eta) << "particle " << s.id[p] << " dried before the ramp";
+            }
+        }
     }
     const Real V = spacing * spacing * spacing;
     const Real expected_top = eta * std::exp(-particle_area(V) / V * exposure);
@@ -622,11 +627,7 @@ TEST(SurfaceEvaporation, TheRampHoldsTheWaterThenScalesTheRate) {
 // The same with D > 0: the water the top layer loses is replaced from below, so the front moves
 // in; the total water lost equals what the exposed particles' decay removed (no grid r term).
 TEST(SurfaceEvaporation, DiffusionCarriesTheFrontInward) {
-    SimModel model = still_model(0.1);
-    model.ground = GroundParams{};
-    model.moisture->D = 0.01;
-    model.moisture->lambda = 0.2;
-    model.moisture->evaporation = MoistureParams::Evaporation::Surface;
+    SimModel model = surface_evaporation_model(0.01);
     const Real spacing = 0.05;
     const test::Lattice l = make_lattice(Vec3::Zero(), Vec3i(8, 12, 8), spacing);
     SimState s = make_initial_state(model, l.X, l.V0);
