@@ -22,6 +22,65 @@ std::string num(Real v) {
     return s.str();
 }
 
+// The closed surface of the box [lo, hi]: 8 corners (corner i at hi on axis d when bit d of i is
+// set), two triangles per face, counter-clockwise seen from outside.
+InputSurface box_surface(const Vec3& lo, const Vec3& hi) {
+    InputSurface s;
+    for (int i = 0; i < 8; ++i)
+        s.positions.emplace_back(i & 1 ? hi.x() : lo.x(), i & 2 ? hi.y() : lo.y(),
+                                 i & 4 ? hi.z() : lo.z());
+    for (int d = 0; d < 3; ++d) {
+        // (e, f, d) is right-handed, so corners (0,0), (1,0), (1,1), (0,1) in (e, f) turn
+        // counter-clockwise about +d
+        const int e = (d + 1) % 3, f = (d + 2) % 3;
+        for (int side = 0; side < 2; ++side) {
+            const int base = side << d;
+            int quad[4] = {base, base | (1 << e), base | (1 << e) | (1 << f), base | (1 << f)};
+            if (side == 0) std::swap(quad[1], quad[3]);  // facing -d
+            s.faces.push_back({quad[0], quad[1], quad[2]});
+            s.faces.push_back({quad[0], quad[2], quad[3]});
+        }
+    }
+    return s;
+}
+
+// A closed surface, checked and tetrahedralized by Mesh_3 (`check_bounds`, when given, sees its
+// bounds first); `name` is how the messages call it (a file, or the box's keys)
+InitResult tetrahedralize_checked(const InputSurface& surface, const std::string& name,
+                                  const MesherOptions& mesher,
+                                  const SurfaceBoundsCheck& check_bounds) {
+    const Real surface_volume = check_input_surface(surface, name);
+    Vec3 lo = surface.positions[0], hi = lo;
+    for (const Vec3& x : surface.positions) lo = lo.cwiseMin(x), hi = hi.cwiseMax(x);
+    // before the edge length's checks: a /sim/h too large for the body is h's fault, not
+    // the edge length's it derives
+    if (check_bounds) check_bounds(lo, hi);
+    if (mesher.edge_length > (hi - lo).maxCoeff())
+        throw ShotValueError("/init/edge_length = " + num(mesher.edge_length) + " m: larger than " +
+                             name + " itself (largest extent " + num((hi - lo).maxCoeff()) +
+                             " m after scaling); expected a fraction of it");
+    // a quality Mesh_3 mesh has about one vertex per 0.55 L^3 (see default_edge_length)
+    const double expected = surface_volume / (0.55 * std::pow(mesher.edge_length, 3));
+    if (expected > kMaxInitParticles)
+        throw ShotValueError("/init/edge_length = " + num(mesher.edge_length) + " m: would make ~" +
+                             count_text(expected) + " particles from " + name + " (volume " +
+                             num(surface_volume) + " m^3); expected at most " +
+                             count_text(kMaxInitParticles) +
+                             ": raise the edge length (or /sim/h when it is derived)");
+    log::info("input surface " + name + ": " + std::to_string(surface.positions.size()) +
+              " vertices, " + std::to_string(surface.faces.size()) + " triangles, volume " +
+              num(surface_volume) + " m^3");
+    WallTimer mesh_timer;
+    TetMesh tets = tetrahedralize_surface(surface, mesher);
+    log::info("CGAL Mesh_3 (" + std::string(mesher.parallel ? "parallel" : "sequential") +
+              ", edge length " + num(mesher.edge_length) + " m): " +
+              std::to_string(tets.tets.size()) + " tets in " + num(mesh_timer.seconds()) + " s");
+    InitResult r = finish_tet_mesh(std::move(tets), &surface);
+    r.surface_volume = surface_volume;
+    r.edge_length = mesher.edge_length;
+    return r;
+}
+
 }  // namespace
 
 Real default_edge_length(Real h) { return Real(0.6) * h; }
@@ -71,51 +130,23 @@ InitResult build_init(const InitParams& params, const MesherOptions& mesher,
     InitResult r;
     switch (params.type) {
         case SourceType::Box:
-            r = finish_tet_mesh(make_box_tets(params.box, params.seed), nullptr);
+            // the loader has checked the box against the shot (as check_bounds does a mesh's)
+            if (params.box.lattice == Lattice::Mesh)
+                r = tetrahedralize_checked(box_surface(params.box.min, params.box.max),
+                                           "the box (/source/box)", mesher, {});
+            else
+                r = finish_tet_mesh(make_box_tets(params.box, params.seed), nullptr);
             break;
         case SourceType::Heightfield:
             r = finish_tet_mesh(make_heightfield_tets(params.heightfield), nullptr);
             break;
-        case SourceType::Mesh: {
+        case SourceType::Mesh:
             if (params.mesh.path.empty())
                 throw ShotValueError(
                     "/source/mesh/path: missing: a mesh source needs a surface file");
-            const InputSurface surface = load_placed_surface(params.mesh);
-            const Real surface_volume = check_input_surface(surface, params.mesh.path);
-            Vec3 lo = surface.positions[0], hi = lo;
-            for (const Vec3& x : surface.positions) lo = lo.cwiseMin(x), hi = hi.cwiseMax(x);
-            // before the edge length's checks: a /sim/h too large for the body is h's fault, not
-            // the edge length's it derives
-            if (check_bounds) check_bounds(lo, hi);
-            if (mesher.edge_length > (hi - lo).maxCoeff())
-                throw ShotValueError("/init/edge_length = " + num(mesher.edge_length) +
-                                     " m: larger than " + params.mesh.path +
-                                     " itself (largest extent " + num((hi - lo).maxCoeff()) +
-                                     " m after scaling); expected a fraction of it");
-            // a quality Mesh_3 mesh has about one vertex per 0.55 L^3 (see default_edge_length)
-            const double expected = surface_volume / (0.55 * std::pow(mesher.edge_length, 3));
-            if (expected > kMaxInitParticles)
-                throw ShotValueError("/init/edge_length = " + num(mesher.edge_length) +
-                                     " m: would make ~" + count_text(expected) +
-                                     " particles from " + params.mesh.path + " (volume " +
-                                     num(surface_volume) + " m^3); expected at most " +
-                                     count_text(kMaxInitParticles) +
-                                     ": raise the edge length (or /sim/h when it is derived)");
-            log::info("input surface " + params.mesh.path + ": " +
-                      std::to_string(surface.positions.size()) + " vertices, " +
-                      std::to_string(surface.faces.size()) + " triangles, volume " +
-                      num(surface_volume) + " m^3");
-            WallTimer mesh_timer;
-            TetMesh tets = tetrahedralize_surface(surface, mesher);
-            log::info("CGAL Mesh_3 (" + std::string(mesher.parallel ? "parallel" : "sequential") +
-                      ", edge length " + num(mesher.edge_length) +
-                      " m): " + std::to_string(tets.tets.size()) + " tets in " +
-                      num(mesh_timer.seconds()) + " s");
-            r = finish_tet_mesh(std::move(tets), &surface);
-            r.surface_volume = surface_volume;
-            r.edge_length = mesher.edge_length;
+            r = tetrahedralize_checked(load_placed_surface(params.mesh), params.mesh.path, mesher,
+                                       check_bounds);
             break;
-        }
     }
     // the heterogeneous strength, a function of the rest positions and the seed
     if (params.strength_field)

@@ -11,7 +11,11 @@
 namespace mudcrack {
 
 enum class SourceType { Mesh, Box, Heightfield };
-enum class Lattice { Regular, Jittered };
+/// How a box is filled: a lattice split into Kuhn tets (regular, or its interior points
+/// jittered), or CGAL Mesh_3's tets of the box's surface, as a mesh source is filled, whose
+/// edges run every way (the lattice's run along three axes and their diagonals, and cracks follow
+/// them: docs/physics.md §6.6).
+enum class Lattice { Regular, Jittered, Mesh };
 
 struct MeshSource {
     std::string path;               // closed triangle mesh (OBJ, PLY, STL, OFF, glTF)
@@ -21,7 +25,8 @@ struct MeshSource {
 };
 
 /// A box slab filled with a lattice split into 6 tets per cell (Kuhn/Freudenthal split), so the
-/// particle count is exactly prod(n_i + 1).
+/// particle count is exactly prod(n_i + 1); or, with Lattice::Mesh, tetrahedralized by Mesh_3 at
+/// InitParams::edge_length (or default_edge_length(h)), spacing and jitter unused.
 struct BoxSource {
     Vec3 min = Vec3(-0.5, 0, -0.5);  // [m]
     Vec3 max = Vec3(0.5, 0.1, 0.5);  // [m]

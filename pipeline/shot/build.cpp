@@ -174,8 +174,10 @@ void build_box(const json& tree, BoxSource& box, Issues& issues) {
                             {"max", &BoxSource::max},
                             {"spacing", &BoxSource::spacing},
                             {"jitter", &BoxSource::jitter}});
-    box.lattice =
-        text(tree, "/source/box/lattice") == "jittered" ? Lattice::Jittered : Lattice::Regular;
+    const std::string lattice = text(tree, "/source/box/lattice");
+    box.lattice = lattice == "jittered" ? Lattice::Jittered
+                  : lattice == "mesh"   ? Lattice::Mesh
+                                        : Lattice::Regular;
     if (issues.has("/source/box")) return;  // bounds already reported
     if (!all_less(box.min, box.max)) {
         issues.add("/source/box/max", issues.value_of(tree, "/source/box/max"),
@@ -185,7 +187,7 @@ void build_box(const json& tree, BoxSource& box, Issues& issues) {
         return;
     }
     const Real smallest = (box.max - box.min).minCoeff();
-    if (box.spacing > smallest)
+    if (box.lattice != Lattice::Mesh && box.spacing > smallest)
         issues.add(
             "/source/box/spacing", issues.value_of(tree, "/source/box/spacing"),
             "must be <= the smallest box extent " + g(smallest) + " (at least one lattice cell)",

@@ -175,7 +175,7 @@ struct BodyBounds {
 
 BodyBounds body_bounds(const InitParams& init) {
     BodyBounds b;
-    if (init.type == SourceType::Box) {
+    if (init.type == SourceType::Box && init.box.lattice != Lattice::Mesh) {
         b = {true,         true, init.box.max - init.box.min, init.box.min.y(), init.box.max.y(),
              "/source/box"};
     } else if (init.type == SourceType::Heightfield) {

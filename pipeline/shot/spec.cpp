@@ -101,9 +101,9 @@ std::vector<KeySpec> build_fixed_table() {
     Key("/source/box/min", T::Vec3).def(vec(-0.5, 0, -0.5)).units("m").doc("lower corner"),
     Key("/source/box/max", T::Vec3).def(vec(0.5, 0.1, 0.5)).units("m").doc("upper corner; > min on every axis"),
     Key("/source/box/spacing", T::Number).def(0.025).gt(0).units("m")
-        .doc("lattice spacing; particles = prod(round(extent/spacing) + 1)"),
-    Key("/source/box/lattice", T::Enum).def("regular").choices({"regular", "jittered"}).units("")
-        .doc("regular lattice, or interior points jittered"),
+        .doc("lattice spacing; particles = prod(round(extent/spacing) + 1) (lattice regular or jittered)"),
+    Key("/source/box/lattice", T::Enum).def("regular").choices({"regular", "jittered", "mesh"}).units("")
+        .doc("regular lattice, interior points jittered, or mesh: CGAL Mesh_3 tets of the box at /init/edge_length, no axis-aligned rows"),
     Key("/source/box/jitter", T::Number).def(0.25).ge(0).lt(0.5).units("spacing")
         .doc("jitter amplitude of interior points (lattice = jittered)"),
     Key("/source/heightfield", T::Section).def(json::object())

@@ -200,6 +200,63 @@ TEST(InitMeshSource, EdgeLengthFarTooSmallOrTooLargeIsAnInputError) {
     fs::remove(file);
 }
 
+// The share of a tet mesh's edge length within `degrees` of the x, y or z axis.
+double axis_aligned_edge_share(const TetMesh& m, double degrees) {
+    const double cos_limit = std::cos(degrees * kPi / 180);
+    double aligned = 0, total = 0;
+    for (const Tet& t : m.tets)
+        for (int a = 0; a < 4; ++a)
+            for (int b = a + 1; b < 4; ++b) {
+                const Vec3 e = m.X[t[b]] - m.X[t[a]];
+                const double length = e.norm();
+                total += length;
+                if (e.cwiseAbs().maxCoeff() >= cos_limit * length) aligned += length;
+            }
+    return aligned / total;
+}
+
+// A box with lattice "mesh" is a mesh source of the box's own surface: Mesh_3 tets at the
+// derived edge length, the box's volume and corners exact, seeded, and edges that run every way
+// (the cracks follow the particles' edges; the Kuhn lattice lays 3 of its 7 edge directions on
+// the axes)
+TEST(InitBoxSource, MeshLatticeFillsTheBoxWithMesh3TetsAlongNoAxis) {
+    InitParams p;
+    p.type = SourceType::Box;
+    p.box.min = Vec3(-0.2, 0, -0.15);
+    p.box.max = Vec3(0.2, 0.1, 0.15);
+    p.box.lattice = Lattice::Mesh;
+    const Real h = 0.05;
+    const InitResult r = build_init(p, h);
+    const double box_volume = (p.box.max - p.box.min).prod();
+    EXPECT_NEAR(r.surface_volume, box_volume, kBoxExactAbs);
+    EXPECT_NEAR(r.quality.tet_volume, box_volume, kCubeVolumeAbs);
+    EXPECT_NEAR((r.quality.bbox_min - p.box.min).norm(), 0.0, kBoxExactAbs);
+    EXPECT_NEAR((r.quality.bbox_max - p.box.max).norm(), 0.0, kBoxExactAbs);
+    EXPECT_EQ(r.edge_length, default_edge_length(h));
+    EXPECT_NEAR(r.quality.mean_edge_length, default_edge_length(h),
+                kEdgeLengthRel * default_edge_length(h));
+    test::expect_closed_outward_boundary(r.mesh);
+    for (const Tet& t : r.mesh.tets)
+        ASSERT_GT(signed_tet_volume(r.mesh.X[t[0]], r.mesh.X[t[1]], r.mesh.X[t[2]], r.mesh.X[t[3]]),
+                  0);
+
+    // Mesh_3's edges put 4 % of their length within 5 degrees of the three axes (isotropic
+    // directions: 1.1 %; the box's faces and sharp edges add the rest), the lattice's 40 %
+    const double mesh_share = axis_aligned_edge_share(r.mesh, 5);
+    InitParams lattice = p;
+    lattice.box.lattice = Lattice::Regular;
+    lattice.box.spacing = 0.025;
+    const double lattice_share = axis_aligned_edge_share(build_init(lattice, h).mesh, 5);
+    EXPECT_GT(lattice_share, 0.35);
+    EXPECT_LT(mesh_share, 0.15) << "against the lattice's " << lattice_share;
+    std::printf("edge length within 5 degrees of the axes: mesh %.3f, lattice %.3f\n", mesh_share,
+                lattice_share);
+
+    const InitResult again = build_init(p, h);
+    EXPECT_EQ(again.mesh.X, r.mesh.X);
+    EXPECT_EQ(again.mesh.tets, r.mesh.tets);
+}
+
 TEST(InitMeshSource, LoadedSurfaceIsScaledTranslatedAndSetOnTheGround) {
     const fs::path file = write_cube_off("cube");
     MeshSource src;

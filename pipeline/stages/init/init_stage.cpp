@@ -62,7 +62,7 @@ void add_init_fields(json& m, const InitParams& params, bool parallel_mesh, cons
         {"min_dihedral_deg", q.min_dihedral_deg}, {"max_dihedral_deg", q.max_dihedral_deg},
         {"mean_edge_length", q.mean_edge_length}, {"tet_volume", q.tet_volume},
         {"bbox_min", vec_json(q.bbox_min)},       {"bbox_max", vec_json(q.bbox_max)}};
-    if (params.type == SourceType::Mesh) {
+    if (r.surface_volume > 0) {  // Mesh_3's tets of a surface: a mesh, or a box's (lattice mesh)
         quality["surface_volume"] = r.surface_volume;
         quality["volume_error_pct"] = 100 * (q.tet_volume / r.surface_volume - 1);
         m["edge_length"] = r.edge_length;
@@ -83,7 +83,7 @@ void print_summary(const InitParams& params, const InitResult& r, double build_s
     std::printf("  %-22s %14lld\n", "boundary faces", static_cast<long long>(q.boundary_faces));
     std::printf("  %-22s %14.2f\n", "min dihedral [deg]", q.min_dihedral_deg);
     std::printf("  %-22s %14.6g\n", "volume [m^3]", q.tet_volume);
-    if (params.type == SourceType::Mesh)
+    if (r.surface_volume > 0)
         std::printf("  %-22s %+14.3f\n", "vs surface [%]",
                     100 * (q.tet_volume / r.surface_volume - 1));
     std::printf("  %-22s %14.2f\n", "build [s]", build_seconds);
