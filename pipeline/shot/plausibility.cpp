@@ -175,7 +175,7 @@ struct BodyBounds {
 
 BodyBounds body_bounds(const InitParams& init) {
     BodyBounds b;
-    if (init.type == SourceType::Box && init.box.lattice != Lattice::Mesh) {
+    if (init.type == SourceType::Box) {
         b = {true,         true, init.box.max - init.box.min, init.box.min.y(), init.box.max.y(),
              "/source/box"};
     } else if (init.type == SourceType::Heightfield) {
@@ -327,7 +327,7 @@ void check_particle_memory(const json& tree, const InitParams& init, Issues& iss
     if (issues.has("/source")) return;
     double count = 0;
     std::string pointer;
-    if (init.type == SourceType::Box) {
+    if (init.type == SourceType::Box && init.box.lattice != Lattice::Mesh) {
         const Vec3 cells = (init.box.max - init.box.min) / init.box.spacing;
         count =
             (std::round(cells.x()) + 1) * (std::round(cells.y()) + 1) * (std::round(cells.z()) + 1);
