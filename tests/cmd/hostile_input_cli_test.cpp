@@ -475,6 +475,12 @@ const ShotCase kShotCases[] = {
     // h against the body (0.2 x 0.1 x 0.2 m) and a given domain, and the domain's walls
     {"h_5_wider_than_the_body", [](json& s) { s["sim"]["h"] = 5; },
      "/sim/h = 5: is larger than the body (/source/box: 0.2 x 0.1 x 0.2 m)"},
+    {"h_5_wider_than_a_box_filled_by_mesh3",
+     [](json& s) {
+         s["source"]["box"]["lattice"] = "mesh";
+         s["sim"]["h"] = 5;
+     },
+     "/sim/h = 5: is larger than the body (/source/box: 0.2 x 0.1 x 0.2 m)"},
     {"h_larger_than_the_domain",
      [](json& s) {
          s["colliders"]["domain"] = {{"min", {-0.15, -0.05, -0.15}}, {"max", {0.15, 0.15, 0.15}}};
