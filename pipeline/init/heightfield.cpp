@@ -65,14 +65,29 @@ Real riverbed_height(const HeightfieldSource& hf, Real x, Real z) {
     return hf.base + hf.amplitude * undulation - carve;
 }
 
-TetMesh make_heightfield_tets(const HeightfieldSource& hf) {
+namespace {
+
+/// The top height of each column of the terrain: columns ~spacing apart over its footprint,
+/// (nx + 1) x (nz + 1) of them, x fastest.
+struct ColumnTops {
+    Real x0 = 0, z0 = 0;  // the footprint's lower corner [m]
+    int nx = 0, nz = 0;   // cells along x and z
+    std::vector<Real> top;
+    Real x(int i, const HeightfieldSource& hf) const { return x0 + hf.size.x() * i / nx; }
+    Real z(int k, const HeightfieldSource& hf) const { return z0 + hf.size.z() * k / nz; }
+    int32_t index(int i, int k) const { return i + (nx + 1) * k; }
+};
+
+ColumnTops column_tops(const HeightfieldSource& hf) {
     if (!(hf.size.x() > 0) || !(hf.size.z() > 0))
         throw ShotValueError("/source/heightfield/size = [" + num(hf.size.x()) + ", " +
                              num(hf.size.z()) + "]: both extents must be > 0 [m]");
     if (!(hf.spacing > 0))
         throw ShotValueError("/source/heightfield/spacing = " + num(hf.spacing) +
                              ": must be > 0 [m]");
-    const Real x0 = -0.5 * hf.size.x(), z0 = -0.5 * hf.size.z();
+    ColumnTops c;
+    c.x0 = -0.5 * hf.size.x();
+    c.z0 = -0.5 * hf.size.z();
     const double columns_x = lattice_cells(hf.size.x(), hf.spacing);
     const double columns_z = lattice_cells(hf.size.z(), hf.spacing);
     if ((columns_x + 1) * (columns_z + 1) > kMaxInitParticles)
@@ -80,12 +95,10 @@ TetMesh make_heightfield_tets(const HeightfieldSource& hf) {
                              count_text((columns_x + 1) * (columns_z + 1)) +
                              " columns; expected at most " + count_text(kMaxInitParticles) +
                              ": raise the spacing");
-    const int nx = int(columns_x), nz = int(columns_z);
-
-    // the top height per column
-    std::vector<Real> top(static_cast<size_t>(nx + 1) * (nz + 1));
-    auto column_x = [&](int i) { return x0 + hf.size.x() * i / nx; };
-    auto column_z = [&](int k) { return z0 + hf.size.z() * k / nz; };
+    c.nx = int(columns_x);
+    c.nz = int(columns_z);
+    const int nx = c.nx, nz = c.nz;
+    c.top.resize(static_cast<size_t>(nx + 1) * (nz + 1));
     if (hf.image.empty()) {
         if (!(hf.channel_depth + hf.amplitude < hf.base))
             throw ShotValueError(
@@ -94,7 +107,7 @@ TetMesh make_heightfield_tets(const HeightfieldSource& hf) {
                 "): the channel would cut through the floor; expected their sum < base [m]");
         for (int k = 0; k <= nz; ++k)
             for (int i = 0; i <= nx; ++i)
-                top[i + (nx + 1) * k] = riverbed_height(hf, column_x(i), column_z(k));
+                c.top[c.index(i, k)] = riverbed_height(hf, c.x(i, hf), c.z(k, hf));
     } else {
         const GrayImage image(read_png(hf.image));
         const Real floor_height = 0.25 * hf.spacing;
@@ -106,25 +119,71 @@ TetMesh make_heightfield_tets(const HeightfieldSource& hf) {
                     h = floor_height;
                     ++raised;
                 }
-                top[i + (nx + 1) * k] = h;
+                c.top[c.index(i, k)] = h;
             }
         if (raised > 0)
             log::warn("heightfield-floor", hf.image + ": " + std::to_string(raised) +
                                                " dark columns raised to the minimum thickness " +
                                                num(floor_height) + " m (a quarter of the spacing)");
     }
-    const Real tallest = *std::max_element(top.begin(), top.end());
+    return c;
+}
+
+}  // namespace
+
+TetMesh make_heightfield_tets(const HeightfieldSource& hf) {
+    const ColumnTops c = column_tops(hf);
+    const Real tallest = *std::max_element(c.top.begin(), c.top.end());
     // a double until it is bounded: a tall column over a fine spacing has more layers than an int
     // holds
     const double layers = std::max(1.0, std::ceil(tallest / hf.spacing - 1e-9));
-    const double points = double(nx + 1) * (layers + 1) * (nz + 1);
+    const double points = double(c.nx + 1) * (layers + 1) * (c.nz + 1);
     if (points > kMaxInitParticles)
         throw ShotValueError("/source/heightfield/spacing = " + num(hf.spacing) + ": gives " +
                              count_text(points) + " particles; expected at most " +
                              count_text(kMaxInitParticles) + ": raise the spacing");
     const int ny = int(layers);
 
-    return make_column_lattice_tets(x0, z0, hf.size.x(), hf.size.z(), nx, ny, nz, top);
+    return make_column_lattice_tets(c.x0, c.z0, hf.size.x(), hf.size.z(), c.nx, ny, c.nz, c.top);
+}
+
+InputSurface heightfield_surface(const HeightfieldSource& hf) {
+    const ColumnTops c = column_tops(hf);
+    InputSurface s;
+    const int32_t per_layer = static_cast<int32_t>(c.top.size());
+    s.positions.reserve(2 * c.top.size());
+    for (int k = 0; k <= c.nz; ++k)  // the top, ids c.index(i, k)
+        for (int i = 0; i <= c.nx; ++i)
+            s.positions.emplace_back(c.x(i, hf), c.top[c.index(i, k)], c.z(k, hf));
+    for (int k = 0; k <= c.nz; ++k)  // the bottom, ids per_layer + c.index(i, k)
+        for (int i = 0; i <= c.nx; ++i) s.positions.emplace_back(c.x(i, hf), 0, c.z(k, hf));
+    // a quad's two triangles, turned to face `outward` (every quad here is planar or nearly so,
+    // and a heightfield's top never overhangs, so the sign of one normal decides)
+    auto add_quad = [&](int32_t a, int32_t b, int32_t d, int32_t e, const Vec3& outward) {
+        const Vec3& p = s.positions[a];
+        if ((s.positions[b] - p).cross(s.positions[d] - p).dot(outward) < 0) std::swap(b, e);
+        s.faces.push_back({a, b, d});
+        s.faces.push_back({a, d, e});
+    };
+    const int32_t bottom = per_layer;
+    for (int k = 0; k < c.nz; ++k)
+        for (int i = 0; i < c.nx; ++i) {
+            const int32_t q[4] = {c.index(i, k), c.index(i + 1, k), c.index(i + 1, k + 1),
+                                  c.index(i, k + 1)};
+            add_quad(q[0], q[1], q[2], q[3], Vec3::UnitY());
+            add_quad(bottom + q[0], bottom + q[1], bottom + q[2], bottom + q[3], -Vec3::UnitY());
+        }
+    for (int i = 0; i < c.nx; ++i)  // the walls at z = z0 and z = z0 + size.z
+        for (int k : {0, c.nz}) {
+            const int32_t a = c.index(i, k), b = c.index(i + 1, k);
+            add_quad(a, b, bottom + b, bottom + a, Vec3(0, 0, k == 0 ? -1 : 1));
+        }
+    for (int k = 0; k < c.nz; ++k)  // the walls at x = x0 and x = x0 + size.x
+        for (int i : {0, c.nx}) {
+            const int32_t a = c.index(i, k), b = c.index(i, k + 1);
+            add_quad(a, b, bottom + b, bottom + a, Vec3(i == 0 ? -1 : 1, 0, 0));
+        }
+    return s;
 }
 
 }  // namespace mudcrack

@@ -2,6 +2,7 @@
 /// The heightfield terrain source: a riverbed slab with a flat bottom at y = 0 and a top from a
 /// formula (banks with a gentle undulation, a meandering carved channel) or a grayscale PNG.
 #include "pipeline/init/init_params.h"
+#include "pipeline/io/mesh_io.h"
 #include "sim/core/tet_mesh.h"
 
 namespace mudcrack {
@@ -22,5 +23,12 @@ Real riverbed_height(const HeightfieldSource& hf, Real x, Real z);
 /// Throws InputError naming the /source/heightfield keys when the formula cuts through the
 /// floor (channel_depth + amplitude >= base) or the image cannot be read.
 TetMesh make_heightfield_tets(const HeightfieldSource& hf);
+
+/// The terrain's closed surface, for Mesh_3 to fill (HeightfieldLattice::Mesh): the top sampled on
+/// the same columns as make_heightfield_tets (~spacing apart, from the formula or the image), a
+/// flat bottom at y = 0 and four vertical walls, two triangles per quad, outward and
+/// counter-clockwise. Throws as make_heightfield_tets does, except that the layer count (a
+/// lattice's) is not checked: Mesh_3's edge length sets the particle count.
+InputSurface heightfield_surface(const HeightfieldSource& hf);
 
 }  // namespace mudcrack

@@ -138,7 +138,11 @@ InitResult build_init(const InitParams& params, const MesherOptions& mesher,
                 r = finish_tet_mesh(make_box_tets(params.box, params.seed), nullptr);
             break;
         case SourceType::Heightfield:
-            r = finish_tet_mesh(make_heightfield_tets(params.heightfield), nullptr);
+            if (params.heightfield.lattice == HeightfieldLattice::Mesh)
+                r = tetrahedralize_checked(heightfield_surface(params.heightfield),
+                                           "the heightfield (/source/heightfield)", mesher, {});
+            else
+                r = finish_tet_mesh(make_heightfield_tets(params.heightfield), nullptr);
             break;
         case SourceType::Mesh:
             if (params.mesh.path.empty())

@@ -35,6 +35,11 @@ struct BoxSource {
     Real jitter = 0.25;  // jitter amplitude in units of spacing (interior only)
 };
 
+/// How a heightfield is filled: its lattice of columns (each column's points spread evenly from
+/// the bottom to its top, in rows along x and z), or CGAL Mesh_3's tets of its closed surface,
+/// whose edges run every way (docs/physics.md §6.6).
+enum class HeightfieldLattice { Columns, Mesh };
+
 /// A terrain slab: flat bottom at y = 0, top at base + a carved channel and gentle noise, or
 /// a grayscale PNG heightmap.
 struct HeightfieldSource {
@@ -46,7 +51,8 @@ struct HeightfieldSource {
     Real channel_meander = 0.5;  // lateral meander amplitude [m]
     std::string image;           // optional grayscale PNG; overrides the formula
     Real image_height = 0.3;     // height of a white pixel [m]
-    Real spacing = 0.05;         // lattice spacing [m]
+    Real spacing = 0.05;         // column spacing [m]: the lattice's, or the surface's samples
+    HeightfieldLattice lattice = HeightfieldLattice::Columns;
 };
 
 /// A shot value the builders refuse, as "<pointer> = <value>: <expectation>": they see the values,

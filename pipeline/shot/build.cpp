@@ -207,6 +207,8 @@ void build_heightfield(json& tree, const std::string& shot_path, HeightfieldSour
                     {"channel_meander", &H::channel_meander},
                     {"image_height", &H::image_height},
                     {"spacing", &H::spacing}});
+    hf.lattice = text(tree, "/source/heightfield/lattice") == "mesh" ? HeightfieldLattice::Mesh
+                                                                     : HeightfieldLattice::Columns;
     if (has(tree, "/source/heightfield/image"))
         hf.image = resolve_existing(tree, "/source/heightfield/image", shot_path, issues);
     // the channel must not cut through the slab's bottom

@@ -332,7 +332,8 @@ void check_particle_memory(const json& tree, const InitParams& init, Issues& iss
         count =
             (std::round(cells.x()) + 1) * (std::round(cells.y()) + 1) * (std::round(cells.z()) + 1);
         pointer = "/source/box/spacing";
-    } else if (init.type == SourceType::Heightfield) {
+    } else if (init.type == SourceType::Heightfield &&
+               init.heightfield.lattice == HeightfieldLattice::Columns) {
         const HeightfieldSource& hf = init.heightfield;
         const Real height = hf.base + hf.amplitude + hf.image_height;
         count = (hf.size.x() / hf.spacing + 1) * (hf.size.z() / hf.spacing + 1) *

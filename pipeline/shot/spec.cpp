@@ -120,7 +120,10 @@ std::vector<KeySpec> build_fixed_table() {
     Key("/source/heightfield/image", T::Path).optional().units("")
         .doc("grayscale PNG heightmap relative to the shot file; overrides the formula"),
     Key("/source/heightfield/image_height", T::Number).def(0.3).gt(0).units("m").doc("height of a white pixel"),
-    Key("/source/heightfield/spacing", T::Number).def(0.05).gt(0).units("m").doc("lattice spacing"),
+    Key("/source/heightfield/spacing", T::Number).def(0.05).gt(0).units("m")
+        .doc("column spacing: the lattice's, or the top's samples when lattice = mesh"),
+    Key("/source/heightfield/lattice", T::Enum).def("columns").choices({"columns", "mesh"}).units("")
+        .doc("columns: a lattice of columns spread from bottom to top; mesh: CGAL Mesh_3 tets of the terrain's surface at /init/edge_length, no axis-aligned rows"),
 
     // --- init: tetrahedralization
     Key("/init", T::Section).def(json::object()).doc("tetrahedral initialization (mc-init)"),

@@ -9,6 +9,7 @@
 #include "init_test_util.h"
 #include "pipeline/init/boundary_uv.h"
 #include "pipeline/init/cgal_mesher.h"
+#include "pipeline/init/heightfield.h"
 #include "pipeline/init/init_builder.h"
 #include "pipeline/init/surface_check.h"
 #include "sim/core/error.h"
@@ -27,6 +28,12 @@ constexpr double kCubeVolumeAbs = 1e-6;  // a meshed unit cube's volume [m^3]
 constexpr double kBoxExactAbs = 1e-9;
 constexpr double kFittedVolumeRel = 0.02;  // the tets' volume vs the input surface's
 constexpr double kGroundFitAbs = 0.01;     // fit_to_ground's lowest point vs y = 0 [m]
+// a heightfield's closed surface vs its columns' tets: the same tops, other diagonals
+constexpr double kHeightfieldVolumeRel = 2e-3;
+// a point on a meshed terrain's top vs the formula: the surface's chords between samples 0.025 m
+// apart sag below the curved channel and undulations, and Mesh_3's facets cut across them
+// (measured: 2.6 mm at most) [m]
+constexpr double kOnTerrainAbs = 5e-3;
 
 namespace fs = std::filesystem;
 
@@ -255,6 +262,59 @@ TEST(InitBoxSource, MeshLatticeFillsTheBoxWithMesh3TetsAlongNoAxis) {
     const InitResult again = build_init(p, h);
     EXPECT_EQ(again.mesh.X, r.mesh.X);
     EXPECT_EQ(again.mesh.tets, r.mesh.tets);
+}
+
+// A heightfield with lattice "mesh" is Mesh_3's fill of the terrain's closed surface: the top
+// sampled on the columns, the bottom flat at y = 0, the footprint's corners exact, and edges that
+// run every way where the columns' run in rows along x and z and up each column
+TEST(InitHeightfieldSource, MeshLatticeFillsTheTerrainWithMesh3TetsAlongNoAxis) {
+    InitParams p;
+    p.type = SourceType::Heightfield;
+    p.heightfield.size = Vec3(1.2, 0, 1.2);
+    p.heightfield.spacing = 0.025;
+    p.heightfield.lattice = HeightfieldLattice::Mesh;
+    const Real h = 0.1;
+
+    // the surface: closed and outward (check_input_surface refuses anything else), enclosing
+    // what the columns enclose (the same tops, triangulated alike or not)
+    const InputSurface surface = heightfield_surface(p.heightfield);
+    const double surface_volume = check_input_surface(surface, "heightfield");
+    InitParams columns = p;
+    columns.heightfield.lattice = HeightfieldLattice::Columns;
+    const InitResult column_fill = build_init(columns, h);
+    EXPECT_NEAR(surface_volume / column_fill.quality.tet_volume, 1.0, kHeightfieldVolumeRel);
+
+    const InitResult r = build_init(p, h);
+    EXPECT_NEAR(r.surface_volume, surface_volume, kBoxExactAbs);
+    EXPECT_NEAR(r.quality.tet_volume / surface_volume, 1.0, kFittedVolumeRel);
+    EXPECT_EQ(r.edge_length, default_edge_length(h));
+    EXPECT_NEAR(r.quality.bbox_min.y(), 0.0, kBoxExactAbs);
+    for (int d : {0, 2}) {
+        EXPECT_NEAR(r.quality.bbox_min[d], -0.6, kBoxExactAbs);
+        EXPECT_NEAR(r.quality.bbox_max[d], 0.6, kBoxExactAbs);
+    }
+    test::expect_closed_outward_boundary(r.mesh);
+    for (const Tet& t : r.mesh.tets)
+        ASSERT_GT(signed_tet_volume(r.mesh.X[t[0]], r.mesh.X[t[1]], r.mesh.X[t[2]], r.mesh.X[t[3]]),
+                  0);
+    // every point Mesh_3 put on the top lies on the terrain (within the chords' sag between the
+    // surface's samples), and none above it
+    int on_top = 0;
+    for (const Vec3& x : r.mesh.X) {
+        const Real top = riverbed_height(p.heightfield, x.x(), x.z());
+        EXPECT_LT(x.y(), top + kOnTerrainAbs);
+        const bool on_wall = std::abs(std::abs(x.x()) - 0.6) < kBoxExactAbs ||
+                             std::abs(std::abs(x.z()) - 0.6) < kBoxExactAbs;
+        if (!on_wall && x.y() > top - kOnTerrainAbs) ++on_top;
+    }
+    EXPECT_GT(on_top, 100);
+
+    const double mesh_share = axis_aligned_edge_share(r.mesh, 5);
+    const double column_share = axis_aligned_edge_share(column_fill.mesh, 5);
+    EXPECT_GT(column_share, 0.2);
+    EXPECT_LT(mesh_share, 0.1) << "against the columns' " << column_share;
+    std::printf("edge length within 5 degrees of the axes: mesh %.3f, columns %.3f\n", mesh_share,
+                column_share);
 }
 
 TEST(InitMeshSource, LoadedSurfaceIsScaledTranslatedAndSetOnTheGround) {
