@@ -71,10 +71,11 @@ namespace {
 /// (nx + 1) x (nz + 1) of them, x fastest.
 struct ColumnTops {
     Real x0 = 0, z0 = 0;  // the footprint's lower corner [m]
+    Real sx = 0, sz = 0;  // the footprint's extent [m]
     int nx = 0, nz = 0;   // cells along x and z
     std::vector<Real> top;
-    Real x(int i, const HeightfieldSource& hf) const { return x0 + hf.size.x() * i / nx; }
-    Real z(int k, const HeightfieldSource& hf) const { return z0 + hf.size.z() * k / nz; }
+    Real x(int i) const { return x0 + sx * i / nx; }
+    Real z(int k) const { return z0 + sz * k / nz; }
     int32_t index(int i, int k) const { return i + (nx + 1) * k; }
 };
 
@@ -86,8 +87,10 @@ ColumnTops column_tops(const HeightfieldSource& hf) {
         throw ShotValueError("/source/heightfield/spacing = " + num(hf.spacing) +
                              ": must be > 0 [m]");
     ColumnTops c;
-    c.x0 = -0.5 * hf.size.x();
-    c.z0 = -0.5 * hf.size.z();
+    c.sx = hf.size.x();
+    c.sz = hf.size.z();
+    c.x0 = -0.5 * c.sx;
+    c.z0 = -0.5 * c.sz;
     const double columns_x = lattice_cells(hf.size.x(), hf.spacing);
     const double columns_z = lattice_cells(hf.size.z(), hf.spacing);
     if ((columns_x + 1) * (columns_z + 1) > kMaxInitParticles)
@@ -107,7 +110,7 @@ ColumnTops column_tops(const HeightfieldSource& hf) {
                 "): the channel would cut through the floor; expected their sum < base [m]");
         for (int k = 0; k <= nz; ++k)
             for (int i = 0; i <= nx; ++i)
-                c.top[c.index(i, k)] = riverbed_height(hf, c.x(i, hf), c.z(k, hf));
+                c.top[c.index(i, k)] = riverbed_height(hf, c.x(i), c.z(k));
     } else {
         const GrayImage image(read_png(hf.image));
         const Real floor_height = 0.25 * hf.spacing;
@@ -144,19 +147,19 @@ TetMesh make_heightfield_tets(const HeightfieldSource& hf) {
                              count_text(kMaxInitParticles) + ": raise the spacing");
     const int ny = int(layers);
 
-    return make_column_lattice_tets(c.x0, c.z0, hf.size.x(), hf.size.z(), c.nx, ny, c.nz, c.top);
+    return make_column_lattice_tets(c.x0, c.z0, c.sx, c.sz, c.nx, ny, c.nz, c.top);
 }
 
 InputSurface heightfield_surface(const HeightfieldSource& hf) {
     const ColumnTops c = column_tops(hf);
     InputSurface s;
-    const int32_t per_layer = static_cast<int32_t>(c.top.size());
+    const int32_t bottom = static_cast<int32_t>(c.top.size());  // the bottom's first id
     s.positions.reserve(2 * c.top.size());
     for (int k = 0; k <= c.nz; ++k)  // the top, ids c.index(i, k)
         for (int i = 0; i <= c.nx; ++i)
-            s.positions.emplace_back(c.x(i, hf), c.top[c.index(i, k)], c.z(k, hf));
-    for (int k = 0; k <= c.nz; ++k)  // the bottom, ids per_layer + c.index(i, k)
-        for (int i = 0; i <= c.nx; ++i) s.positions.emplace_back(c.x(i, hf), 0, c.z(k, hf));
+            s.positions.emplace_back(c.x(i), c.top[c.index(i, k)], c.z(k));
+    for (int k = 0; k <= c.nz; ++k)  // the bottom, ids bottom + c.index(i, k)
+        for (int i = 0; i <= c.nx; ++i) s.positions.emplace_back(c.x(i), 0, c.z(k));
     // a quad's two triangles, turned to face `outward` (every quad here is planar or nearly so,
     // and a heightfield's top never overhangs, so the sign of one normal decides)
     auto add_quad = [&](int32_t a, int32_t b, int32_t d, int32_t e, const Vec3& outward) {
@@ -165,7 +168,6 @@ InputSurface heightfield_surface(const HeightfieldSource& hf) {
         s.faces.push_back({a, b, d});
         s.faces.push_back({a, d, e});
     };
-    const int32_t bottom = per_layer;
     for (int k = 0; k < c.nz; ++k)
         for (int i = 0; i < c.nx; ++i) {
             const int32_t q[4] = {c.index(i, k), c.index(i + 1, k), c.index(i + 1, k + 1),

@@ -297,8 +297,8 @@ TEST(InitHeightfieldSource, MeshLatticeFillsTheTerrainWithMesh3TetsAlongNoAxis) 
     for (const Tet& t : r.mesh.tets)
         ASSERT_GT(signed_tet_volume(r.mesh.X[t[0]], r.mesh.X[t[1]], r.mesh.X[t[2]], r.mesh.X[t[3]]),
                   0);
-    // every point Mesh_3 put on the top lies on the terrain (within the chords' sag between the
-    // surface's samples), and none above it
+    // every point Mesh_3 put on the top lies on the terrain, and none lies higher above it than
+    // the chords between the surface's samples do
     int on_top = 0;
     for (const Vec3& x : r.mesh.X) {
         const Real top = riverbed_height(p.heightfield, x.x(), x.z());
