@@ -20,6 +20,15 @@ using mpm::SparseGrid;
 
 namespace {
 
+// The Jacobi preconditioner's stiffness part, sum_p V_p |grad w_ip|^2 (in 1/h^2), as this factor
+// times W_i = sum_p V_p w_ip: its ratio for a node amid particles spread evenly over its support,
+// int |grad N|^2 / int N = 3 (int N'^2) (int N^2)^2 = 3 (1) (11/20)^2 for the quadratic B-spline
+// N(x) N(y) N(z). The diagonal only preconditions the CG (and takes the explicit evaporation's
+// Jacobi step), so it need not be exact, and M_ii = W_i / dt outweighs it by h^2 / (D dt) (about
+// 2,000 on the demo, 100 on mpm_bench's reference scene): the P2G is spared a third moisture
+// field (docs/physics.md §4.5 has the report's figures).
+constexpr Real kStiffnessPerWeight = Real(3 * 121) / 400;
+
 int64_t node_count(const SparseGrid& grid) {
     return static_cast<int64_t>(grid.n_blocks()) * kBlockNodes;
 }
@@ -409,7 +418,7 @@ void begin_moisture_p2g(MoistureGrid& mg, const SparseGrid& grid) {
     const int64_t n = node_count(grid);
     resize_zero(mg.W, n);
     resize_zero(mg.theta, n);
-    resize_zero(mg.diag, n);
+    mg.diag.resize(n);
 }
 
 namespace {
@@ -473,11 +482,11 @@ MoistureSolveStats solve_moisture(const MoistureParams& mp, const MoistureSeal& 
     const Real inv_dt = 1 / dt;
     const size_t n_particles = grid.order.size();
 
-    // nodal theta^n = (V theta)_i / W_i and the Jacobi diagonal M_ii + sum_p V D |grad w|^2
+    // nodal theta^n = (V theta)_i / W_i and the Jacobi diagonal M_ii + kappa D W_i / h^2
     parallel_for(n_nodes, [&](int64_t i) {
         if (mg.W[i] > 0) {
             mg.theta[i] /= mg.W[i];
-            mg.diag[i] = mg.W[i] * inv_dt + mp.D * geo.inv_h * geo.inv_h * mg.diag[i];
+            mg.diag[i] = mg.W[i] * (inv_dt + kStiffnessPerWeight * mp.D * geo.inv_h * geo.inv_h);
         } else {
             mg.theta[i] = 0;
             mg.diag[i] = 0;

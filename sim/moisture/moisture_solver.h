@@ -22,7 +22,7 @@ namespace mudcrack {
 struct MoistureGrid {
     std::vector<Real> W;      // sum_p V_p w_ip [m^3]
     std::vector<Real> theta;  // (V theta)_i after the P2G, then theta_i^n
-    // sum_p V_p |grad w_ip|^2 after the P2G, the Jacobi diagonal, its inverse
+    // the Jacobi diagonal, then its inverse
     std::vector<Real> diag;
     // r (explicit), or r_0 = sum S lambda theta_0 w (implicit Robin)
     std::vector<Real> evaporation;
@@ -60,11 +60,10 @@ struct MoistureSolveStats {
     Real residual = 0;   // final ||b - A x|| / ||b||
 };
 
-/// Resizes and zeroes the node fields the P2G accumulates (W, theta, diag) for the current grid.
+/// Resizes the node fields for the current grid and zeroes those the P2G accumulates (W, theta).
 void begin_moisture_p2g(MoistureGrid& mg, const mpm::SparseGrid& grid);
 
-/// Solves one implicit moisture step of length dt after the P2G filled W, (V theta) and
-/// sum V |grad w|^2, and the mechanics grid holds the nodal masses (for the surface test).
+/// Solves one implicit moisture step of length dt after the P2G filled W and (V theta).
 /// On return mg.x holds theta^{n+1} - theta^n per node (zero off the material) and
 /// mg.particle_is_boundary flags the evaporating particles. The CG starts from theta^n plus the
 /// Jacobi step on the explicit evaporation plus the flux `history` predicts, and this solve's

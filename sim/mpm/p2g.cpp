@@ -15,8 +15,8 @@ namespace mudcrack::mpm {
 
 namespace {
 
-// window layout: per node m, (m v) x y z; with moisture then three planar windows W, (V theta),
-// sum V |grad w|^2, kMoistureStride apart, whose z rows are updated as 4 lanes (the z weights with
+// window layout: per node m, (m v) x y z; with moisture then two planar windows W and (V theta),
+// kMoistureStride apart, whose z rows are updated as 4 lanes (the z weights with
 // a zero 4th lane: one SIMD operation per row; the stride keeps that lane inside the scratch)
 constexpr int kMoistureStride = kWindowNodes + 8;
 using Lanes = Eigen::Array<Real, 4, 1>;
@@ -42,7 +42,7 @@ void p2g_impl(const SimStateOf<S>& state, const SymMat3* kirchhoff, SparseGrid& 
     for_each_pblock_colored(grid, [&](int t, int32_t pb) {
         Real* win = windows[t].data();
         Real* mw = win + kWindowNodes * kStride;  // moisture windows
-        std::fill(win, win + kWindowNodes * kStride + (kMoisture ? 3 * kMoistureStride : 0),
+        std::fill(win, win + kWindowNodes * kStride + (kMoisture ? 2 * kMoistureStride : 0),
                   Real(0));
         const Vec3i origin = geo.block_coord(grid.pblock_key[pb]) * kBlockWidth;
         for (int32_t i = grid.pblock_begin[pb]; i < grid.pblock_begin[pb + 1]; ++i) {
@@ -72,18 +72,14 @@ void p2g_impl(const SimStateOf<S>& state, const SymMat3* kirchhoff, SparseGrid& 
             const Real db[4] = {0, Ah(0, 1), Ah(1, 1), Ah(2, 1)};
             const Real dc[4] = {0, Ah(0, 2), Ah(1, 2), Ah(2, 2)};
 #endif
-            // the moisture rows' z profiles, scaled once per particle: V wz, V theta wz, V wz^2
-            // and V dwz^2 (each row then takes one multiply-add per field)
-            Lanes V_wz = Lanes::Zero(), Vtheta_wz = Lanes::Zero(), V_wz2 = Lanes::Zero(),
-                  V_dwz2 = Lanes::Zero();
+            // the moisture rows' z profiles, scaled once per particle: V wz and V theta wz (each
+            // row then takes one multiply-add per field)
+            Lanes V_wz = Lanes::Zero(), Vtheta_wz = Lanes::Zero();
             if constexpr (kMoisture) {
                 const Real V = V0[p] * J[p];
                 const Lanes wz(az.w[0], az.w[1], az.w[2], 0);
-                const Lanes dwz(az.dw[0], az.dw[1], az.dw[2], 0);
                 V_wz = V * wz;
                 Vtheta_wz = theta[p] * V_wz;
-                V_wz2 = V_wz * wz;
-                V_dwz2 = (V * dwz) * dwz;
             }
 
             // scatter to the 3x3x3 stencil
@@ -114,14 +110,9 @@ void p2g_impl(const SimStateOf<S>& state, const SymMat3* kirchhoff, SparseGrid& 
                     }
 #endif
                     if constexpr (kMoisture) {
-                        // W, V theta and V |grad w|^2 with |grad w|^2 (in 1/h^2) =
-                        // ((dwx wy)^2 + (wx dwy)^2) wz^2 + (wx wy)^2 dwz^2
                         const int n = window_index(o0 + a, o1 + b, o2);
-                        const Real gxy = ax.dw[a] * ay.w[b], gyx = ax.w[a] * ay.dw[b];
                         Eigen::Map<Lanes>(mw + n) += wab * V_wz;
                         Eigen::Map<Lanes>(mw + kMoistureStride + n) += wab * Vtheta_wz;
-                        Eigen::Map<Lanes>(mw + 2 * kMoistureStride + n) +=
-                            (gxy * gxy + gyx * gyx) * V_wz2 + (wab * wab) * V_dwz2;
                     }
                 }
             }
@@ -132,7 +123,6 @@ void p2g_impl(const SimStateOf<S>& state, const SymMat3* kirchhoff, SparseGrid& 
         if constexpr (kMoisture) {
             flush_window<1, 1>(grid, pb, mw, mg->W.data());
             flush_window<1, 1>(grid, pb, mw + kMoistureStride, mg->theta.data());
-            flush_window<1, 1>(grid, pb, mw + 2 * kMoistureStride, mg->diag.data());
         }
     });
 }

@@ -15,9 +15,8 @@ namespace mudcrack::mpm {
 
 /// Scatters mass and APIC momentum with the MLS stress term
 /// A_p = m_p C_p - dt V0_p (4/h^2) tau_p (docs/physics.md §1.2) into grid.nodes, which
-/// bin_particles zeroed. With `moisture` non-null also W_i, (V theta)_i and
-/// sum_p V_p |grad w_ip|^2 (docs/physics.md §7 step 1); those fields must be zeroed
-/// (begin_moisture_p2g).
+/// bin_particles zeroed. With `moisture` non-null also W_i and (V theta)_i (docs/physics.md §7
+/// step 1); those fields must be zeroed (begin_moisture_p2g).
 /// tau_p is read from `tau` (per slot, the Kirchhoff stress of Fe: what the last G2P left, or
 /// kirchhoff_stresses).
 /// @param dt time step [s]  @param windows per-thread scratch of 8 * 216 values
