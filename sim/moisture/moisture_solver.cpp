@@ -20,15 +20,6 @@ using mpm::SparseGrid;
 
 namespace {
 
-// The Jacobi preconditioner's stiffness part, sum_p V_p |grad w_ip|^2 (in 1/h^2), as this factor
-// times W_i = sum_p V_p w_ip: its ratio for a node amid particles spread evenly over its support,
-// int |grad N|^2 / int N = 3 (int N'^2) (int N^2)^2 = 3 (1) (11/20)^2 for the quadratic B-spline
-// N(x) N(y) N(z). The diagonal only preconditions the CG (and takes the explicit evaporation's
-// Jacobi step), so it need not be exact, and M_ii = W_i / dt outweighs it by h^2 / (D dt) (about
-// 2,000 on the demo, 100 on mpm_bench's reference scene): the P2G is spared a third moisture
-// field (docs/physics.md §4.5 has the report's figures).
-constexpr Real kStiffnessPerWeight = Real(3 * 121) / 400;
-
 int64_t node_count(const SparseGrid& grid) {
     return static_cast<int64_t>(grid.n_blocks()) * kBlockNodes;
 }
@@ -486,7 +477,8 @@ MoistureSolveStats solve_moisture(const MoistureParams& mp, const MoistureSeal& 
     parallel_for(n_nodes, [&](int64_t i) {
         if (mg.W[i] > 0) {
             mg.theta[i] /= mg.W[i];
-            mg.diag[i] = mg.W[i] * (inv_dt + kStiffnessPerWeight * mp.D * geo.inv_h * geo.inv_h);
+            mg.diag[i] =
+                mg.W[i] * (inv_dt + kJacobiStiffnessPerWeight * mp.D * geo.inv_h * geo.inv_h);
         } else {
             mg.theta[i] = 0;
             mg.diag[i] = 0;

@@ -18,6 +18,15 @@
 
 namespace mudcrack {
 
+/// The Jacobi preconditioner's stiffness part, L's diagonal sum_p V_p D |grad w_ip|^2, taken as
+/// this factor times D W_i / h^2 (W_i = sum_p V_p w_ip): the ratio for a node amid particles spread
+/// evenly over its support, int |grad N|^2 / int N = 3 (int N'^2)(int N^2)^2 = 3 (1)(11/20)^2 for
+/// the quadratic B-spline N(x) N(y) N(z) with h = 1 (docs/physics.md §4.5). The diagonal only
+/// preconditions the CG (and takes the explicit evaporation's Jacobi step), so it need not be
+/// exact, and M_ii = W_i / dt outweighs it by h^2 / (D dt) (about 2,000 on the demo, 100 on
+/// mpm_bench's reference scene): the P2G is spared a third moisture field.
+constexpr Real kJacobiStiffnessPerWeight = Real(3 * 121) / 400;
+
 /// Moisture node fields, (n_blocks * 64) each, and per-particle boundary flags.
 struct MoistureGrid {
     std::vector<Real> W;      // sum_p V_p w_ip [m^3]

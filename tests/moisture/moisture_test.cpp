@@ -195,6 +195,31 @@ TEST(Moisture, ConjugateGradientsMatchAnEigenDirectSolve) {
 
 // the CG's initial guess from the flux history (flux_history.h) changes how many iterations a
 // solve takes, not what it converges to
+// The preconditioner's kappa is L's diagonal per unit of W for a node amid evenly spread
+// particles, sum_p |grad w_ip|^2 / sum_p w_ip (h = 1): here over particles on a fine lattice that
+// fills the node's support, by the weights the transfers use. The sums over the lattice factor by
+// axis: sum w = Sw^3 and sum |grad w|^2 = 3 Sdw2 Sw2^2 with Sw, Sw2, Sdw2 the 1D sums of w, w^2
+// and dw^2.
+TEST(Moisture, JacobiStiffnessPerWeightIsTheRatioOfAnEvenlyFilledSupport) {
+    constexpr int kPerCell = 64;  // particles per cell and axis (midpoint rule)
+    Real Sw = 0, Sw2 = 0, Sdw2 = 0;
+    for (int k = 0; k < 3 * kPerCell; ++k) {
+        // a particle at grid coordinate xg in (-1.5, 1.5) and its weight on the node at 0
+        const Real xg = Real(-1.5) + (k + Real(0.5)) / kPerCell;
+        const mpm::AxisWeights a = mpm::axis_weights(xg);
+        const int node = -a.base;
+        ASSERT_GE(node, 0);
+        ASSERT_LT(node, 3);
+        Sw += a.w[node];
+        Sw2 += a.w[node] * a.w[node];
+        Sdw2 += a.dw[node] * a.dw[node];
+    }
+    const Real ratio = 3 * Sdw2 * Sw2 * Sw2 / (Sw * Sw * Sw);
+    // the midpoint rule's error on the piecewise quadratics, O(1 / kPerCell^2)
+    constexpr Real kQuadrature = 1e-3;
+    EXPECT_NEAR(ratio, kJacobiStiffnessPerWeight, kQuadrature);
+}
+
 TEST(Moisture, WarmStartFromTheFluxHistoryConvergesToTheColdStartSolution) {
     SimModel model = still_model(0.1);
     model.moisture->D = 0.5;       // D dt/h^2 = 0.05
