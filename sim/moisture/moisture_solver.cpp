@@ -409,7 +409,6 @@ void begin_moisture_p2g(MoistureGrid& mg, const SparseGrid& grid) {
     const int64_t n = node_count(grid);
     resize_zero(mg.W, n);
     resize_zero(mg.theta, n);
-    mg.diag.resize(n);
 }
 
 namespace {
@@ -474,6 +473,7 @@ MoistureSolveStats solve_moisture(const MoistureParams& mp, const MoistureSeal& 
     const size_t n_particles = grid.order.size();
 
     // nodal theta^n = (V theta)_i / W_i and the Jacobi diagonal M_ii + kappa D W_i / h^2
+    mg.diag.resize(n_nodes);
     parallel_for(n_nodes, [&](int64_t i) {
         if (mg.W[i] > 0) {
             mg.theta[i] /= mg.W[i];

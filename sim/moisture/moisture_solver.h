@@ -69,7 +69,7 @@ struct MoistureSolveStats {
     Real residual = 0;   // final ||b - A x|| / ||b||
 };
 
-/// Resizes the node fields for the current grid and zeroes those the P2G accumulates (W, theta).
+/// Resizes and zeroes the node fields the P2G accumulates (W, theta) for the current grid.
 void begin_moisture_p2g(MoistureGrid& mg, const mpm::SparseGrid& grid);
 
 /// Solves one implicit moisture step of length dt after the P2G filled W and (V theta).

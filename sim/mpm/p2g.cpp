@@ -16,8 +16,8 @@ namespace mudcrack::mpm {
 namespace {
 
 // window layout: per node m, (m v) x y z; with moisture then two planar windows W and (V theta),
-// kMoistureStride apart, whose z rows are updated as 4 lanes (the z weights with
-// a zero 4th lane: one SIMD operation per row; the stride keeps that lane inside the scratch)
+// kMoistureStride apart, whose z rows are updated as 4 lanes (the z weights with a zero 4th lane:
+// one SIMD operation per row; the stride keeps that lane inside the scratch)
 constexpr int kMoistureStride = kWindowNodes + 8;
 using Lanes = Eigen::Array<Real, 4, 1>;
 

@@ -193,8 +193,6 @@ TEST(Moisture, ConjugateGradientsMatchAnEigenDirectSolve) {
     EXPECT_LT(max_err, 1e-10) << "CG and the Cholesky solve disagree";
 }
 
-// the CG's initial guess from the flux history (flux_history.h) changes how many iterations a
-// solve takes, not what it converges to
 // The preconditioner's kappa is L's diagonal per unit of W for a node amid evenly spread
 // particles, sum_p |grad w_ip|^2 / sum_p w_ip (h = 1): here over particles on a fine lattice that
 // fills the node's support, by the weights the transfers use. The sums over the lattice factor by
@@ -220,6 +218,8 @@ TEST(Moisture, JacobiStiffnessPerWeightIsTheRatioOfAnEvenlyFilledSupport) {
     EXPECT_NEAR(ratio, kJacobiStiffnessPerWeight, kQuadrature);
 }
 
+// the CG's initial guess from the flux history (flux_history.h) changes how many iterations a
+// solve takes, not what it converges to
 TEST(Moisture, WarmStartFromTheFluxHistoryConvergesToTheColdStartSolution) {
     SimModel model = still_model(0.1);
     model.moisture->D = 0.5;       // D dt/h^2 = 0.05
