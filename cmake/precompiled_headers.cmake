@@ -17,7 +17,8 @@ target_precompile_headers(mudcrack_pch PRIVATE ${_mudcrack_pch_headers})
 
 if(TARGET GTest::gtest)
   add_library(mudcrack_pch_tests OBJECT ${PROJECT_SOURCE_DIR}/cmake/pch_host.cpp)
-  target_link_libraries(mudcrack_pch_tests PRIVATE Eigen3::Eigen OpenMP::OpenMP_CXX GTest::gtest mudcrack_warnings)
+  target_link_libraries(mudcrack_pch_tests PRIVATE Eigen3::Eigen OpenMP::OpenMP_CXX GTest::gtest mudcrack_warnings
+                        mudcrack_test_codegen)
   target_precompile_headers(mudcrack_pch_tests PRIVATE ${_mudcrack_pch_headers} <gtest/gtest.h>)
 endif()
 
@@ -46,7 +47,7 @@ foreach(_t ${_mudcrack_all_targets})
   get_target_property(_libs ${_t} LINK_LIBRARIES)
   set(_on_core FALSE)
   foreach(_lib ${_libs})
-    if(_lib MATCHES "^(mudcrack::|mudcrack_)" AND NOT _lib STREQUAL "mudcrack_warnings"
+    if(_lib MATCHES "^(mudcrack::|mudcrack_)" AND NOT _lib MATCHES "^mudcrack_(warnings|test_codegen)$"
        OR _lib STREQUAL "Eigen3::Eigen")
       set(_on_core TRUE)
     endif()

@@ -3,8 +3,7 @@
 //   (fig8_c, eps = 1) peels and curls; without porous shrinkage (fig8_a, eta = 0) nothing compacts
 //   or curls.
 // - Fig. 6: the larger the hardening rate eps, the more the soil curls and the larger its pieces.
-// - Fig. 7: the mossy ground cracks into a network of polygons and curls, and another seed draws
-//   another network with as many polygons.
+// - Fig. 7: the mossy ground cracks into a network of polygons and curls.
 // - The demo: a crack network that wanders (not along the grid) and peels, and another seed draws
 //   another network of the same statistics.
 // Fig. 7 and Fig. 8 run the shots as shipped (70K particles, 1.5 s; 31K particles, 2 s). Fig. 6's
@@ -249,19 +248,17 @@ TEST_F(FigureClaims, DemoCracksIntoAWanderingNetworkThatPeelsAndAnotherSeedDraws
     EXPECT_GE(two.at("split_fraction").get<double>(), kDemoPeel);
 }
 
-TEST_F(FigureClaims, Fig7GroundCracksIntoPolygonsAndAnotherSeedDrawsAsMany) {
+TEST_F(FigureClaims, Fig7GroundCracksIntoPolygonsThatCurl) {
     // the whole shot: a 0.8 m patch does not do (its free edges take the shrinkage, and it lifts
-    // off its base, 96-100 %, in 1-4 polygons)
-    const auto [one, two] = run_two_seeds("fig7_mossy_ground");
-    ASSERT_FALSE(one.is_null() || two.is_null());
-    for (const json* m : {&one, &two}) {
-        // cracks into a network of polygons, not a few plates cut along grid lines, and curls
-        EXPECT_GE(m->at("surface_polygons").get<int>(), kFig7Polygons);
-        EXPECT_GE(m->at("effective_surface_polygons").get<double>(), kFig7EffectivePlates);
-        EXPECT_GT(m->at("curl").get<double>(), kFig7Curl);
-    }
-    // another seed, another network of the same statistics
-    expect_another_network_with_as_many_polygons(one, two);
+    // off its base, 96-100 %, in 1-4 polygons). One seed: the demo's case holds "another seed
+    // draws another network of the same statistics" (a second Fig. 7 run, 254 s of a ctest's
+    // 2,287 CPU seconds on a Zen 3, 2026-11-28, checked the same claim again)
+    const json m = run_and_measure(write_shot("fig7_mossy_ground", read_shot("fig7_mossy_ground")));
+    ASSERT_FALSE(m.is_null());
+    // cracks into a network of polygons, not a few plates cut along grid lines, and curls
+    EXPECT_GE(m.at("surface_polygons").get<int>(), kFig7Polygons);
+    EXPECT_GE(m.at("effective_surface_polygons").get<double>(), kFig7EffectivePlates);
+    EXPECT_GT(m.at("curl").get<double>(), kFig7Curl);
 }
 
 TEST_F(FigureClaims, Fig6LargerHardeningRateCurlsMoreAndBreaksIntoLargerPieces) {

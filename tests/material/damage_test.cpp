@@ -25,7 +25,9 @@ TEST(Damage, NeverDecreasesAndSaturatesAtOne) {
         const Real next = damage_after_return(d, before, after, strain(rng));
         ASSERT_GE(next, d) << "step " << i;
         ASSERT_LE(next, 1) << "step " << i;
-        if (after <= before) ASSERT_EQ(next, d) << "a hardening return must leave the damage";
+        if (after <= before) {
+            ASSERT_EQ(next, d) << "a hardening return must leave the damage";
+        }
         d = next;
     }
     EXPECT_EQ(d, 1);
