@@ -8,6 +8,8 @@
 #   tools/seed_study.sh SHOT [SEED...]   (default seeds: 1 2)
 #
 # Environment: BUILD (default build), THREADS (default 2), KEEP=1 keeps the outputs (printed).
+# Exits 3 when the spread is outside those bounds: the claim the figure tests no longer run on a
+# second seed (tests/figures/figure_claims_test.cpp), checked here by hand after a physics change.
 # The columns: polygons = crack polygons of the top layer; plates = mc-measure's effective count
 # (sum A)^2 / sum A^2, which chips hardly move; largest = the largest polygon's share of the top;
 # axis = inland crack length within 15 degrees of the grid axes (33 % is isotropic); split =
@@ -63,11 +65,14 @@ for seed in "${SEEDS[@]}"; do
                s, v[1], v[2], 100 * v[3], 100 * v[4], 100 * v[5], v[6], 100 * v[7], 1e3 * v[8], w }'
 done
 
+same=0
 printf '%s\n' "${rows[@]}" | awk -F'\t' '
     NR == 1 { pmin = pmax = $1; amin = amax = $4 }
     { if ($1 < pmin) pmin = $1; if ($1 > pmax) pmax = $1; if ($4 < amin) amin = $4; if ($4 > amax) amax = $4 }
     END {
         printf "spread: polygon counts %d-%d (ratio %s; same statistics: at most 1.5), axis-aligned %.1f-%.1f %% (%.1f points; at most 10)\n",
                pmin, pmax, (pmin > 0 ? sprintf("%.2f", pmax / pmin) : "inf"), 100 * amin, 100 * amax, 100 * (amax - amin)
-    }'
+        exit !(pmax <= 1.5 * pmin && amax - amin <= 0.10)
+    }' || same=$?
 [[ ${KEEP:-0} != 1 ]] || echo "outputs kept in $WORK"
+[[ $same -eq 0 ]] || { echo "seed_study.sh: the seeds do not draw networks of the same statistics" >&2; exit 3; }
