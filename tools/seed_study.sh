@@ -65,7 +65,7 @@ for seed in "${SEEDS[@]}"; do
                s, v[1], v[2], 100 * v[3], 100 * v[4], 100 * v[5], v[6], 100 * v[7], 1e3 * v[8], w }'
 done
 
-same=0
+spread_status=0
 printf '%s\n' "${rows[@]}" | awk -F'\t' '
     NR == 1 { pmin = pmax = $1; amin = amax = $4 }
     { if ($1 < pmin) pmin = $1; if ($1 > pmax) pmax = $1; if ($4 < amin) amin = $4; if ($4 > amax) amax = $4 }
@@ -73,6 +73,6 @@ printf '%s\n' "${rows[@]}" | awk -F'\t' '
         printf "spread: polygon counts %d-%d (ratio %s; same statistics: at most 1.5), axis-aligned %.1f-%.1f %% (%.1f points; at most 10)\n",
                pmin, pmax, (pmin > 0 ? sprintf("%.2f", pmax / pmin) : "inf"), 100 * amin, 100 * amax, 100 * (amax - amin)
         exit !(pmax <= 1.5 * pmin && amax - amin <= 0.10)
-    }' || same=$?
+    }' || spread_status=$?
 [[ ${KEEP:-0} != 1 ]] || echo "outputs kept in $WORK"
-[[ $same -eq 0 ]] || { echo "seed_study.sh: the seeds do not draw networks of the same statistics" >&2; exit 3; }
+[[ $spread_status -eq 0 ]] || { echo "seed_study.sh: the seeds do not draw networks of the same statistics" >&2; exit 3; }
