@@ -5,6 +5,7 @@
 #include <cstring>
 #include <limits>
 
+#include "sim/core/lanes.h"
 #include "sim/core/types.h"
 
 namespace mudcrack {
@@ -20,6 +21,15 @@ inline Real fused_madd(Real a, Real b, Real c) {
 #endif
 }
 
+/// fused_madd in every lane: the same bits per lane.
+inline Lanes fused_madd(Lanes a, Lanes b, Lanes c) {
+#if defined(__FMA__)
+    return __builtin_ia32_vfmaddpd256(a, b, c);
+#else
+    return a * b + c;
+#endif
+}
+
 /// Cube roots without a libm call. The kernels take J^(1/3) and J^(-2/3) of every particle every
 /// step, and libm's cbrt (a call, a frexp, a polynomial and a division) was 12 % of the G2P
 /// (docs/measurements.md). The inverse cube root starts from the exponent divided by three in
@@ -28,24 +38,31 @@ inline Real fused_madd(Real a, Real b, Real c) {
 /// rounded, and the same bits on every run of one build.
 namespace cube_root_detail {
 
+// the exponent's third, with the mantissa offset that minimises the largest relative error over
+// an octave (3.42 %)
+constexpr uint64_t kMagic = 0x553ef0ff25e5c700ull;
+
+/// x^(-1/3) from r, its first guess within 3.42 %: the root is r (1 - e)^(-1/3), e = 1 - x r^3;
+/// the series to e^2 triples the digits (3.4e-2 -> 2e-4 -> 4e-11 relative), then the series to e
+/// (Newton) doubles them. T is Real or Lanes.
+template <class T>
+inline T refine_inv_cube_root(T x, T r) {
+    for (int k = 0; k < 2; ++k) {
+        const T e = fused_madd(-x * r, r * r, splat<T>(1));
+        r = fused_madd(r * e, fused_madd(e, splat<T>(2.0 / 9), splat<T>(1.0 / 3)), r);
+    }
+    const T e = fused_madd(-x * r, r * r, splat<T>(1));
+    return fused_madd(r * e, splat<T>(1.0 / 3), r);
+}
+
 /// x^(-1/3) for a positive normal double x.
 inline Real positive_inv_cube_root(double x) {
-    // the exponent's third, with the mantissa offset that minimises the largest relative error
-    // over an octave (3.42 %)
-    constexpr uint64_t kMagic = 0x553ef0ff25e5c700ull;
     uint64_t bits;
     std::memcpy(&bits, &x, sizeof bits);
     bits = kMagic - bits / 3;
     double r;
     std::memcpy(&r, &bits, sizeof r);
-    // the root is r (1 - e)^(-1/3), e = 1 - x r^3: the series to e^2 triples the digits
-    // (3.4e-2 -> 2e-4 -> 4e-11 relative), then the series to e (Newton) doubles them
-    for (int k = 0; k < 2; ++k) {
-        const double e = fused_madd(-x * r, r * r, 1);
-        r = fused_madd(r * e, fused_madd(e, 2.0 / 9, 1.0 / 3), r);
-    }
-    const double e = fused_madd(-x * r, r * r, 1);
-    return fused_madd(r * e, 1.0 / 3, r);
+    return refine_inv_cube_root(x, r);
 }
 
 /// Whether |x| is in the bit trick's domain: the normal doubles.
@@ -61,6 +78,34 @@ inline bool normal_magnitude(double x) {
 inline Real inv_cube_root(Real x) {
     if (!cube_root_detail::normal_magnitude(x)) return 1 / std::cbrt(x);
     return std::copysign(cube_root_detail::positive_inv_cube_root(std::abs(x)), x);
+}
+
+/// inv_cube_root in every lane: the same bits per lane.
+inline Lanes inv_cube_root(Lanes x) {
+    constexpr uint64_t kSign = uint64_t(1) << 63;
+    const LaneBits sign = lanes_to_bits(x) & kSign;
+    const LaneBits magnitude_bits = lanes_to_bits(x) & ~kSign;
+    const Lanes magnitude = lanes_from_bits(magnitude_bits);
+    const LaneMask normal = (magnitude >= std::numeric_limits<double>::min()) &
+                            (magnitude <= std::numeric_limits<double>::max());
+    if (!lanes_all(normal)) {  // rare: a zero, subnormal, infinite or NaN J
+        Lanes r = x;
+        for (int l = 0; l < kLaneCount; ++l) r[l] = inv_cube_root(x[l]);
+        return r;
+    }
+    LaneBits guess_bits;
+    for (int l = 0; l < kLaneCount; ++l)  // no 64-bit SIMD division: the scalar's bits / 3
+        guess_bits[l] = cube_root_detail::kMagic - magnitude_bits[l] / 3;
+    const Lanes root =
+        cube_root_detail::refine_inv_cube_root(magnitude, lanes_from_bits(guess_bits));
+    const LaneBits root_bits = lanes_to_bits(root) | sign;
+    return lanes_from_bits(root_bits);
+}
+
+/// inv_cube_root_squared in every lane: the same bits per lane.
+inline Lanes inv_cube_root_squared(Lanes x) {
+    const Lanes r = inv_cube_root(x);
+    return r * r;
 }
 
 /// x^(1/3), odd in x (libm's cbrt outside the normal doubles).

@@ -55,41 +55,79 @@ struct NeoHookeanTerms {
     Real shear;
 };
 
-/// The terms of Fe. Defined for any Fe; shear is +infinity at J = 0. Every product-sum is an
-/// explicit fused_madd, so the terms (and tau) round alike wherever they are inlined: the stress
-/// G2P caches for the next P2G and the stress P2G computes itself are the same bits. Always
-/// inlined: the inline cube root made it large enough that g++ 12 called it from the G2P, and the
-/// call's stores and loads of the terms cost more than the cube root saved.
-[[gnu::always_inline]] inline NeoHookeanTerms neo_hookean_terms(const Mat3& F,
-                                                                const LameParams& p) {
-    const auto dot3 = [](Real a0, Real a1, Real a2, Real b0, Real b1, Real b2) {
+/// NeoHookeanTerms of four matrices side by side (G2P's lanes); b as xx, yy, zz, xy, xz, yz.
+struct NeoHookeanLaneTerms {
+    Lanes J;
+    Lanes b[6];
+    Lanes mean_b;
+    Lanes shear;
+};
+
+/// The terms of F (Mat3 with T = Real, LaneMat3 with T = Lanes): J, b's six entries (xx, yy, zz,
+/// xy, xz, yz), tr b / 3 and mu J^(-2/3). Defined for any F; shear is +infinity at J = 0. Every
+/// product-sum is an explicit fused_madd, so the terms (and tau) round alike wherever they are
+/// inlined: the stress G2P caches for the next P2G and the stress P2G computes itself are the
+/// same bits, and so are a lane's and the scalar's. Always inlined: the inline cube root made it
+/// large enough that g++ 12 called it from the G2P, and the call's stores and loads of the terms
+/// cost more than the cube root saved.
+template <class T, class M>
+[[gnu::always_inline]] inline void neo_hookean_terms_of(const M& F, const LameParams& p, T& J,
+                                                        T (&b)[6], T& mean_b, T& shear) {
+    const auto dot3 = [](T a0, T a1, T a2, T b0, T b1, T b2) {
         return fused_madd(a2, b2, fused_madd(a1, b1, a0 * b0));
     };
     const auto row_dot = [&](int i, int j) {
         return dot3(F(i, 0), F(i, 1), F(i, 2), F(j, 0), F(j, 1), F(j, 2));
     };
+    const T c0 = fused_madd(F(1, 1), F(2, 2), -(F(1, 2) * F(2, 1)));
+    const T c1 = fused_madd(F(1, 0), F(2, 2), -(F(1, 2) * F(2, 0)));
+    const T c2 = fused_madd(F(1, 0), F(2, 1), -(F(1, 1) * F(2, 0)));
+    J = fused_madd(F(0, 2), c2, fused_madd(-F(0, 1), c1, F(0, 0) * c0));
+    b[0] = row_dot(0, 0);
+    b[1] = row_dot(1, 1);
+    b[2] = row_dot(2, 2);
+    b[3] = row_dot(0, 1);
+    b[4] = row_dot(0, 2);
+    b[5] = row_dot(1, 2);
+    mean_b = (b[0] + b[1] + b[2]) / 3;
+    shear = p.mu * inv_cube_root_squared(J);
+}
+
+/// The terms of Fe.
+[[gnu::always_inline]] inline NeoHookeanTerms neo_hookean_terms(const Mat3& F,
+                                                                const LameParams& p) {
     NeoHookeanTerms t;
-    const Real c0 = fused_madd(F(1, 1), F(2, 2), -(F(1, 2) * F(2, 1)));
-    const Real c1 = fused_madd(F(1, 0), F(2, 2), -(F(1, 2) * F(2, 0)));
-    const Real c2 = fused_madd(F(1, 0), F(2, 1), -(F(1, 1) * F(2, 0)));
-    t.J = fused_madd(F(0, 2), c2, fused_madd(-F(0, 1), c1, F(0, 0) * c0));
-    t.b = {row_dot(0, 0), row_dot(1, 1), row_dot(2, 2),
-           row_dot(0, 1), row_dot(0, 2), row_dot(1, 2)};
-    t.mean_b = (t.b.xx + t.b.yy + t.b.zz) / 3;
-    t.shear = p.mu * inv_cube_root_squared(t.J);
+    Real b[6];
+    neo_hookean_terms_of(F, p, t.J, b, t.mean_b, t.shear);
+    t.b = {b[0], b[1], b[2], b[3], b[4], b[5]};
     return t;
+}
+
+/// The terms of four matrices side by side.
+[[gnu::always_inline]] inline NeoHookeanLaneTerms neo_hookean_terms(const LaneMat3& F,
+                                                                    const LameParams& p) {
+    NeoHookeanLaneTerms t;
+    neo_hookean_terms_of(F, p, t.J, t.b, t.mean_b, t.shear);
+    return t;
+}
+
+/// Kirchhoff stress's six entries (xx, yy, zz, xy, xz, yz) from the terms J, b, tr b / 3 and
+/// mu J^(-2/3); T is Real or Lanes.
+template <class T>
+inline void neo_hookean_kirchhoff_of(T J, const T (&b)[6], T mean_b, T shear, const LameParams& p,
+                                     T (&tau)[6]) {
+    const T volumetric = p.kappa / 2 * fused_madd(J, J, splat<T>(-1));
+    const T diagonal = fused_madd(-shear, mean_b, volumetric);
+    for (int k = 0; k < 3; ++k) tau[k] = fused_madd(shear, b[k], diagonal);
+    for (int k = 3; k < 6; ++k) tau[k] = shear * b[k];
 }
 
 /// Kirchhoff stress tau = dpsi/dFe Fe^T [Pa] from Fe's terms. Requires det Fe != 0.
 inline SymMat3 neo_hookean_kirchhoff(const NeoHookeanTerms& t, const LameParams& p) {
-    const Real volumetric = p.kappa / 2 * fused_madd(t.J, t.J, Real(-1));
-    const Real diagonal = fused_madd(-t.shear, t.mean_b, volumetric);
-    return {fused_madd(t.shear, t.b.xx, diagonal),
-            fused_madd(t.shear, t.b.yy, diagonal),
-            fused_madd(t.shear, t.b.zz, diagonal),
-            t.shear * t.b.xy,
-            t.shear * t.b.xz,
-            t.shear * t.b.yz};
+    const Real b[6] = {t.b.xx, t.b.yy, t.b.zz, t.b.xy, t.b.xz, t.b.yz};
+    Real tau[6];
+    neo_hookean_kirchhoff_of(t.J, b, t.mean_b, t.shear, p, tau);
+    return {tau[0], tau[1], tau[2], tau[3], tau[4], tau[5]};
 }
 
 /// Kirchhoff stress tau = dpsi/dFe Fe^T [Pa]. Requires det Fe != 0.

@@ -10,6 +10,7 @@
 
 #include <immintrin.h>
 
+#include "sim/core/lanes.h"
 #include "sim/grid/bspline.h"
 #include "sim/material/damage.h"
 #include "sim/material/material_math.h"
@@ -28,37 +29,49 @@ constexpr int kStride = 4;
 // relative margin that keeps the SVD-free inside test on the safe side of the kernel's own test
 constexpr Real kInsideMargin = 1e-9;
 
+// max(x, 0) as std::max(x, Real(0)) gives it (x itself when x is NaN), per lane for Lanes
+template <class T>
+inline T max_with_zero(T x) {
+    if constexpr (!std::is_same_v<T, Real>)
+        return lanes_select(x < 0, splat<T>(0), x);
+    else
+        return std::max(x, Real(0));
+}
+
 // The NACC inside test (docs/physics.md §2.2, case 3a) without an SVD, on Fe's Neo-Hookean terms
-// (J = det Fe; ||dev b_hat|| is the rotation-invariant ||dev(Fe Fe^T)||). True only when the
-// state is inside with a relative margin, so the return map (which would return Fe unchanged) can
-// be skipped; near the surface and at the tips the full kernel decides.
-inline bool clearly_inside_yield_surface(const NeoHookeanTerms& fe, Real alpha, Real beta,
-                                         Real strength, const NaccParams& nacc,
-                                         const LameParams& lame) {
-    const Real J = fe.J;
-    if (!(J > 0)) return false;
-    // p0 from below (its ulps of rounding are far inside kInsideMargin): a smaller ellipse,
-    // so "clearly inside" stays on the safe side
-    const Real p0 = strength * nacc_p0_lower_bound(alpha, nacc.xi, lame.kappa);
-    const Real p = -lame.kappa / 2 * (J * J - 1);
-    if (!(p < p0 && p > -beta * p0)) return false;
-    const Real dev_b2 = fe.b.squared_norm() - 3 * fe.mean_b * fe.mean_b;  // ||b - mean_b I||^2
-    const Real s2 = fe.shear * fe.shear * std::max(dev_b2, Real(0));
-    const Real a = Real(1.5) * (1 + 2 * beta);
-    const Real y_s = a * s2;
-    const Real y_p = nacc.M * nacc.M * (p + beta * p0) * (p - p0);  // < 0 between the tips
-    return y_s + y_p < -kInsideMargin * (y_s - y_p);
+// (J = det Fe; ||dev b_hat|| is the rotation-invariant ||dev(Fe Fe^T)||) and p0's lower bound
+// times the particle's strength (from below, its ulps of rounding far inside kInsideMargin: a
+// smaller ellipse, so "clearly inside" stays on the safe side). True (all ones in a lane) only
+// when the state is inside with a relative margin, so the return map (which would return Fe
+// unchanged) can be skipped; near the surface and at the tips the full kernel decides. T is Real
+// (a bool-valued int) or Lanes (a LaneMask).
+template <class T>
+inline auto clearly_inside_yield_surface(T J, const T (&b)[6], T mean_b, T shear, T p0, T beta,
+                                         const NaccParams& nacc, const LameParams& lame) {
+    const T p = -lame.kappa / 2 * (J * J - 1);
+    const T b_norm2 =
+        b[0] * b[0] + b[1] * b[1] + b[2] * b[2] + 2 * (b[3] * b[3] + b[4] * b[4] + b[5] * b[5]);
+    const T dev_b2 = b_norm2 - 3 * mean_b * mean_b;  // ||b - mean_b I||^2
+    const T s2 = shear * shear * max_with_zero(dev_b2);
+    const T a = Real(1.5) * (1 + 2 * beta);
+    const T y_s = a * s2;
+    const T y_p = nacc.M * nacc.M * (p + beta * p0) * (p - p0);  // < 0 between the tips
+    return (J > 0) & (p < p0) & (p > -beta * p0) & (y_s + y_p < -kInsideMargin * (y_s - y_p));
 }
 
 // The gather of one particle: v_p = sum w v_i, B_p = sum w v_i ((a,b,c) - fx)^T and, with
-// kTheta, dth = sum w dtheta_i, over the 3x3x3 stencil in (a, b, c) order. Every sum takes its
-// terms in the same order and with the same roundings (w v_i rounded, then added to v_p and
+// kTheta, dth = sum w dtheta_i, over the 3x3x3 stencil in (a, b, c) order, into sums: v_p's
+// entries in sums[0][0..2], B_p's column k in sums[1 + k][0..2], dth in sums[4][3]. Every sum takes
+// its terms in the same order and with the same roundings (w v_i rounded, then added to v_p and
 // fused-multiply-added into B_p; w dtheta_i fused into dth) in both versions below, so their
-// results are the same bits.
+// results are the same bits. The caller reads the sums back one number at a time: each read lies
+// inside one vector store, which the CPU forwards without a stall (a Mat3 built from the sums
+// and read back two entries at a time stalled on every read).
 template <bool kTheta>
-inline void gather_velocity(const Real* win, int o0, int o1, int o2, const AxisWeights& ax,
-                            const AxisWeights& ay, const AxisWeights& az, Vec3& vp, Mat3& B,
-                            Real& dth) {
+inline void gather_velocity(const Real* win, const Stencil& st, const Vec3i& origin,
+                            Real (&sums)[5][kLaneCount]) {
+    const AxisWeights &ax = st.axis[0], &ay = st.axis[1], &az = st.axis[2];
+    const int o0 = ax.base - origin.x(), o1 = ay.base - origin.y(), o2 = az.base - origin.z();
 #if defined(__AVX__) && defined(__FMA__)
     // one node's (v, dtheta) as a 4-lane vector: each update is one instruction for v_p and one
     // per column of B_p, instead of a 2-lane and a scalar one
@@ -81,37 +94,106 @@ inline void gather_velocity(const Real* win, int o0, int o1, int o2, const AxisW
                 if constexpr (kTheta) th_sum = _mm256_fmadd_pd(w, node, th_sum);
             }
         }
-    alignas(32) Real lanes[5][4];
-    _mm256_store_pd(lanes[0], v_sum);
-    _mm256_store_pd(lanes[1], b0);
-    _mm256_store_pd(lanes[2], b1);
-    _mm256_store_pd(lanes[3], b2);
-    _mm256_store_pd(lanes[4], th_sum);
-    vp = Vec3(lanes[0][0], lanes[0][1], lanes[0][2]);
-    for (int k = 0; k < 3; ++k) B.col(k) = Vec3(lanes[1 + k][0], lanes[1 + k][1], lanes[1 + k][2]);
-    dth = kTheta ? lanes[4][3] : Real(0);
+    _mm256_storeu_pd(sums[0], v_sum);
+    _mm256_storeu_pd(sums[1], b0);
+    _mm256_storeu_pd(sums[2], b1);
+    _mm256_storeu_pd(sums[3], b2);
+    _mm256_storeu_pd(sums[4], th_sum);
 #else
-    vp.setZero();
-    B.setZero();
-    dth = 0;
+    for (auto& lane : sums)
+        for (Real& x : lane) x = 0;
     for (int a = 0; a < 3; ++a)
         for (int b = 0; b < 3; ++b) {
             const Real wab = ax.w[a] * ay.w[b];
             const Real* row = win + window_index(o0 + a, o1 + b, o2) * kStride;
-            const Vec3 dpos_ab(a - ax.fx, b - ay.fx, 0);
             for (int c = 0; c < 3; ++c) {
                 const Real w = wab * az.w[c];
                 const Real* node = row + c * kStride;
-                const Vec3 wv(w * node[0], w * node[1], w * node[2]);
-                vp += wv;
-                B.col(0) += wv * dpos_ab.x();
-                B.col(1) += wv * dpos_ab.y();
-                B.col(2) += wv * (c - az.fx);
-                if constexpr (kTheta) dth += w * node[3];
+                for (int k = 0; k < 3; ++k) {
+                    const Real wv = w * node[k];
+                    sums[0][k] += wv;
+                    sums[1][k] = fused_madd(wv, a - ax.fx, sums[1][k]);
+                    sums[2][k] = fused_madd(wv, b - ay.fx, sums[2][k]);
+                    sums[3][k] = fused_madd(wv, c - az.fx, sums[3][k]);
+                }
+                if constexpr (kTheta) sums[4][3] = fused_madd(w, node[3], sums[4][3]);
             }
         }
 #endif
+    if constexpr (!kTheta) sums[4][3] = 0;
 }
+
+// a b, four particles' 3x3 matrices at once: each entry a fused multiply-add chain over k in
+// order, rounded the same at every optimisation level (no product left for the compiler to fuse)
+inline LaneMat3 lanes_product(const LaneMat3& a, const LaneMat3& b) {
+    LaneMat3 r;
+    for (int j = 0; j < 3; ++j)
+        for (int i = 0; i < 3; ++i)
+            r(i, j) = fused_madd(a(i, 2), b(2, j), fused_madd(a(i, 1), b(1, j), a(i, 0) * b(0, j)));
+    return r;
+}
+
+// det m, four particles at once: the cofactor expansion along the first row, rounded as
+// neo_hookean_terms rounds J
+inline Lanes lanes_determinant(const LaneMat3& m) {
+    const Lanes c0 = fused_madd(m(1, 1), m(2, 2), -(m(1, 2) * m(2, 1)));
+    const Lanes c1 = fused_madd(m(1, 0), m(2, 2), -(m(1, 2) * m(2, 0)));
+    const Lanes c2 = fused_madd(m(1, 0), m(2, 1), -(m(1, 1) * m(2, 0)));
+    return fused_madd(m(0, 2), c2, fused_madd(-m(0, 1), c1, m(0, 0) * c0));
+}
+
+// Particles per chunk: a chunk's arrays (about 11 KB) stay in L1 between its passes, and each
+// pass's scalar stores have retired long before the next pass loads them as lanes (a vector load
+// of four fresh scalar stores would stall on store-to-load forwarding).
+constexpr int kChunk = 32;
+
+// One chunk of a particle block's particles, field by field (slot j of each array is the chunk's
+// j-th particle): the per-particle passes of the G2P fill and read it one particle at a time, its
+// lane passes four at a time. Past the chunk's last particle, up to the next multiple of four,
+// the lanes hold copies of it, so the lane passes compute on numbers of the kind they expect.
+struct ParticleChunk {
+    using Field = Real[kChunk];
+    alignas(32) Field v[3], C[9], F[9], J_start, J_new, dtheta, alpha, beta, p0, J_trial, b[6],
+        mean_b, shear, tau[6];
+    bool inside[kChunk];
+
+    static Lanes lanes(const Field& f, int j) { return lanes_load(f + j); }
+    static void store(Field& f, int j, Lanes x) { lanes_store(f + j, x); }
+
+    // particle j's gathered sums (gather_velocities): v_p, C_p = c_scale B_p and dtheta
+    void set_gathered(int j, const Real (&sums)[5][kLaneCount], Real c_scale) {
+        for (int k = 0; k < 3; ++k) v[k][j] = sums[0][k];
+        for (int col = 0; col < 3; ++col)
+            for (int row = 0; row < 3; ++row) C[3 * col + row][j] = c_scale * sums[1 + col][row];
+        dtheta[j] = sums[4][3];
+    }
+    // copies of the last particle's kinematic inputs into the lanes past it
+    void pad_kinematics(int n) {
+        for (int j = n; j % kLaneCount != 0; ++j) {
+            for (int k = 0; k < 9; ++k) {
+                C[k][j] = C[k][n - 1];
+                F[k][j] = F[k][n - 1];
+            }
+            J_start[j] = J_start[n - 1];
+        }
+    }
+    // the same for the pore update's outputs and the hardening
+    void pad_hardening(int n) {
+        for (int j = n; j % kLaneCount != 0; ++j) {
+            for (int k = 0; k < 9; ++k) F[k][j] = F[k][n - 1];
+            alpha[j] = alpha[n - 1];
+            beta[j] = beta[n - 1];
+            p0[j] = p0[n - 1];
+        }
+    }
+    // particle j's Neo-Hookean terms of Fe_trial, as the lane pass left them
+    NeoHookeanTerms terms(int j) const {
+        return {J_trial[j],
+                {b[0][j], b[1][j], b[2][j], b[3][j], b[4][j], b[5][j]},
+                mean_b[j],
+                shear[j]};
+    }
+};
 
 // @note Longer than a page on purpose: its body is the step's per-particle hot loop (the G2P
 // share of mpm_bench's particle-steps/s), each particle's phases (gather, kinematics, pores,
@@ -159,118 +241,185 @@ G2PResult g2p_impl(const SimModel& model, SimStateOf<S>& state, const SparseGrid
         }
         const Vec3i origin = geo.block_coord(grid.pblock_key[pb]) * kBlockWidth;
         Real speed2 = max_speed2[t];
-        for (int32_t i = grid.pblock_begin[pb]; i < grid.pblock_begin[pb + 1]; ++i) {
-            const int32_t p = grid.order[i];
-            const Stencil st = make_stencil(geo.to_grid(state.x[p].template cast<Real>()));
-            const AxisWeights &ax = st.axis[0], &ay = st.axis[1], &az = st.axis[2];
-            const int o0 = ax.base - origin.x(), o1 = ay.base - origin.y(),
-                      o2 = az.base - origin.z();
+        ParticleChunk chunk;
+        const int32_t block_end = grid.pblock_begin[pb + 1];
+        for (int32_t i0 = grid.pblock_begin[pb]; i0 < block_end; i0 += kChunk) {
+            const int n = std::min(kChunk, block_end - i0);
+            const int32_t* slots = grid.order.data() + i0;
 
-            // gather v_p, B_p = sum w v_i (x_i - x_p)^T / h and the theta increment
-            Vec3 vp;
-            Mat3 B;
-            Real dth;
-            gather_velocity<kTheta>(win, o0, o1, o2, ax, ay, az, vp, B, dth);
-            // C_p = (4/h^2) sum w v_i (x_i - x_p)^T, with x_i - x_p = h ((a,b,c) - fx)
-            const Mat3 Cp = (c_scale * h) * B;
+            // 1. gather v_p, B_p = sum w v_i (x_i - x_p)^T / h and the theta increment; C_p =
+            // (4/h^2) sum w v_i (x_i - x_p)^T, with x_i - x_p = h ((a,b,c) - fx)
+            for (int j = 0; j < n; ++j) {
+                const Stencil st =
+                    make_stencil(geo.to_grid(state.x[slots[j]].template cast<Real>()));
+                alignas(32) Real sums[5][kLaneCount];
+                gather_velocity<kTheta>(win, st, origin, sums);
+                chunk.set_gathered(j, sums, c_scale * h);
+            }
+            for (int j = 0; j < n; ++j) {
+                const int32_t p = slots[j];
+                const Vec3 vp(chunk.v[0][j], chunk.v[1][j], chunk.v[2][j]);
+                speed2 = std::max(speed2, vp.squaredNorm());
+                const Mat3 Fe = state.Fe[p].template cast<Real>();
+                for (int k = 0; k < 9; ++k) chunk.F[k][j] = Fe(k);
+                chunk.J_start[j] = state.J[p];
+            }
+            chunk.pad_kinematics(n);
 
-            // kinematics: Fe_trial = (I + dt C) Fe, J *= det(I + dt C)
-            Mat3 dF = dt * Cp;
-            dF.diagonal().array() += 1;
-            Mat3 Fe_trial = dF * state.Fe[p].template cast<Real>();
-            const Real J_start = state.J[p];  // the volume the moisture solve saw
-            state.J[p] = J_start * dF.determinant();
+            // 2. kinematics, four particles at a time: Fe_trial = (I + dt C) Fe, J *= det(I + dt C)
+            for (int j = 0; j < n; j += kLaneCount) {
+                LaneMat3 dF, Fe;
+                const Lanes dt_lanes = splat<Lanes>(dt);
+                for (int col = 0; col < 3; ++col)
+                    for (int row = 0; row < 3; ++row) {
+                        const Lanes C = chunk.lanes(chunk.C[3 * col + row], j);
+                        dF(row, col) =
+                            row == col ? fused_madd(dt_lanes, C, splat<Lanes>(1)) : dt_lanes * C;
+                        Fe(row, col) = chunk.lanes(chunk.F[3 * col + row], j);
+                    }
+                const LaneMat3 Fe_trial = lanes_product(dF, Fe);
+                for (int k = 0; k < 9; ++k) chunk.store(chunk.F[k], j, Fe_trial.m[k]);
+                chunk.store(chunk.J_new, j, chunk.lanes(chunk.J_start, j) * lanes_determinant(dF));
+            }
 
-            // pore update (Eq. 6, 10, 11, 12): theta, Jw, Fe compensation, mass, cohesion
-            Real beta = beta_saturated;
-            Real alpha = kNacc ? state.alpha[p] : Real(0);
-            if constexpr (kPore) {
-                Real theta = state.theta[p];
-                if constexpr (kTheta) {
-                    theta = std::clamp(theta + dth, Real(0), moist.eta);
-                    if (evaporating && evaporating[p]) {
-                        const Real V = state.V0[p] * J_start;
-                        theta =
-                            moist.theta0 + (theta - moist.theta0) *
-                                               std::exp(-evaporation_rate_dt * inv_cube_root(V));
+            // 3. pore update (Eq. 6, 10, 11, 12): theta, Jw, Fe compensation, mass, cohesion;
+            // the hardening and p0's lower bound the inside test reads
+            for (int j = 0; j < n; ++j) {
+                const int32_t p = slots[j];
+                Real beta = beta_saturated;
+                Real alpha = kNacc ? state.alpha[p] : Real(0);
+                if constexpr (kPore) {
+                    Real theta = state.theta[p];
+                    if constexpr (kTheta) {
+                        theta = std::clamp(theta + chunk.dtheta[j], Real(0), moist.eta);
+                        if (evaporating && evaporating[p]) {
+                            // the volume the moisture solve saw
+                            const Real V = state.V0[p] * chunk.J_start[j];
+                            theta = moist.theta0 +
+                                    (theta - moist.theta0) *
+                                        std::exp(-evaporation_rate_dt * inv_cube_root(V));
+                        }
+                    }
+                    state.theta[p] = theta;
+                    const Real s = saturation_of(theta, moist.eta);
+                    const PoreStep ps = pore_step(state.Jw[p], s, moist.eta, moist.max_log_jw_step);
+                    if (ps.Fe_scale != 1)
+                        for (int k = 0; k < 9; ++k) chunk.F[k][j] *= ps.Fe_scale;
+                    state.Jw[p] = ps.Jw;
+                    if constexpr (kNacc) {
+                        alpha += moist.eps * ps.log_ratio;
+                        beta = cohesion_of(nacc, s);
+                    }
+                    state.mass[p] = moist_mass(state.V0[p], rho_s, s, moist);
+                }
+                if constexpr (kNacc) {
+                    const Real strength = has_strength ? state.strength[p] : Real(1);
+                    if (has_damage) beta = damaged_cohesion(beta, state.damage[p]);
+                    chunk.alpha[j] = alpha;
+                    chunk.beta[j] = beta;
+                    chunk.p0[j] = strength * nacc_p0_lower_bound(alpha, nacc.xi, lame.kappa);
+                }
+            }
+            chunk.pad_hardening(n);
+
+            // 4. the Neo-Hookean terms of Fe_trial, the inside test and the Kirchhoff stress,
+            // four particles at a time
+            for (int j = 0; j < n; j += kLaneCount) {
+                LaneMat3 Fe_trial;
+                for (int k = 0; k < 9; ++k) Fe_trial.m[k] = chunk.lanes(chunk.F[k], j);
+                const NeoHookeanLaneTerms terms = neo_hookean_terms(Fe_trial, lame);
+                chunk.store(chunk.J_trial, j, terms.J);
+                for (int k = 0; k < 6; ++k) chunk.store(chunk.b[k], j, terms.b[k]);
+                chunk.store(chunk.mean_b, j, terms.mean_b);
+                chunk.store(chunk.shear, j, terms.shear);
+                if constexpr (kNacc) {
+                    const LaneMask inside = clearly_inside_yield_surface(
+                        terms.J, terms.b, terms.mean_b, terms.shear, chunk.lanes(chunk.p0, j),
+                        chunk.lanes(chunk.beta, j), nacc, lame);
+                    for (int l = 0; l < kLaneCount; ++l) chunk.inside[j + l] = inside[l] != 0;
+                }
+                if constexpr (std::is_same_v<S, Real>) {
+                    Lanes tau_lanes[6];
+                    neo_hookean_kirchhoff_of(terms.J, terms.b, terms.mean_b, terms.shear, lame,
+                                             tau_lanes);
+                    for (int k = 0; k < 6; ++k) chunk.store(chunk.tau[k], j, tau_lanes[k]);
+                }
+            }
+
+            // 5. plasticity: NACC return mapping with the particle's strength and damage where
+            // the state is not clearly inside, else Fe_trial (what the return map would return,
+            // case 3a); the stress of the new Fe for the next P2G; advection; checks
+            for (int j = 0; j < n; ++j) {
+                const int32_t p = slots[j];
+                state.J[p] = chunk.J_new[j];
+                Mat3 Fe_trial;
+                for (int k = 0; k < 9; ++k) Fe_trial(k) = chunk.F[k][j];
+                bool is_elastic = true;
+                if constexpr (kNacc) {
+                    is_elastic = chunk.inside[j];
+                    if (is_elastic) {
+                        state.alpha[p] = chunk.alpha[j];
+                    } else {
+                        const Real strength = has_strength ? state.strength[p] : Real(1);
+                        const NeoHookeanTerms trial_terms = chunk.terms(j);
+                        const NaccProjection r = nacc_project(Fe_trial, trial_terms, chunk.alpha[j],
+                                                              chunk.beta[j], nacc, lame, strength);
+                        if (has_damage)
+                            state.damage[p] = damage_after_return(state.damage[p], chunk.alpha[j],
+                                                                  r.alpha, nacc.damage_strain);
+                        state.Fe[p] = r.Fe.template cast<S>();
+                        state.alpha[p] = r.alpha;
                     }
                 }
-                state.theta[p] = theta;
-                const Real s = saturation_of(theta, moist.eta);
-                const PoreStep ps = pore_step(state.Jw[p], s, moist.eta, moist.max_log_jw_step);
-                if (ps.Fe_scale != 1) Fe_trial *= ps.Fe_scale;
-                state.Jw[p] = ps.Jw;
-                if constexpr (kNacc) {
-                    alpha += moist.eps * ps.log_ratio;
-                    beta = cohesion_of(nacc, s);
-                }
-                state.mass[p] = moist_mass(state.V0[p], rho_s, s, moist);
-            }
-
-            // plasticity: NACC return mapping with the particle's strength and damage, else pure
-            // elasticity; then the Kirchhoff stress of the new Fe for the next P2G (inside the
-            // yield surface from the terms the inside test already has)
-            const NeoHookeanTerms trial_terms = neo_hookean_terms(Fe_trial, lame);
-            bool is_elastic = true;
-            if constexpr (kNacc) {
-                const Real strength = has_strength ? state.strength[p] : Real(1);
-                if (has_damage) beta = damaged_cohesion(beta, state.damage[p]);
-                is_elastic =
-                    clearly_inside_yield_surface(trial_terms, alpha, beta, strength, nacc, lame);
-                if (is_elastic) {
-                    // and Fe_trial is what the return map returns (case 3a)
-                    state.alpha[p] = alpha;
+                bool is_inverted = false;  // the stored Fe (checked in float only: see below)
+                if constexpr (std::is_same_v<S, Real>) {
+                    if (is_elastic) {
+                        state.Fe[p] = Fe_trial;
+                        tau[p] = {chunk.tau[0][j], chunk.tau[1][j], chunk.tau[2][j],
+                                  chunk.tau[3][j], chunk.tau[4][j], chunk.tau[5][j]};
+                    } else {
+                        tau[p] = neo_hookean_kirchhoff(neo_hookean_terms(state.Fe[p], lame), lame);
+                    }
                 } else {
-                    const NaccProjection r =
-                        nacc_project(Fe_trial, trial_terms, alpha, beta, nacc, lame, strength);
-                    if (has_damage)
-                        state.damage[p] = damage_after_return(state.damage[p], alpha, r.alpha,
-                                                              nacc.damage_strain);
-                    state.Fe[p] = r.Fe.template cast<S>();
-                    state.alpha[p] = r.alpha;
+                    // the stress of Fe as stored (rounded to float), as kirchhoff_stresses
+                    // computes it after a resume or a rollback, so a resumed run continues bit for
+                    // bit. Read back through a volatile pointer: g++ 12 at -O3 -march=native gave
+                    // the stress the unrounded Fe when the stored matrix was read back directly
+                    // (caught by FloatState.ACopyContinuesBitForBit and the float resume test)
+                    if (is_elastic) state.Fe[p] = Fe_trial.template cast<S>();
+                    const volatile S* stored = state.Fe[p].data();
+                    Mat3 Fe_stored;
+                    for (int k = 0; k < 9; ++k) Fe_stored(k) = static_cast<Real>(stored[k]);
+                    const NeoHookeanTerms stored_terms = neo_hookean_terms(Fe_stored, lame);
+                    tau[p] = neo_hookean_kirchhoff(stored_terms, lame);
+                    // rounding a nearly singular Fe can invert it (a 200 m/s impact in the
+                    // stability matrix: 305 particles with det Fe <= 0 and no error, while J, kept
+                    // in double, stayed > 0): the step fails its checks and is retried, as for
+                    // J <= 0
+                    is_inverted = !(stored_terms.J > 0);
                 }
-            }
-            bool is_inverted = false;  // the stored Fe (checked in float only: see below)
-            if constexpr (std::is_same_v<S, Real>) {
-                if (is_elastic) state.Fe[p] = Fe_trial;
-                tau[p] = neo_hookean_kirchhoff(
-                    is_elastic ? trial_terms : neo_hookean_terms(state.Fe[p], lame), lame);
-            } else {
-                // the stress of Fe as stored (rounded to float), as kirchhoff_stresses computes it
-                // after a resume or a rollback, so a resumed run continues bit for bit. Read back
-                // through a volatile pointer: g++ 12 at -O3 -march=native gave the stress the
-                // unrounded Fe when the stored matrix was read back directly (caught by
-                // FloatState.ACopyContinuesBitForBit and the float resume test)
-                if (is_elastic) state.Fe[p] = Fe_trial.template cast<S>();
-                const volatile S* stored = state.Fe[p].data();
-                Mat3 Fe_stored;
-                for (int k = 0; k < 9; ++k) Fe_stored(k) = static_cast<Real>(stored[k]);
-                const NeoHookeanTerms stored_terms = neo_hookean_terms(Fe_stored, lame);
-                tau[p] = neo_hookean_kirchhoff(stored_terms, lame);
-                // rounding a nearly singular Fe can invert it (a 200 m/s impact in the stability
-                // matrix: 305 particles with det Fe <= 0 and no error, while J, kept in double,
-                // stayed > 0): the step fails its checks and is retried, as for J <= 0
-                is_inverted = !(stored_terms.J > 0);
-            }
 
-            // advect, clamped into the domain box
-            Vec3 x = state.x[p].template cast<Real>() + dt * vp;
-            x = x.cwiseMax(lo).cwiseMin(hi);
-            state.x[p] = x.template cast<S>();
-            state.v[p] = vp.template cast<S>();
-            state.C[p] = Cp.template cast<S>();
+                // advect, clamped into the domain box
+                const Vec3 vp(chunk.v[0][j], chunk.v[1][j], chunk.v[2][j]);
+                Mat3 Cp;
+                for (int k = 0; k < 9; ++k) Cp(k) = chunk.C[k][j];
+                Vec3 x = state.x[p].template cast<Real>() + dt * vp;
+                x = x.cwiseMax(lo).cwiseMin(hi);
+                state.x[p] = x.template cast<S>();
+                state.v[p] = vp.template cast<S>();
+                state.C[p] = Cp.template cast<S>();
 
-            // finite-ness: a NaN or inf anywhere poisons the sum; J <= 0 is an inverted particle,
-            // which no stable step produces (it precedes the overflow by many steps)
-            // (as stored: a float state overflows to inf at its own range)
-            Real check = Real(state.x[p].sum()) + Real(state.v[p].sum()) + Real(state.Fe[p].sum()) +
-                         state.J[p];
-            if constexpr (kNacc) check += state.alpha[p];
-            if constexpr (kPore) check += state.theta[p];
-            if ((!std::isfinite(check) || !(state.J[p] > 0) || is_inverted) &&
-                (bad[t] < 0 || p < bad[t]))
-                bad[t] = p;
-            speed2 = std::max(speed2, vp.squaredNorm());
+                // finite-ness: a NaN or inf anywhere poisons the sum; J <= 0 is an inverted
+                // particle, which no stable step produces (it precedes the overflow by many steps)
+                // (as stored: a float state overflows to inf at its own range)
+                Real check = Real(state.x[p].sum()) + Real(state.v[p].sum()) +
+                             Real(state.Fe[p].sum()) + state.J[p];
+                if constexpr (kNacc) check += state.alpha[p];
+                if constexpr (kPore) check += state.theta[p];
+                if ((!std::isfinite(check) || !(state.J[p] > 0) || is_inverted) &&
+                    (bad[t] < 0 || p < bad[t]))
+                    bad[t] = p;
+            }
         }
         max_speed2[t] = speed2;
     });

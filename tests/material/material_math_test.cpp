@@ -1,12 +1,13 @@
 // The kernels' cube roots (sim/material/material_math.h): within a few ulp of the root over the
-// whole range of doubles, libm's own answers outside the positive normals, and the same
-// bits run to run.
+// whole range of doubles, libm's own answers outside the positive normals, the same bits run to
+// run, and the same bits in four lanes (G2P's) as one at a time.
 #include "sim/material/material_math.h"
 
 #include <gtest/gtest.h>
 
 #include <cmath>
 #include <cstdio>
+#include <cstring>
 #include <limits>
 #include <random>
 
@@ -78,6 +79,31 @@ TEST(CubeRoot, GivesTheSameBitsEveryCall) {
         volatile double y = x;  // a second evaluation the compiler cannot fold into the first
         EXPECT_EQ(a, cube_root(y));
     }
+}
+
+TEST(CubeRoot, FourLanesGiveTheBitsOfFourScalarCalls) {
+    std::mt19937_64 rng(13);
+    std::uniform_real_distribution<double> exponent(-1021.9, 1023.9), mantissa(1, 2), sign(-1, 1);
+    const auto same_bits = [](double a, double b) { return std::memcmp(&a, &b, sizeof a) == 0; };
+    const auto check = [&](Lanes x) {
+        const Lanes root = inv_cube_root(x), square = inv_cube_root_squared(x);
+        for (int l = 0; l < kLaneCount; ++l) {
+            ASSERT_TRUE(same_bits(root[l], inv_cube_root(x[l]))) << x[l];
+            ASSERT_TRUE(same_bits(square[l], inv_cube_root_squared(x[l]))) << x[l];
+        }
+    };
+    for (int i = 0; i < 20000; ++i) {
+        Lanes x;
+        for (int l = 0; l < kLaneCount; ++l)
+            x[l] =
+                std::copysign(std::ldexp(mantissa(rng), int(std::floor(exponent(rng)))), sign(rng));
+        check(x);
+    }
+    // a lane outside the normal doubles sends all four down libm's path, each still its own
+    constexpr double kInf = std::numeric_limits<double>::infinity();
+    const double subnormal = std::numeric_limits<double>::denorm_min() * 12345;
+    for (double odd : {0.0, -0.0, kInf, -kInf, subnormal, std::nan("")})
+        check(Lanes{0.7, odd, -3.2, 1e300});
 }
 
 }  // namespace

@@ -1,10 +1,12 @@
 // Neo-Hookean (Tu et al. Eq. 4-5): zero stress for rotations, SVD path == direct path, and the
-// analytic stress against central differences of the energy (with the error order).
+// analytic stress against central differences of the energy (with the error order), and the
+// terms and stress of four matrices side by side (G2P's lanes) bit for bit as one at a time.
 #include "sim/material/neo_hookean.h"
 
 #include <gtest/gtest.h>
 
 #include <Eigen/SVD>
+#include <cstring>
 #include <random>
 
 #include "material/material_samples.h"
@@ -128,6 +130,41 @@ TEST(NeoHookean, PrincipalStressesOfAStretch) {
     EXPECT_NEAR(tau(0), 2 * shear + volumetric, tol::kRoundoff * kLame.kappa);
     EXPECT_NEAR(tau(1), -shear + volumetric, tol::kRoundoff * kLame.kappa);
     EXPECT_NEAR(tau(2), -shear + volumetric, tol::kRoundoff * kLame.kappa);
+}
+
+TEST(NeoHookean, FourLanesGiveTheScalarTermsAndStressBitForBit) {
+    std::mt19937_64 rng(23);
+    std::normal_distribution<Real> g(0, 0.3);
+    const auto same_bits = [](Real a, Real b) { return std::memcmp(&a, &b, sizeof a) == 0; };
+    for (int i = 0; i < 5000; ++i) {
+        Mat3 F[kLaneCount];
+        LaneMat3 lanes;
+        for (int l = 0; l < kLaneCount; ++l) {
+            F[l] = Mat3::Identity() + (i % 7 == 0 && l == 1
+                                           ? Mat3::Zero()
+                                           : Mat3(Mat3::NullaryExpr([&] { return g(rng); })));
+            if (i % 11 == 0 && l == 2) F[l].col(2) = F[l].col(0);  // J = 0: shear is infinite
+            for (int k = 0; k < 9; ++k) lanes.m[k][l] = F[l](k);
+        }
+        const NeoHookeanLaneTerms t = neo_hookean_terms(lanes, kLame);
+        Lanes tau[6];
+        neo_hookean_kirchhoff_of(t.J, t.b, t.mean_b, t.shear, kLame, tau);
+        for (int l = 0; l < kLaneCount; ++l) {
+            const NeoHookeanTerms want = neo_hookean_terms(F[l], kLame);
+            const SymMat3 want_tau = neo_hookean_kirchhoff(want, kLame);
+            const Real want_b[6] = {want.b.xx, want.b.yy, want.b.zz,
+                                    want.b.xy, want.b.xz, want.b.yz};
+            const Real want_t[6] = {want_tau.xx, want_tau.yy, want_tau.zz,
+                                    want_tau.xy, want_tau.xz, want_tau.yz};
+            ASSERT_TRUE(same_bits(t.J[l], want.J)) << i;
+            ASSERT_TRUE(same_bits(t.mean_b[l], want.mean_b)) << i;
+            ASSERT_TRUE(same_bits(t.shear[l], want.shear)) << i;
+            for (int k = 0; k < 6; ++k) {
+                ASSERT_TRUE(same_bits(t.b[k][l], want_b[k])) << i << " b " << k;
+                ASSERT_TRUE(same_bits(tau[k][l], want_t[k])) << i << " tau " << k;
+            }
+        }
+    }
 }
 
 }  // namespace

@@ -17,6 +17,7 @@
 #include "sim/core/parallel.h"
 #include "sim/material/nacc.h"
 #include "sim/material/neo_hookean.h"
+#include "sim/mpm/g2p_impl.h"
 #include "sim/mpm/simulation.h"
 #include "sim/mpm/workspace.h"
 #include "tolerance.h"
@@ -247,6 +248,78 @@ TEST(G2pStressCache, RecomputingFromFeChangesNoBit) {
             }
         });
     });
+}
+
+// the G2P's kinematics on four particles at once: dF Fe and det dF within a few ulps of the exact
+// products (a long double reference)
+TEST(G2pLanes, KinematicsAreTheProductAndDeterminantToAFewUlps) {
+    std::mt19937_64 rng(31);
+    std::normal_distribution<Real> g(0, 0.3);
+    Real worst_product = 0, worst_det = 0;
+    for (int i = 0; i < 2000; ++i) {
+        Mat3 dF[kLaneCount], Fe[kLaneCount];
+        LaneMat3 dF_lanes, Fe_lanes;
+        for (int l = 0; l < kLaneCount; ++l) {
+            dF[l] = Mat3::Identity() + 0.01 * Mat3(Mat3::NullaryExpr([&] { return g(rng); }));
+            Fe[l] = Mat3::Identity() + Mat3(Mat3::NullaryExpr([&] { return g(rng); }));
+            for (int k = 0; k < 9; ++k) {
+                dF_lanes.m[k][l] = dF[l](k);
+                Fe_lanes.m[k][l] = Fe[l](k);
+            }
+        }
+        const LaneMat3 product = mpm::g2p_detail::lanes_product(dF_lanes, Fe_lanes);
+        const Lanes det = mpm::g2p_detail::lanes_determinant(dF_lanes);
+        for (int l = 0; l < kLaneCount; ++l) {
+            const Eigen::Matrix<long double, 3, 3> a = dF[l].cast<long double>(),
+                                                   b = Fe[l].cast<long double>();
+            const Eigen::Matrix<long double, 3, 3> exact = a * b;
+            for (int k = 0; k < 9; ++k)
+                worst_product = std::max(worst_product, Real(std::abs(product.m[k][l] - exact(k)) /
+                                                             b.cwiseAbs().maxCoeff()));
+            worst_det = std::max(worst_det, Real(std::abs(det[l] - a.determinant())));
+        }
+    }
+    const Real eps = std::numeric_limits<Real>::epsilon();
+    EXPECT_LT(worst_product, 4 * eps);  // |dF| ~ 1: an ulp or two of the largest term
+    EXPECT_LT(worst_det, 8 * eps);
+}
+
+// the inside test on four particles at once decides as it does on one
+TEST(G2pLanes, InsideTestDecidesAsTheScalarOne) {
+    const SimModel model = mixed_yield_model();
+    const LameParams lame = lame_params(model.elastic);
+    std::mt19937_64 rng(37);
+    std::uniform_real_distribution<Real> u(0, 1);
+    std::normal_distribution<Real> g(0, 1);
+    int inside = 0, outside = 0;
+    for (int i = 0; i < 4000; ++i) {
+        LaneMat3 F;
+        Real p0[kLaneCount], beta[kLaneCount];
+        Mat3 Fs[kLaneCount];
+        for (int l = 0; l < kLaneCount; ++l) {
+            const Real log_J = 0.12 * (u(rng) - 0.5), dev = 0.08 * u(rng);
+            Fs[l] = test::with_singular_values(
+                rng, std::exp(log_J / 3) * Vec3(std::exp(dev * g(rng)), std::exp(dev * g(rng)),
+                                                std::exp(dev * g(rng))));
+            for (int k = 0; k < 9; ++k) F.m[k][l] = Fs[l](k);
+            p0[l] = nacc_p0_lower_bound(-0.3 * u(rng), model.nacc->xi, lame.kappa);
+            beta[l] = 0.4 * u(rng);
+        }
+        const NeoHookeanLaneTerms t = neo_hookean_terms(F, lame);
+        const LaneMask got = mpm::g2p_detail::clearly_inside_yield_surface(
+            t.J, t.b, t.mean_b, t.shear, Lanes{p0[0], p0[1], p0[2], p0[3]},
+            Lanes{beta[0], beta[1], beta[2], beta[3]}, *model.nacc, lame);
+        for (int l = 0; l < kLaneCount; ++l) {
+            const NeoHookeanTerms s = neo_hookean_terms(Fs[l], lame);
+            const Real b[6] = {s.b.xx, s.b.yy, s.b.zz, s.b.xy, s.b.xz, s.b.yz};
+            const bool want = mpm::g2p_detail::clearly_inside_yield_surface(
+                s.J, b, s.mean_b, s.shear, p0[l], beta[l], *model.nacc, lame);
+            ASSERT_EQ(got[l] != 0, want) << i << " lane " << l;
+            (want ? inside : outside) += 1;
+        }
+    }
+    EXPECT_GT(inside, 1000);
+    EXPECT_GT(outside, 1000);
 }
 
 }  // namespace
