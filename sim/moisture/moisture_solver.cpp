@@ -132,14 +132,15 @@ void mark_surface_nodes(const SparseGrid& grid, const MoistureSeal& seal, Moistu
     });
 }
 
-// The window of one particle block as 4-lane rows: a particle's 3 stencil nodes along z are
-// loaded and stored as 4 contiguous values whose 4th lane has weight 0. Its sub-windows are
+// The window of one particle block as 4-lane z rows (ZRow; not sim/core/lanes.h's Lanes, which
+// hold four particles): a particle's 3 stencil nodes along z are loaded and stored as 4
+// contiguous values whose 4th lane has weight 0. Its sub-windows are
 // kWindowStride apart so that lane past the last node stays inside the scratch.
-using Lanes = Eigen::Array<Real, 4, 1>;
+using ZRow = Eigen::Array<Real, 4, 1>;
 constexpr int kWindowStride = kWindowNodes + 8;
 
-inline Lanes load_lanes(const Real* p) { return Eigen::Map<const Lanes>(p); }
-inline void add_lanes(Real* p, const Lanes& v) { Eigen::Map<Lanes>(p) += v; }
+inline ZRow load_z_row(const Real* p) { return Eigen::Map<const ZRow>(p); }
+inline void add_z_row(Real* p, const ZRow& v) { Eigen::Map<ZRow>(p) += v; }
 
 // Surface evaporation: a particle near an air-exposed face evaporates when the grid's volume
 // fraction at it, sum_i w_ip W_i / h^3, is below this. On a flat face it is 0.62-0.66 on the outer
@@ -232,13 +233,13 @@ void evaporation_pass(const MoistureParams& mp, const SparseGrid& grid,
             const Real source =
                 implicit_robin ? lambda_S * mp.theta0 : -lambda_S * (pp.theta[p] - mp.theta0);
             // z rows of 4 lanes (4th z weight 0), as in the operator pass
-            const Lanes wz(az.w[0], az.w[1], az.w[2], 0);
+            const ZRow wz(az.w[0], az.w[1], az.w[2], 0);
             for (int a = 0; a < 3; ++a)
                 for (int b = 0; b < 3; ++b) {
                     const int n = mpm::window_index(o0 + a, o1 + b, o2);
                     const Real wab = ax.w[a] * ay.w[b];
-                    add_lanes(rw + n, (source * wab) * wz);
-                    if (implicit_robin) add_lanes(dw + n, (lambda_S * wab * wab) * (wz * wz));
+                    add_z_row(rw + n, (source * wab) * wz);
+                    if (implicit_robin) add_z_row(dw + n, (lambda_S * wab * wab) * (wz * wz));
                 }
         }
         if (any_boundary && !surface_layer) {
@@ -251,7 +252,7 @@ void evaporation_pass(const MoistureParams& mp, const SparseGrid& grid,
 // What the operator pass keeps of one particle between its gather and its scatter.
 struct OperatorParticle {
     Real wx[3], dwx[3], wy[3], dwy[3];  // x and y weights and their derivatives (d/d(x/h))
-    Lanes wz, dwz;                      // z weights and derivatives, 4th lane 0
+    ZRow wz, dwz;                       // z weights and derivatives, 4th lane 0
     Real gx, gy, gz;                    // V D grad theta_p (in units of 1/h^2)
     Real robin;                         // lambda S_p sum_j w_jp x_j (implicit Robin only)
     int offset;                         // window index of the stencil's first node
@@ -308,8 +309,8 @@ void operator_pass(const MoistureParams& mp, const SparseGrid& grid,
                     op.wy[a] = ay.w[a];
                     op.dwy[a] = ay.dw[a];
                 }
-                op.wz = Lanes(az.w[0], az.w[1], az.w[2], 0);
-                op.dwz = Lanes(az.dw[0], az.dw[1], az.dw[2], 0);
+                op.wz = ZRow(az.w[0], az.w[1], az.w[2], 0);
+                op.dwz = ZRow(az.dw[0], az.dw[1], az.dw[2], 0);
             }
             // gather g_p = sum_j x_j grad w_jp (in units of 1/h) and s_p = sum_j w_jp x_j as z
             // rows: contract over y (w and dw), then over x; the z weights close the sums
@@ -317,13 +318,13 @@ void operator_pass(const MoistureParams& mp, const SparseGrid& grid,
                 const int32_t p = grid.order[first + k];
                 OperatorParticle& op = batch[k];
                 const Real* xrow = xw + op.offset;
-                Lanes rx = Lanes::Zero(), ry = Lanes::Zero(), rs = Lanes::Zero();
+                ZRow rx = ZRow::Zero(), ry = ZRow::Zero(), rs = ZRow::Zero();
                 for (int a = 0; a < 3; ++a) {
                     const Real* plane = xrow + a * kPlane;
-                    const Lanes r0 = load_lanes(plane), r1 = load_lanes(plane + kRow),
-                                r2 = load_lanes(plane + 2 * kRow);
-                    const Lanes wy_rows = op.wy[0] * r0 + op.wy[1] * r1 + op.wy[2] * r2;
-                    const Lanes dwy_rows = op.dwy[0] * r0 + op.dwy[1] * r1 + op.dwy[2] * r2;
+                    const ZRow r0 = load_z_row(plane), r1 = load_z_row(plane + kRow),
+                               r2 = load_z_row(plane + 2 * kRow);
+                    const ZRow wy_rows = op.wy[0] * r0 + op.wy[1] * r1 + op.wy[2] * r2;
+                    const ZRow dwy_rows = op.dwy[0] * r0 + op.dwy[1] * r1 + op.dwy[2] * r2;
                     rs += op.wx[a] * wy_rows;
                     rx += op.dwx[a] * wy_rows;
                     ry += op.wx[a] * dwy_rows;
@@ -345,22 +346,22 @@ void operator_pass(const MoistureParams& mp, const SparseGrid& grid,
             // u_b = (gy dwy_b [+ robin wy_b]) wz + gz wy_b dwz. Runs of particles with the same
             // stencil (neighbours in id order often share one) sum their rows in registers and
             // add them to the window once: the rows' load-add-store chains bound this loop.
-            Lanes rows[9];
+            ZRow rows[9];
             int run_offset = -1;
             auto flush_run = [&] {
                 if (run_offset < 0) return;
                 for (int a = 0; a < 3; ++a)
                     for (int b = 0; b < 3; ++b)
-                        add_lanes(yw + run_offset + a * kPlane + b * kRow, rows[3 * a + b]);
+                        add_z_row(yw + run_offset + a * kPlane + b * kRow, rows[3 * a + b]);
             };
             for (int k = 0; k < count; ++k) {
                 const OperatorParticle& op = batch[k];
                 if (op.offset != run_offset) {
                     flush_run();
                     run_offset = op.offset;
-                    for (Lanes& r : rows) r.setZero();
+                    for (ZRow& r : rows) r.setZero();
                 }
-                Lanes q[3], u[3];
+                ZRow q[3], u[3];
                 for (int b = 0; b < 3; ++b) {
                     q[b] = op.wy[b] * op.wz;
                     Real cwz = op.gy * op.dwy[b];

@@ -160,7 +160,7 @@ struct ParticleChunk {
     static Lanes lanes(const Field& f, int j) { return lanes_load(f + j); }
     static void store(Field& f, int j, Lanes x) { lanes_store(f + j, x); }
 
-    // particle j's gathered sums (gather_velocities): v_p, C_p = c_scale B_p and dtheta
+    // particle j's gathered sums (gather_velocity): v_p, C_p = c_scale B_p and dtheta
     void set_gathered(int j, const Real (&sums)[5][kLaneCount], Real c_scale) {
         for (int k = 0; k < 3; ++k) v[k][j] = sums[0][k];
         for (int col = 0; col < 3; ++col)
@@ -177,10 +177,10 @@ struct ParticleChunk {
             J_start[j] = J_start[n - 1];
         }
     }
-    // the same for the pore update's outputs and the hardening
+    // the same for the hardening the inside test reads (the padded lanes' Fe_trial keeps the
+    // copy made before the pore update: any Fe of the kind will do there)
     void pad_hardening(int n) {
         for (int j = n; j % kLaneCount != 0; ++j) {
-            for (int k = 0; k < 9; ++k) F[k][j] = F[k][n - 1];
             alpha[j] = alpha[n - 1];
             beta[j] = beta[n - 1];
             p0[j] = p0[n - 1];
@@ -196,9 +196,9 @@ struct ParticleChunk {
 };
 
 // @note Longer than a page on purpose: its body is the step's per-particle hot loop (the G2P
-// share of mpm_bench's particle-steps/s), each particle's phases (gather, kinematics, pores,
-// plasticity, advection, checks) sharing locals in one pass; the kernels it calls are the
-// small, tested functions.
+// share of mpm_bench's particle-steps/s), a chunk's passes (gather, kinematics, pores, terms and
+// inside test, plasticity with advection and checks) sharing the chunk's arrays; the kernels
+// they call are the small, tested functions.
 template <bool kTheta, bool kPore, bool kNacc, class S>
 G2PResult g2p_impl(const SimModel& model, SimStateOf<S>& state, const SparseGrid& grid,
                    const MoistureUpdate& moisture, Real dt, std::vector<std::vector<Real>>& windows,
@@ -320,7 +320,7 @@ G2PResult g2p_impl(const SimModel& model, SimStateOf<S>& state, const SparseGrid
                     chunk.p0[j] = strength * nacc_p0_lower_bound(alpha, nacc.xi, lame.kappa);
                 }
             }
-            chunk.pad_hardening(n);
+            if constexpr (kNacc) chunk.pad_hardening(n);
 
             // 4. the Neo-Hookean terms of Fe_trial, the inside test and the Kirchhoff stress,
             // four particles at a time

@@ -19,7 +19,7 @@ namespace {
 // kMoistureStride apart, whose z rows are updated as 4 lanes (the z weights with a zero 4th lane:
 // one SIMD operation per row; the stride keeps that lane inside the scratch)
 constexpr int kMoistureStride = kWindowNodes + 8;
-using Lanes = Eigen::Array<Real, 4, 1>;
+using ZRow = Eigen::Array<Real, 4, 1>;  // a z row of three nodes and the zero lane
 
 // @note Longer than a page on purpose: its body is the step's per-particle scatter, a hot loop
 // (the P2G share of mpm_bench's particle-steps/s), each particle's weights, stress and moisture
@@ -74,10 +74,10 @@ void p2g_impl(const SimStateOf<S>& state, const SymMat3* kirchhoff, SparseGrid& 
 #endif
             // the moisture rows' z profiles, scaled once per particle: V wz and V theta wz (each
             // row then takes one multiply-add per field)
-            Lanes V_wz = Lanes::Zero(), Vtheta_wz = Lanes::Zero();
+            ZRow V_wz = ZRow::Zero(), Vtheta_wz = ZRow::Zero();
             if constexpr (kMoisture) {
                 const Real V = V0[p] * J[p];
-                const Lanes wz(az.w[0], az.w[1], az.w[2], 0);
+                const ZRow wz(az.w[0], az.w[1], az.w[2], 0);
                 V_wz = V * wz;
                 Vtheta_wz = theta[p] * V_wz;
             }
@@ -111,8 +111,8 @@ void p2g_impl(const SimStateOf<S>& state, const SymMat3* kirchhoff, SparseGrid& 
 #endif
                     if constexpr (kMoisture) {
                         const int n = window_index(o0 + a, o1 + b, o2);
-                        Eigen::Map<Lanes>(mw + n) += wab * V_wz;
-                        Eigen::Map<Lanes>(mw + kMoistureStride + n) += wab * Vtheta_wz;
+                        Eigen::Map<ZRow>(mw + n) += wab * V_wz;
+                        Eigen::Map<ZRow>(mw + kMoistureStride + n) += wab * Vtheta_wz;
                     }
                 }
             }
