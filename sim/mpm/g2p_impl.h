@@ -8,8 +8,6 @@
 #include <cmath>
 #include <type_traits>
 
-#include <immintrin.h>
-
 #include "sim/core/lanes.h"
 #include "sim/grid/bspline.h"
 #include "sim/material/damage.h"
@@ -60,67 +58,57 @@ inline auto clearly_inside_yield_surface(T J, const T (&b)[6], T mean_b, T shear
 }
 
 // The gather of one particle: v_p = sum w v_i, B_p = sum w v_i ((a,b,c) - fx)^T and, with
-// kTheta, dth = sum w dtheta_i, over the 3x3x3 stencil in (a, b, c) order, into sums: v_p's
-// entries in sums[0][0..2], B_p's column k in sums[1 + k][0..2], dth in sums[4][3]. Every sum takes
-// its terms in the same order and with the same roundings (w v_i rounded, then added to v_p and
-// fused-multiply-added into B_p; w dtheta_i fused into dth) in both versions below, so their
-// results are the same bits. The caller reads the sums back one number at a time: each read lies
-// inside one vector store, which the CPU forwards without a stall (a Mat3 built from the sums
-// and read back two entries at a time stalled on every read).
+// kTheta, dth = sum w dtheta_i, over the 3x3x3 stencil, into sums: v_p's entries in
+// sums[0][0..2], B_p's column k in sums[1 + k][0..2], dth in sums[4][3]. The weight is a product
+// w = wx_a wy_b wz_c, so the sums separate: each z row of nodes is contracted first (by wz and by
+// wz (c - fz)), then the rows of each x plane (by wy and wy (b - fy)), then the planes (by wx and
+// wx (a - fx)). That takes 93 multiply-adds where the node-by-node sum took 135 (162 with
+// dtheta), in chains 3 long instead of 27; dtheta rides in the 4th lane of v_p's sum. The sums'
+// order is fixed, so the same thread count gives the same bits. The caller reads the sums back
+// one number at a time: each read lies inside one vector store, which the CPU forwards without
+// a stall (a Mat3 built from them and read two entries at a time stalled on every read).
 template <bool kTheta>
 inline void gather_velocity(const Real* win, const Stencil& st, const Vec3i& origin,
                             Real (&sums)[5][kLaneCount]) {
     const AxisWeights &ax = st.axis[0], &ay = st.axis[1], &az = st.axis[2];
-    const int o0 = ax.base - origin.x(), o1 = ay.base - origin.y(), o2 = az.base - origin.z();
-#if defined(__AVX__) && defined(__FMA__)
-    // one node's (v, dtheta) as a 4-lane vector: each update is one instruction for v_p and one
-    // per column of B_p, instead of a 2-lane and a scalar one
-    __m256d v_sum = _mm256_setzero_pd(), b0 = v_sum, b1 = v_sum, b2 = v_sum, th_sum = v_sum;
-    const __m256d dz[3] = {_mm256_set1_pd(0 - az.fx), _mm256_set1_pd(1 - az.fx),
-                           _mm256_set1_pd(2 - az.fx)};
-    for (int a = 0; a < 3; ++a)
+    const Real* corner =
+        win +
+        window_index(ax.base - origin.x(), ay.base - origin.y(), az.base - origin.z()) * kStride;
+    // per axis: the weights w and the first moments w (k - f)
+    Real gx[3], gy[3], gz[3];
+    for (int k = 0; k < 3; ++k) {
+        gx[k] = ax.w[k] * (k - ax.fx);
+        gy[k] = ay.w[k] * (k - ay.fx);
+        gz[k] = az.w[k] * (k - az.fx);
+    }
+    // one node's (v, dtheta) as four lanes; Lanes are one AVX register where the CPU has AVX
+    Lanes v = splat<Lanes>(0), b0 = v, b1 = v, b2 = v;
+    for (int a = 0; a < 3; ++a) {
+        Lanes plane_w = splat<Lanes>(0), plane_gy = plane_w, plane_gz = plane_w;
         for (int b = 0; b < 3; ++b) {
-            const Real wab = ax.w[a] * ay.w[b];
-            const Real* row = win + window_index(o0 + a, o1 + b, o2) * kStride;
-            const __m256d dx = _mm256_set1_pd(a - ax.fx), dy = _mm256_set1_pd(b - ay.fx);
-            for (int c = 0; c < 3; ++c) {
-                const __m256d w = _mm256_set1_pd(wab * az.w[c]);
-                const __m256d node = _mm256_loadu_pd(row + c * kStride);
-                const __m256d wv = _mm256_mul_pd(w, node);
-                v_sum = _mm256_add_pd(v_sum, wv);
-                b0 = _mm256_fmadd_pd(wv, dx, b0);
-                b1 = _mm256_fmadd_pd(wv, dy, b1);
-                b2 = _mm256_fmadd_pd(wv, dz[c], b2);
-                if constexpr (kTheta) th_sum = _mm256_fmadd_pd(w, node, th_sum);
-            }
+            const Real* row = corner + window_index(a, b, 0) * kStride;
+            const Lanes n0 = lanes_load(row), n1 = lanes_load(row + kStride),
+                        n2 = lanes_load(row + 2 * kStride);
+            const Lanes row_w =
+                fused_madd(splat<Lanes>(az.w[2]), n2,
+                           fused_madd(splat<Lanes>(az.w[1]), n1, splat<Lanes>(az.w[0]) * n0));
+            const Lanes row_gz =
+                fused_madd(splat<Lanes>(gz[2]), n2,
+                           fused_madd(splat<Lanes>(gz[1]), n1, splat<Lanes>(gz[0]) * n0));
+            plane_w = fused_madd(splat<Lanes>(ay.w[b]), row_w, plane_w);
+            plane_gy = fused_madd(splat<Lanes>(gy[b]), row_w, plane_gy);
+            plane_gz = fused_madd(splat<Lanes>(ay.w[b]), row_gz, plane_gz);
         }
-    _mm256_storeu_pd(sums[0], v_sum);
-    _mm256_storeu_pd(sums[1], b0);
-    _mm256_storeu_pd(sums[2], b1);
-    _mm256_storeu_pd(sums[3], b2);
-    _mm256_storeu_pd(sums[4], th_sum);
-#else
-    for (auto& lane : sums)
-        for (Real& x : lane) x = 0;
-    for (int a = 0; a < 3; ++a)
-        for (int b = 0; b < 3; ++b) {
-            const Real wab = ax.w[a] * ay.w[b];
-            const Real* row = win + window_index(o0 + a, o1 + b, o2) * kStride;
-            for (int c = 0; c < 3; ++c) {
-                const Real w = wab * az.w[c];
-                const Real* node = row + c * kStride;
-                for (int k = 0; k < 3; ++k) {
-                    const Real wv = w * node[k];
-                    sums[0][k] += wv;
-                    sums[1][k] = fused_madd(wv, a - ax.fx, sums[1][k]);
-                    sums[2][k] = fused_madd(wv, b - ay.fx, sums[2][k]);
-                    sums[3][k] = fused_madd(wv, c - az.fx, sums[3][k]);
-                }
-                if constexpr (kTheta) sums[4][3] = fused_madd(w, node[3], sums[4][3]);
-            }
-        }
-#endif
-    if constexpr (!kTheta) sums[4][3] = 0;
+        v = fused_madd(splat<Lanes>(ax.w[a]), plane_w, v);
+        b0 = fused_madd(splat<Lanes>(gx[a]), plane_w, b0);
+        b1 = fused_madd(splat<Lanes>(ax.w[a]), plane_gy, b1);
+        b2 = fused_madd(splat<Lanes>(ax.w[a]), plane_gz, b2);
+    }
+    lanes_store(sums[0], v);
+    lanes_store(sums[1], b0);
+    lanes_store(sums[2], b1);
+    lanes_store(sums[3], b2);
+    sums[4][3] = kTheta ? v[3] : Real(0);
 }
 
 // a b, four particles' 3x3 matrices at once: each entry a fused multiply-add chain over k in
