@@ -50,9 +50,6 @@ inline void lanes_store(Real* x, Lanes value) { std::memcpy(x, &value, sizeof va
 /// Where mask is set, a; elsewhere b.
 inline Lanes lanes_select(LaneMask mask, Lanes a, Lanes b) { return mask ? a : b; }
 
-/// Whether any lane of mask is set.
-inline bool lanes_any(LaneMask mask) { return (mask[0] | mask[1] | mask[2] | mask[3]) != 0; }
-
 /// Whether every lane of mask is set.
 inline bool lanes_all(LaneMask mask) { return (mask[0] & mask[1] & mask[2] & mask[3]) != 0; }
 
