@@ -148,11 +148,11 @@ struct ParticleChunk {
     static Lanes lanes(const Field& f, int j) { return lanes_load(f + j); }
     static void store(Field& f, int j, Lanes x) { lanes_store(f + j, x); }
 
-    // particle j's gathered sums (gather_velocity): v_p, C_p = c_scale B_p and dtheta
-    void set_gathered(int j, const Real (&sums)[5][kLaneCount], Real c_scale) {
+    // particle j's gathered sums (gather_velocity): v_p, C_p = B_scale B_p and dtheta
+    void set_gathered(int j, const Real (&sums)[5][kLaneCount], Real B_scale) {
         for (int k = 0; k < 3; ++k) v[k][j] = sums[0][k];
         for (int col = 0; col < 3; ++col)
-            for (int row = 0; row < 3; ++row) C[3 * col + row][j] = c_scale * sums[1 + col][row];
+            for (int row = 0; row < 3; ++row) C[3 * col + row][j] = B_scale * sums[1 + col][row];
         dtheta[j] = sums[4][3];
     }
     // copies of the last particle's kinematic inputs into the lanes past it
@@ -238,16 +238,12 @@ G2PResult g2p_impl(const SimModel& model, SimStateOf<S>& state, const SparseGrid
             // 1. gather v_p, B_p = sum w v_i (x_i - x_p)^T / h and the theta increment; C_p =
             // (4/h^2) sum w v_i (x_i - x_p)^T, with x_i - x_p = h ((a,b,c) - fx)
             for (int j = 0; j < n; ++j) {
-                const Stencil st =
-                    make_stencil(geo.to_grid(state.x[slots[j]].template cast<Real>()));
+                const int32_t p = slots[j];
+                const Stencil st = make_stencil(geo.to_grid(state.x[p].template cast<Real>()));
                 alignas(32) Real sums[5][kLaneCount];
                 gather_velocity<kTheta>(win, st, origin, sums);
                 chunk.set_gathered(j, sums, c_scale * h);
-            }
-            for (int j = 0; j < n; ++j) {
-                const int32_t p = slots[j];
-                const Vec3 vp(chunk.v[0][j], chunk.v[1][j], chunk.v[2][j]);
-                speed2 = std::max(speed2, vp.squaredNorm());
+                speed2 = std::max(speed2, Vec3(sums[0][0], sums[0][1], sums[0][2]).squaredNorm());
                 const Mat3 Fe = state.Fe[p].template cast<Real>();
                 for (int k = 0; k < 9; ++k) chunk.F[k][j] = Fe(k);
                 chunk.J_start[j] = state.J[p];
