@@ -75,24 +75,38 @@ int64_t SparseGrid::memory_bytes() const {
 
 namespace {
 
-// one stable counting-sort pass of the slots in `idx` by bits [shift, shift + digit_bits) of
-// key[slot]
-void radix_pass(const uint32_t* key, int shift, int digit_bits, std::vector<int32_t>& idx,
-                std::vector<int32_t>& idx_tmp, std::vector<uint32_t>& count) {
-    const uint32_t buckets = 1u << digit_bits;
-    const size_t n = idx.size();
-    idx_tmp.resize(n);
-    count.assign(buckets, 0u);
-    for (size_t i = 0; i < n; ++i) ++count[(key[idx[i]] >> shift) & (buckets - 1)];
+// One stable counting-sort pass of the n slots in `in` by bits [shift, shift + digit_bits) of
+// their block key, into `out`, on the worker threads: each counts the digits of its contiguous
+// share of `in`, the counts are summed in (digit, thread) order, and each scatters its share in
+// input order, so the result is the serial pass's for any thread count. `out_key` gets the keys in
+// `out`'s order.
+void radix_pass(const uint32_t* key, int shift, int digit_bits, const int32_t* in, int32_t* out,
+                uint32_t* out_key, int64_t n, std::vector<uint32_t>& count) {
+    const uint32_t buckets = 1u << digit_bits, mask = buckets - 1;
+    const int nt = std::max(1, thread_count());
+    count.assign(static_cast<size_t>(nt) * buckets, 0u);
+    parallel_chunks(n, [&](int t, int64_t b, int64_t e) {
+        uint32_t* c = count.data() + static_cast<size_t>(t) * buckets;
+        for (int64_t i = b; i < e; ++i) ++c[(key[in[i]] >> shift) & mask];
+    });
     uint32_t sum = 0;
-    for (uint32_t& c : count) {
-        const uint32_t here = c;
-        c = sum;
-        sum += here;
-    }
-    for (size_t i = 0; i < n; ++i)
-        idx_tmp[count[(key[idx[i]] >> shift) & (buckets - 1)]++] = idx[i];
-    idx.swap(idx_tmp);
+    for (uint32_t d = 0; d < buckets; ++d)
+        for (int t = 0; t < nt; ++t) {
+            uint32_t& c = count[static_cast<size_t>(t) * buckets + d];
+            const uint32_t here = c;
+            c = sum;
+            sum += here;
+        }
+    parallel_chunks(n, [&](int t, int64_t b, int64_t e) {
+        uint32_t* c = count.data() + static_cast<size_t>(t) * buckets;
+        for (int64_t i = b; i < e; ++i) {
+            const int32_t s = in[i];
+            const uint32_t k = key[s];
+            const uint32_t at = c[(k >> shift) & mask]++;
+            out[at] = s;
+            out_key[at] = k;
+        }
+    });
 }
 
 int bits_for(uint64_t count) {
@@ -117,41 +131,47 @@ void bin_particles(SparseGrid& grid, const std::vector<Eigen::Matrix<StateReal, 
         int b[3];
         for (int d = 0; d < 3; ++d) b[d] = static_cast<int>(std::floor(xg[d] - Real(0.5))) >> 2;
         grid.particle_key[p] = geo.block_key(b[0], b[1], b[2]);
-        grid.order[p] = static_cast<int32_t>(p);
     });
 
     // order slots by (block, particle id): canonical, so the scatter order (and every bit of the
     // result) does not depend on how the arrays happen to be ordered, e.g. after a resume.
     // Skipped when the slots are already in that order (right after the arrays were permuted).
+    std::vector<uint32_t>& sorted_key = grid.sort_key_tmp;
+    sorted_key.resize(n);
     bool sorted = true;
     for (int64_t p = 1; p < n && sorted; ++p)
         sorted = grid.particle_key[p - 1] < grid.particle_key[p] ||
                  (grid.particle_key[p - 1] == grid.particle_key[p] && id[p - 1] < id[p]);
-    if (!sorted) {
+    if (sorted) {
+        parallel_for(n, [&](int64_t p) {
+            grid.order[p] = static_cast<int32_t>(p);
+            sorted_key[p] = grid.particle_key[p];
+        });
+    } else {
         // the slots in id order (the ids are a permutation of 0..n-1: one scatter, where sorting
         // by id took a radix pass per 11 bits), then stable passes by block
-        std::fill(grid.order.begin(), grid.order.end(), -1);
+        std::vector<int32_t>& by_id = grid.sort_idx_tmp;
+        by_id.assign(n, -1);
         for (int64_t p = 0; p < n; ++p) {
             const int32_t i = id[p];
-            if (i < 0 || i >= n || grid.order[i] >= 0)
+            if (i < 0 || i >= n || by_id[i] >= 0)
                 throw RuntimeError("particle binning: slot " + std::to_string(p) + " has id " +
                                    std::to_string(i) + ", which is out of [0, " +
                                    std::to_string(n) + ") or another slot's: a damaged state");
-            grid.order[i] = static_cast<int32_t>(p);
+            by_id[i] = static_cast<int32_t>(p);
         }
-        // as few passes as digits of at most 16 bits allow (a 2^16 count array stays in L2:
-        // one pass over the slots for up to 65,536 blocks)
+        // as few passes as digits of at most 16 bits allow (a 2^16 count array per thread stays
+        // in L2: one pass for up to 65,536 blocks)
         const int block_bits =
             bits_for(static_cast<uint64_t>(geo.blocks.x()) * geo.blocks.y() * geo.blocks.z());
         const int passes = (block_bits + 15) / 16;
         const int digit_bits = (block_bits + passes - 1) / passes;
-        for (int k = 0; k < passes; ++k)
-            radix_pass(grid.particle_key.data(), k * digit_bits, digit_bits, grid.order,
-                       grid.sort_idx_tmp, grid.radix_count);
+        for (int k = 0; k < passes; ++k) {
+            radix_pass(grid.particle_key.data(), k * digit_bits, digit_bits, by_id.data(),
+                       grid.order.data(), sorted_key.data(), n, grid.radix_count);
+            if (k + 1 < passes) by_id.swap(grid.order);
+        }
     }
-    std::vector<uint32_t>& sorted_key = grid.sort_key_tmp;
-    sorted_key.resize(n);
-    parallel_for(n, [&](int64_t i) { sorted_key[i] = grid.particle_key[grid.order[i]]; });
 
     // particle blocks: runs of equal keys
     grid.pblock_key.clear();
@@ -165,31 +185,41 @@ void bin_particles(SparseGrid& grid, const std::vector<Eigen::Matrix<StateReal, 
     grid.pblock_begin.push_back(static_cast<int32_t>(n));
     const size_t npb = grid.pblock_key.size();
 
-    // allocated blocks: every particle block and its +1 neighbours
+    // allocated blocks: every particle block and its +1 neighbours. Keys are linear in the block
+    // coordinates, so the neighbours at one offset are the particle blocks' keys plus a constant:
+    // eight ascending runs, merged.
+    const uint32_t sx = 1, sy = static_cast<uint32_t>(geo.blocks.x()),
+                   sz = static_cast<uint32_t>(geo.blocks.x()) * geo.blocks.y();
+    uint32_t offset[8];
+    for (int dx = 0; dx < 2; ++dx)
+        for (int dy = 0; dy < 2; ++dy)
+            for (int dz = 0; dz < 2; ++dz)
+                offset[(dx * 2 + dy) * 2 + dz] = dx * sx + dy * sy + dz * sz;
     std::vector<uint32_t>& keys = grid.neighbor_keys_tmp;
-    keys.clear();
-    keys.reserve(npb * 8);
-    for (uint32_t k : grid.pblock_key) {
-        const Vec3i b = geo.block_coord(k);
-        for (int dx = 0; dx < 2; ++dx)
-            for (int dy = 0; dy < 2; ++dy)
-                for (int dz = 0; dz < 2; ++dz)
-                    keys.push_back(geo.block_key(b.x() + dx, b.y() + dy, b.z() + dz));
-    }
-    std::sort(keys.begin(), keys.end());
+    keys.resize(npb * 8);
+    for (int o = 0; o < 8; ++o)
+        for (size_t i = 0; i < npb; ++i) keys[o * npb + i] = grid.pblock_key[i] + offset[o];
+    for (size_t run = npb; run < keys.size(); run *= 2)
+        for (size_t b = 0; b + run < keys.size(); b += 2 * run)
+            std::inplace_merge(keys.begin() + b, keys.begin() + b + run,
+                               keys.begin() + std::min(b + 2 * run, keys.size()));
     keys.erase(std::unique(keys.begin(), keys.end()), keys.end());
     grid.block_keys.assign(keys.begin(), keys.end());
 
-    // neighbour slots and colours of the particle blocks
+    // neighbour slots: at each offset, one walk up the allocated keys beside the particle blocks'
     grid.pblock_neighbors.resize(npb);
+    parallel_for(8, [&](int64_t o) {
+        size_t j = 0;
+        for (size_t i = 0; i < npb; ++i) {
+            const uint32_t k = grid.pblock_key[i] + offset[o];
+            while (grid.block_keys[j] < k) ++j;
+            grid.pblock_neighbors[i][o] = static_cast<int32_t>(j);
+        }
+    });
+    // colours of the particle blocks
     for (auto& c : grid.color_pblocks) c.clear();
     for (size_t i = 0; i < npb; ++i) {
         const Vec3i b = geo.block_coord(grid.pblock_key[i]);
-        for (int dx = 0; dx < 2; ++dx)
-            for (int dy = 0; dy < 2; ++dy)
-                for (int dz = 0; dz < 2; ++dz)
-                    grid.pblock_neighbors[i][(dx * 2 + dy) * 2 + dz] =
-                        grid.find_block(geo.block_key(b.x() + dx, b.y() + dy, b.z() + dz));
         const int color = (b.x() & 1) | ((b.y() & 1) << 1) | ((b.z() & 1) << 2);
         grid.color_pblocks[color].push_back(static_cast<int32_t>(i));
     }

@@ -387,6 +387,23 @@ TEST(MpmStep, BinningOrdersSlotsByBlockThenIdAndRefusesDamagedIds) {
             ASSERT_TRUE(k0 < k1 || (k0 == k1 && id[prev] < id[slot])) << "h " << h << ", " << i;
         }
         EXPECT_EQ(std::count(seen.begin(), seen.end(), 1), static_cast<long>(x.size()));
+        // the allocated blocks are exactly the particle blocks and their +1 neighbours, ascending,
+        // and each particle block's neighbour slots name them
+        std::vector<uint32_t> expected;
+        for (size_t i = 0; i < grid.n_pblocks(); ++i) {
+            const Vec3i b = grid.geo.block_coord(grid.pblock_key[i]);
+            for (int o = 0; o < 8; ++o) {
+                const uint32_t key =
+                    grid.geo.block_key(b.x() + (o >> 2), b.y() + ((o >> 1) & 1), b.z() + (o & 1));
+                expected.push_back(key);
+                const int32_t slot = grid.pblock_neighbors[i][o];
+                ASSERT_GE(slot, 0);
+                ASSERT_EQ(grid.block_keys[slot], key) << "h " << h << ", block " << i;
+            }
+        }
+        std::sort(expected.begin(), expected.end());
+        expected.erase(std::unique(expected.begin(), expected.end()), expected.end());
+        EXPECT_EQ(grid.block_keys, expected) << "h " << h;
     }
 
     std::vector<int32_t> duplicated = id;
