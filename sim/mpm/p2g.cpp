@@ -2,12 +2,12 @@
 // §1.2, §4.3).
 #include <algorithm>
 
-#include <immintrin.h>
-
 #include <Eigen/Core>
 
+#include "sim/core/lanes.h"
 #include "sim/core/parallel.h"
 #include "sim/grid/bspline.h"
+#include "sim/material/material_math.h"
 #include "sim/material/neo_hookean.h"
 #include "sim/mpm/transfer.h"
 
@@ -52,26 +52,32 @@ void p2g_impl(const SimStateOf<S>& state, const SymMat3* kirchhoff, SparseGrid& 
             const int o0 = ax.base - origin.x(), o1 = ay.base - origin.y(),
                       o2 = az.base - origin.z();
 
-            // affine momentum with the stress folded in: A_p = m C - dt V0 (4/h^2) tau
+            // affine momentum with the stress folded in, A_p h = h (m C - dt V0 (4/h^2) tau), by
+            // columns as 4-lane vectors: (mass, momentum) at node (a,b,c) is
+            // w (base + a da + b db + c dc), mass in lane 0 with a zero affine part, so each node
+            // update is one vector multiply-add. Built in registers from the particle's arrays and
+            // rounded by explicit FMAs: the Mat3 expression the compiler made of it spilled a
+            // column to the stack and read it back across two stores, which stalled store-to-load
+            // forwarding on every particle.
             const Real m = mass[p];
-            const Mat3 tau = kirchhoff[p].matrix();
-            const Mat3 Ah = h * (m * C[p].template cast<Real>() - (stress_scale * V0[p]) * tau);
-            // (mass, momentum) at node (a,b,c): w (m, m v + A h ((a,b,c) - fx)), as 4-vectors
-            // (mass first, with a zero affine part) so each node update is one SIMD add
-            const Vec3 q0 = m * v[p].template cast<Real>() - Ah * Vec3(ax.fx, ay.fx, az.fx);
-#if defined(__AVX__) && defined(__FMA__)
-            // assembled in registers: written to memory entry by entry and read back as one
-            // vector, they stalled store-to-load forwarding for each particle
-            const __m256d base = _mm256_set_pd(q0.z(), q0.y(), q0.x(), m);
-            const __m256d da = _mm256_set_pd(Ah(2, 0), Ah(1, 0), Ah(0, 0), 0);
-            const __m256d db = _mm256_set_pd(Ah(2, 1), Ah(1, 1), Ah(0, 1), 0);
-            const __m256d dc = _mm256_set_pd(Ah(2, 2), Ah(1, 2), Ah(0, 2), 0);
-#else
-            const Real base[4] = {m, q0.x(), q0.y(), q0.z()};
-            const Real da[4] = {0, Ah(0, 0), Ah(1, 0), Ah(2, 0)};
-            const Real db[4] = {0, Ah(0, 1), Ah(1, 1), Ah(2, 1)};
-            const Real dc[4] = {0, Ah(0, 2), Ah(1, 2), Ah(2, 2)};
-#endif
+            const auto& Cp = C[p];
+            const SymMat3& tau = kirchhoff[p];
+            const Lanes m4 = splat<Lanes>(m), minus_cs = splat<Lanes>(-stress_scale * V0[p]),
+                        h4 = splat<Lanes>(h);
+            auto affine_column = [&](int j, Lanes tau_column) {
+                const Lanes C_column = {0, Real(Cp(0, j)), Real(Cp(1, j)), Real(Cp(2, j))};
+                return h4 * fused_madd(minus_cs, tau_column, m4 * C_column);
+            };
+            const Lanes da = affine_column(0, Lanes{0, tau.xx, tau.xy, tau.xz});
+            const Lanes db = affine_column(1, Lanes{0, tau.xy, tau.yy, tau.yz});
+            const Lanes dc = affine_column(2, Lanes{0, tau.xz, tau.yz, tau.zz});
+            // (m, m v - A h fx): the base node's values
+            const Lanes affine_at_base =
+                fused_madd(dc, splat<Lanes>(az.fx),
+                           fused_madd(db, splat<Lanes>(ay.fx), da * splat<Lanes>(ax.fx)));
+            const auto& vp = v[p];
+            const Lanes base =
+                fused_madd(m4, Lanes{1, Real(vp.x()), Real(vp.y()), Real(vp.z())}, -affine_at_base);
             // the moisture rows' z profiles, scaled once per particle: V wz and V theta wz (each
             // row then takes one multiply-add per field)
             ZRow V_wz = ZRow::Zero(), Vtheta_wz = ZRow::Zero();
@@ -87,28 +93,16 @@ void p2g_impl(const SimStateOf<S>& state, const SymMat3* kirchhoff, SparseGrid& 
                 for (int b = 0; b < 3; ++b) {
                     const Real wab = ax.w[a] * ay.w[b];
                     Real* row = win + window_index(o0 + a, o1 + b, o2) * kStride;
-#if defined(__AVX__) && defined(__FMA__)
-                    // the loop below as 4-lane vectors with each product fused into its sum, as
-                    // the compiler contracts the scalar loop (a da, b db and c dc are exact for
-                    // 0, 1, 2, so fused or not those sums round alike): the same window bits
-                    const __m256d q =
-                        _mm256_fmadd_pd(_mm256_set1_pd(Real(b)), db,
-                                        _mm256_fmadd_pd(_mm256_set1_pd(Real(a)), da, base));
+                    // a da, b db and c dc are exact for 0, 1, 2, so fused or not these sums round
+                    // alike
+                    const Lanes q = fused_madd(splat<Lanes>(Real(b)), db,
+                                               fused_madd(splat<Lanes>(Real(a)), da, base));
                     for (int c = 0; c < 3; ++c) {
                         Real* node = row + c * kStride;
-                        const __m256d t = _mm256_fmadd_pd(_mm256_set1_pd(Real(c)), dc, q);
-                        _mm256_storeu_pd(node, _mm256_fmadd_pd(_mm256_set1_pd(wab * az.w[c]), t,
-                                                               _mm256_loadu_pd(node)));
+                        const Lanes t = fused_madd(splat<Lanes>(Real(c)), dc, q);
+                        lanes_store(node,
+                                    fused_madd(splat<Lanes>(wab * az.w[c]), t, lanes_load(node)));
                     }
-#else
-                    Real q[4];
-                    for (int k = 0; k < 4; ++k) q[k] = base[k] + Real(a) * da[k] + Real(b) * db[k];
-                    for (int c = 0; c < 3; ++c) {
-                        const Real w = wab * az.w[c];
-                        Real* node = row + c * kStride;
-                        for (int k = 0; k < 4; ++k) node[k] += w * (q[k] + Real(c) * dc[k]);
-                    }
-#endif
                     if constexpr (kMoisture) {
                         const int n = window_index(o0 + a, o1 + b, o2);
                         Eigen::Map<ZRow>(mw + n) += wab * V_wz;
