@@ -19,7 +19,6 @@ namespace {
 // kMoistureStride apart, whose z rows are updated as 4 lanes (the z weights with a zero 4th lane:
 // one SIMD operation per row; the stride keeps that lane inside the scratch)
 constexpr int kMoistureStride = kWindowNodes + 8;
-using ZRow = Eigen::Array<Real, 4, 1>;  // a z row of three nodes and the zero lane
 
 // @note Longer than a page on purpose: its body is the step's per-particle scatter, a hot loop
 // (the P2G share of mpm_bench's particle-steps/s), each particle's weights, stress and moisture
@@ -80,12 +79,11 @@ void p2g_impl(const SimStateOf<S>& state, const SymMat3* kirchhoff, SparseGrid& 
                 fused_madd(m4, Lanes{1, Real(vp.x()), Real(vp.y()), Real(vp.z())}, -affine_at_base);
             // the moisture rows' z profiles, scaled once per particle: V wz and V theta wz (each
             // row then takes one multiply-add per field)
-            ZRow V_wz = ZRow::Zero(), Vtheta_wz = ZRow::Zero();
+            Lanes V_wz = splat<Lanes>(0), Vtheta_wz = splat<Lanes>(0);
             if constexpr (kMoisture) {
                 const Real V = V0[p] * J[p];
-                const ZRow wz(az.w[0], az.w[1], az.w[2], 0);
-                V_wz = V * wz;
-                Vtheta_wz = theta[p] * V_wz;
+                V_wz = splat<Lanes>(V) * Lanes{az.w[0], az.w[1], az.w[2], 0};
+                Vtheta_wz = splat<Lanes>(theta[p]) * V_wz;
             }
 
             // scatter to the 3x3x3 stencil
@@ -105,8 +103,11 @@ void p2g_impl(const SimStateOf<S>& state, const SymMat3* kirchhoff, SparseGrid& 
                     }
                     if constexpr (kMoisture) {
                         const int n = window_index(o0 + a, o1 + b, o2);
-                        Eigen::Map<ZRow>(mw + n) += wab * V_wz;
-                        Eigen::Map<ZRow>(mw + kMoistureStride + n) += wab * Vtheta_wz;
+                        Real* W_row = mw + n;
+                        Real* Vtheta_row = mw + kMoistureStride + n;
+                        lanes_store(W_row, fused_madd(splat<Lanes>(wab), V_wz, lanes_load(W_row)));
+                        lanes_store(Vtheta_row, fused_madd(splat<Lanes>(wab), Vtheta_wz,
+                                                           lanes_load(Vtheta_row)));
                     }
                 }
             }
