@@ -188,13 +188,11 @@ void bin_particles(SparseGrid& grid, const std::vector<Eigen::Matrix<StateReal, 
     // allocated blocks: every particle block and its +1 neighbours. Keys are linear in the block
     // coordinates, so the neighbours at one offset are the particle blocks' keys plus a constant:
     // eight ascending runs, merged.
-    const uint32_t sx = 1, sy = static_cast<uint32_t>(geo.blocks.x()),
-                   sz = static_cast<uint32_t>(geo.blocks.x()) * geo.blocks.y();
-    uint32_t offset[8];
+    uint32_t offset[8];  // block_key(b + d) - block_key(b), the key of d itself
     for (int dx = 0; dx < 2; ++dx)
         for (int dy = 0; dy < 2; ++dy)
             for (int dz = 0; dz < 2; ++dz)
-                offset[(dx * 2 + dy) * 2 + dz] = dx * sx + dy * sy + dz * sz;
+                offset[(dx * 2 + dy) * 2 + dz] = geo.block_key(dx, dy, dz);
     std::vector<uint32_t>& keys = grid.neighbor_keys_tmp;
     keys.resize(npb * 8);
     for (int o = 0; o < 8; ++o)
