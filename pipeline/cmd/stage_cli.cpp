@@ -27,18 +27,25 @@ namespace fs = std::filesystem;
 namespace mudcrack {
 namespace {
 
-// OpenMP threads that spin at barriers (libgomp spins 300,000 times before it sleeps) take the
-// cores the working threads need whenever other jobs share the node, and a stage then runs many
-// times slower (docs/reliability.md: 145 s instead of 8 s for six demo frames on a loaded node).
-// libgomp reads its wait policy once, when it is loaded, before main runs, so setting it here
-// would come too late: a stage whose user set neither variable re-executes itself, once, with
-// OMP_WAIT_POLICY=passive. A user's own OMP_WAIT_POLICY or GOMP_SPINCOUNT is kept as it is.
-void reexec_with_passive_openmp_threads(char** argv) {
+// How long an idle OpenMP thread spins at a barrier before it sleeps. libgomp's default, 300,000
+// spins (about 3 ms), takes the cores the working threads need whenever other jobs share the node,
+// and a stage then runs many times slower (docs/reliability.md: 145 s instead of 8 s for six demo
+// frames on a loaded node). Sleeping at once (OMP_WAIT_POLICY=passive, our default until
+// 2026-11-29) is fair but slow alone: a demo step opens some 55 short parallel regions, each
+// sleep and wake is a futex call (slow on a virtual machine), and mc-sim took 1.5x as long on the
+// demo, 2 threads, quiet. 1,000 spins (some microseconds) bridge the gap between two
+// regions and sleep through anything longer: docs/reliability.md has the measurements.
+constexpr const char* kOpenMpSpinCount = "1000";
+
+// libgomp reads its wait settings once, when it is loaded, before main runs, so setting them here
+// would come too late: a stage whose user set neither OMP_WAIT_POLICY nor GOMP_SPINCOUNT
+// re-executes itself, once, with GOMP_SPINCOUNT=kOpenMpSpinCount. A user's own setting is kept.
+void reexec_with_bounded_openmp_spinning(char** argv) {
     if (std::getenv("OMP_WAIT_POLICY") || std::getenv("GOMP_SPINCOUNT")) return;
-    if (setenv("OMP_WAIT_POLICY", "passive", /*overwrite=*/0) != 0) return;
+    if (setenv("GOMP_SPINCOUNT", kOpenMpSpinCount, /*overwrite=*/0) != 0) return;
     execv("/proc/self/exe", argv);
-    // no exec (no /proc?): run on with libgomp's spinning threads, only slower under load
-    unsetenv("OMP_WAIT_POLICY");
+    // no exec (no /proc?): run on with libgomp's default spinning, only slower under load
+    unsetenv("GOMP_SPINCOUNT");
 }
 
 // a std::filesystem call that threw (a read-only or full output folder) in the house format,
@@ -238,7 +245,7 @@ void report_error_lines(const std::string& message) {
 int run_stage(const std::string& program, const std::string& description, int argc, char** argv,
               const std::function<void(CLI::App&)>& add_flags,
               const std::function<int(const StageOptions&)>& body, const LockModeOf& lock_mode) {
-    reexec_with_passive_openmp_threads(argv);
+    reexec_with_bounded_openmp_spinning(argv);
     handle_stop_signals();
     WallTimer timer;
     log::set_program(program);

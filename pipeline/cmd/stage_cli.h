@@ -59,7 +59,8 @@ void report_error_lines(const std::string& message);
 /// and exit 1. SIGTERM and SIGINT remove the .partial folder, the temporary files and the lock,
 /// and exit 128 + the signal (pipeline/io/atomic_output.h). First, when the
 /// environment sets neither OMP_WAIT_POLICY nor GOMP_SPINCOUNT, re-executes the binary once with
-/// OMP_WAIT_POLICY=passive, so idle OpenMP threads sleep instead of spinning on a shared node.
+/// GOMP_SPINCOUNT=1000, so idle OpenMP threads bridge the short gaps between parallel regions and
+/// sleep through longer ones instead of spinning on a shared node.
 /// @param argv main's argv (null-terminated), passed on unchanged to the re-executed binary
 int run_stage(const std::string& program, const std::string& description, int argc, char** argv,
               const std::function<void(CLI::App&)>& add_flags,
