@@ -136,6 +136,13 @@ TEST_F(McSimCli, SameShotTwiceGivesByteIdenticalCaches) {
     EXPECT_GE(m["substeps"].get<int>(), 3);
     EXPECT_EQ(m["retries"], 0);
     EXPECT_GT(m["particle_steps_per_second"].get<double>(), 0);
+    // the step loop's wall time by phase: each phase ran, and they sum to at most the loop's time
+    double phase_sum = 0;
+    for (const char* phase : {"bin", "p2g", "grid", "g2p"}) {
+        EXPECT_GT(m.at("step_phase_seconds").at(phase).get<double>(), 0) << phase;
+        phase_sum += m.at("step_phase_seconds").at(phase).get<double>();
+    }
+    EXPECT_LE(phase_sum, m["step_loop_seconds"].get<double>());
     EXPECT_GT(m["dt"]["min"].get<double>(), 0);
     EXPECT_LE(m["dt"]["min"].get<double>(), m["dt"]["max"].get<double>());
     EXPECT_GT(m["peak_memory_bytes"].get<double>(), 0);
@@ -314,6 +321,7 @@ TEST_F(McSimCli, MoistureLessShotCachesAndAllocatesNoMoisture) {
     EXPECT_EQ(m["allocated"]["theta"], false);
     EXPECT_EQ(m["cg_iterations"]["max"], 0);
     EXPECT_EQ(m["cg_iterations"]["mean_per_substep"], 0.0);
+    EXPECT_EQ(m.at("step_phase_seconds").at("moisture"), 0.0);
     for (const auto& name : m["cached_attributes"]) {
         EXPECT_NE(name, "theta");
         EXPECT_NE(name, "saturation");

@@ -46,7 +46,7 @@ double frame_end_time(const SimModel& model, int frame) { return double(frame) /
 template <class S>
 int advance_frame(const SimModel& model, SimStateOf<S>& state, int frame,
                   RetryingStepperOf<S>& stepper, SimTotals& totals,
-                  const SubstepCallback& on_substep) {
+                  const SubstepCallback& on_substep, const PhaseSecondsCallback& on_phase_seconds) {
     const double t_end = frame_end_time(model, frame);
     const double frame_length = 1.0 / model.time.fps;
     int substeps = 0;
@@ -111,14 +111,15 @@ int advance_frame(const SimModel& model, SimStateOf<S>& state, int frame,
             substeps_at_rollback_point = substeps;
             totals_at_rollback_point = totals;
         }
+        if (on_phase_seconds) on_phase_seconds(stats.seconds);
         if (on_substep) on_substep(substeps);
     }
     return substeps;
 }
 
 template int advance_frame(const SimModel&, SimStateOf<double>&, int, RetryingStepperOf<double>&,
-                           SimTotals&, const SubstepCallback&);
+                           SimTotals&, const SubstepCallback&, const PhaseSecondsCallback&);
 template int advance_frame(const SimModel&, SimStateOf<float>&, int, RetryingStepperOf<float>&,
-                           SimTotals&, const SubstepCallback&);
+                           SimTotals&, const SubstepCallback&, const PhaseSecondsCallback&);
 
 }  // namespace mudcrack

@@ -42,6 +42,10 @@ double frame_end_time(const SimModel& model, int frame);
 /// Called after every substep with the frame's substep count so far.
 using SubstepCallback = std::function<void(int frame_substeps)>;
 
+/// Called after every accepted substep with its wall time by phase (what the sim manifest's
+/// per-phase table sums: wall time, so it stays out of SimTotals and the checkpoints).
+using PhaseSecondsCallback = std::function<void(const StepPhaseSeconds& seconds)>;
+
 /// Advances `state` from its current time to the end of `frame` (state.time must lie before it).
 /// The last substep lands exactly on k/fps; a step that would leave a sliver shorter than half a
 /// stable step is split into two equal halves instead. A substep that fails its checks is rolled
@@ -55,6 +59,7 @@ using SubstepCallback = std::function<void(int frame_substeps)>;
 template <class S>
 int advance_frame(const SimModel& model, SimStateOf<S>& state, int frame,
                   RetryingStepperOf<S>& stepper, SimTotals& totals,
-                  const SubstepCallback& on_substep = {});
+                  const SubstepCallback& on_substep = {},
+                  const PhaseSecondsCallback& on_phase_seconds = {});
 
 }  // namespace mudcrack

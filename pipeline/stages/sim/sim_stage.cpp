@@ -277,6 +277,7 @@ struct SimRun {
     int64_t substeps_before = 0;             // totals.substeps when this run started
     int64_t retries_before = 0;              // totals.retries when this run started
     double step_seconds = 0;                 // in advance_frame only: the rate's denominator
+    StepPhaseSeconds phase_seconds;          // this run's accepted steps, by phase (wall)
     int64_t state_bytes = 0;                 // the state and stepper's largest footprint
     std::vector<std::string> cached_attributes;
 };
@@ -390,10 +391,14 @@ void simulate_frames(const Shot& shot, const SimStageOptions& sim_options, SimRu
         int frame_substeps = 0;
         try {
             step_timer.reset();
-            frame_substeps = advance_frame(model, state, frame, stepper, run.totals, [&](int k) {
-                progress.substep(frame, k, state.time, run.totals.substeps - run.substeps_before,
-                                 run.step_seconds + step_timer.seconds());
-            });
+            frame_substeps = advance_frame(
+                model, state, frame, stepper, run.totals,
+                [&](int k) {
+                    progress.substep(frame, k, state.time,
+                                     run.totals.substeps - run.substeps_before,
+                                     run.step_seconds + step_timer.seconds());
+                },
+                [&](const StepPhaseSeconds& seconds) { run.phase_seconds += seconds; });
             run.step_seconds += step_timer.seconds();
         } catch (const RuntimeError& e) {
             progress.finish();
@@ -445,6 +450,14 @@ json sim_manifest(const Shot& shot, const fs::path& out, const InitParticles& in
     m["resumed_from_frame"] = run.resumed ? json(run.done_frame) : json(nullptr);
     m["wall_seconds"] = wall_seconds;
     m["step_loop_seconds"] = run.step_seconds;
+    // where the accepted steps' wall time went (StepPhaseSeconds; the rest of step_loop_seconds is
+    // the stable dt, the retries' rollback copies and redone steps)
+    const StepPhaseSeconds& ph = run.phase_seconds;
+    m["step_phase_seconds"] = {{"bin", ph.bin},
+                               {"p2g", ph.p2g},
+                               {"grid", ph.grid},
+                               {"moisture", ph.moisture},
+                               {"g2p", ph.g2p}};
     m["substeps_this_run"] = totals.substeps - run.substeps_before;
     m["particle_steps_per_second"] = step_rate(run);
     m["substeps"] = totals.substeps;
