@@ -162,7 +162,7 @@ void evaporation_pass(const MoistureParams& mp, const SparseGrid& grid,
     const bool implicit_robin = mp.implicit_robin;
     const bool surface_layer = mp.evaporation == MoistureParams::Evaporation::Surface;
     const Real inv_cell_volume = geo.inv_h * geo.inv_h * geo.inv_h;
-    mpm::for_each_pblock_colored(grid, [&](int t, int32_t pb) {
+    auto visit_block = [&](int t, int32_t pb) {
         Real* sw = windows[t].data();   // surface flags
         Real* rw = sw + kWindowStride;  // evaporation r
         Real* dw = rw + kWindowStride;  // Robin diagonal
@@ -173,9 +173,11 @@ void evaporation_pass(const MoistureParams& mp, const SparseGrid& grid,
                 mg.particle_is_boundary[grid.order[i]] = 0;
             return;
         }
-        std::fill(rw, rw + 2 * kWindowStride, Real(0));
         Real* ww = dw + kWindowStride;  // W_i (surface evaporation)
-        if (surface_layer) mpm::gather_window<1, 1, 1>(grid, pb, mg.W.data(), 0, ww);
+        if (surface_layer)
+            mpm::gather_window<1, 1, 1>(grid, pb, mg.W.data(), 0, ww);
+        else
+            std::fill(rw, rw + 2 * kWindowStride, Real(0));
         // which of the block's 4x4x4 stencil bases have a surface node in their 3x3x3 stencil: a
         // separable 3-wide "any" over the window, along z, then y, then x
         bool along_z[kWindowWidth][kWindowWidth][kBlockWidth],
@@ -246,7 +248,13 @@ void evaporation_pass(const MoistureParams& mp, const SparseGrid& grid,
             mpm::flush_window<1, 1>(grid, pb, rw, mg.evaporation.data());
             if (implicit_robin) mpm::flush_window<1, 1>(grid, pb, dw, mg.diag.data());
         }
-    });
+    };
+    // the surface layer only flags its particles, so its blocks need no colours: one parallel
+    // loop over all of them, balanced by particle count, instead of eight
+    if (surface_layer)
+        mpm::for_each_pblock(grid, visit_block);
+    else
+        mpm::for_each_pblock_colored(grid, visit_block);
 }
 
 // What the operator pass keeps of one particle between its gather and its scatter.
