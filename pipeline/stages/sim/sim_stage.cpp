@@ -450,8 +450,9 @@ json sim_manifest(const Shot& shot, const fs::path& out, const InitParticles& in
     m["resumed_from_frame"] = run.resumed ? json(run.done_frame) : json(nullptr);
     m["wall_seconds"] = wall_seconds;
     m["step_loop_seconds"] = run.step_seconds;
-    // where the accepted steps' wall time went (StepPhaseSeconds; the rest of step_loop_seconds is
-    // the stable dt, the retries' rollback copies and redone steps)
+    // where the accepted steps' wall time went (StepPhaseSeconds; a step redone after a rollback
+    // counts each time it was accepted); the rest of step_loop_seconds is the stable dt, the
+    // rollback copies and the attempts that failed their checks
     const StepPhaseSeconds& ph = run.phase_seconds;
     m["step_phase_seconds"] = {{"bin", ph.bin},
                                {"p2g", ph.p2g},
