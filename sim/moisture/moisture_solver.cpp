@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <optional>
 
 #include <Eigen/Core>
 
@@ -67,6 +68,16 @@ void build_face_neighbors(const SparseGrid& grid, MoistureGrid& mg) {
     });
 }
 
+// Whether grid node g lies in the ground or in the domain's wall band, when the shot seals them:
+// such a node is never air, neither for mark_surface_nodes nor for the exposed layer's air probe,
+// which counts it as full of soil.
+bool node_is_sealed(const mpm::GridGeometry& geo, const MoistureSeal& seal, const Vec3i& g) {
+    if (!seal.seal_colliders) return false;
+    for (int d = 0; d < 3; ++d)
+        if (g[d] < geo.padding || g[d] > geo.cells[d] - geo.padding) return true;
+    return seal.has_ground && geo.origin.y() + geo.h * g.y() <= seal.ground_height;
+}
+
 // surface nodes: mass > 0 and an empty face neighbour that is air (not sealed by a collider).
 // Each block copies its "has mass" flags with a one-node halo from its 6 face neighbours into a
 // 6x6x6 array, so the 6-neighbour test is six loads at fixed offsets.
@@ -80,12 +91,6 @@ void mark_surface_nodes(const SparseGrid& grid, const MoistureSeal& seal, Moistu
     const Real* W = mg.W.data();
     auto has_mass = [&](int32_t slot, int a, int b, int c) {
         return W[static_cast<int64_t>(slot) * kBlockNodes + mpm::block_node_index(a, b, c)] > 0;
-    };
-    auto is_sealed = [&](const Vec3i& g) {
-        if (!seal.seal_colliders) return false;
-        for (int d = 0; d < 3; ++d)
-            if (g[d] < geo.padding || g[d] > geo.cells[d] - geo.padding) return true;
-        return seal.has_ground && geo.origin.y() + geo.h * g.y() <= seal.ground_height;
     };
     auto at = [](int a, int b, int c) { return (a * kW + b) * kW + c; };
     const int step[3] = {kW * kW, kW, 1};
@@ -124,7 +129,7 @@ void mark_surface_nodes(const SparseGrid& grid, const MoistureSeal& seal, Moistu
                                 if (filled[n + (side ? step[d] : -step[d])]) continue;
                                 Vec3i g = corner + Vec3i(a, bb, c);
                                 g[d] += side ? 1 : -1;
-                                if (!is_sealed(g)) flag = 1;
+                                if (!node_is_sealed(geo, seal, g)) flag = 1;
                             }
                     }
                     mg.surface[b * kBlockNodes + mpm::block_node_index(a, bb, c)] = flag;
@@ -142,12 +147,193 @@ constexpr int kWindowStride = kWindowNodes + 8;
 inline ZRow load_z_row(const Real* p) { return Eigen::Map<const ZRow>(p); }
 inline void add_z_row(Real* p, const ZRow& v) { Eigen::Map<ZRow>(p) += v; }
 
-// Surface evaporation: a particle near an air-exposed face evaporates when the grid's volume
-// fraction at it, sum_i w_ip W_i / h^3, is below this. On a flat face it is 0.62-0.66 on the outer
-// particle layer and 0.84-0.87 on the next at 2 particles per cell and axis (over all offsets of
-// the lattice to the grid; 0.64-0.69 and 0.89-0.92 at 0.6 h spacing, the tet init's), so the
-// exposed layer is one particle thick; corners and edges lie lower still.
+// Which of a particle block's 4x4x4 stencil bases have a surface node in their 3x3x3 stencil,
+// from the block's window of surface flags: a separable 3-wide "any", along z, then y, then x.
+using StencilBaseFlags = bool[kBlockWidth][kBlockWidth][kBlockWidth];
+void stencil_bases_touching_surface(const Real* surface_window, StencilBaseFlags& touches) {
+    bool along_z[kWindowWidth][kWindowWidth][kBlockWidth],
+        along_yz[kWindowWidth][kBlockWidth][kBlockWidth];
+    for (int a = 0; a < kWindowWidth; ++a)
+        for (int b = 0; b < kWindowWidth; ++b)
+            for (int c = 0; c < kBlockWidth; ++c) {
+                const Real* row = surface_window + mpm::window_index(a, b, c);
+                along_z[a][b][c] = row[0] > 0 || row[1] > 0 || row[2] > 0;
+            }
+    for (int a = 0; a < kWindowWidth; ++a)
+        for (int b = 0; b < kBlockWidth; ++b)
+            for (int c = 0; c < kBlockWidth; ++c)
+                along_yz[a][b][c] =
+                    along_z[a][b][c] || along_z[a][b + 1][c] || along_z[a][b + 2][c];
+    for (int a = 0; a < kBlockWidth; ++a)
+        for (int b = 0; b < kBlockWidth; ++b)
+            for (int c = 0; c < kBlockWidth; ++c)
+                touches[a][b][c] =
+                    along_yz[a][b][c] || along_yz[a + 1][b][c] || along_yz[a + 2][b][c];
+}
+
+// Surface evaporation: a particle is in the exposed layer when the grid's volume fraction at it,
+// sum_i w_ip W_i / h^3, is below this. On a flat face it is 0.62-0.66 on the outer particle layer
+// and 0.84-0.87 on the next at 2 particles per cell and axis (over all offsets of the lattice to
+// the grid; 0.64-0.69 and 0.89-0.92 at 0.6 h spacing, the tet init's), so the exposed layer is one
+// particle thick; corners and edges lie lower still.
 constexpr Real kExposedVolumeFraction = 0.75;
+
+// The air an exposed-layer particle must face: the grid's volume fraction at most this, two cells
+// outward from it. Over a flat face that point has none (the particle layers lie 2 and 2.5 cells
+// from it, past the kernel's 1.5); in a crack it reaches the far wall's particles unless the walls
+// stand about 3 cells apart, where the grid mode's first empty node appears, so narrow cracks keep
+// their walls wet in both modes.
+constexpr Real kAirProbeCells = 2;
+constexpr Real kAirVolumeFraction = 0.25;
+// A bottom layer (h / 4 above the ground at 2 particles per cell) has no surface node near and
+// faces the ground: the node nearest half a cell outward from it is sealed.
+constexpr Real kSealProbeCells = 0.5;
+
+// The 27 blocks around a particle block (-1, 0, +1 per axis), looked up once when a particle of
+// the block needs a node outside its window: a slot, or -1 where none is allocated (no mass).
+struct BlockNeighborhood {
+    Vec3i first_block;  // block coordinates of the (-1, -1, -1) neighbour
+    int32_t slot[3][3][3];
+};
+
+BlockNeighborhood block_neighborhood(const SparseGrid& grid, int32_t pblock) {
+    const mpm::GridGeometry& geo = grid.geo;
+    BlockNeighborhood nb;
+    nb.first_block = geo.block_coord(grid.pblock_key[pblock]) - Vec3i::Ones();
+    for (int a = 0; a < 3; ++a)
+        for (int b = 0; b < 3; ++b)
+            for (int c = 0; c < 3; ++c) {
+                const Vec3i blk = nb.first_block + Vec3i(a, b, c);
+                nb.slot[a][b][c] =
+                    (blk.array() < 0).any() || (blk.array() >= geo.blocks.array()).any()
+                        ? -1
+                        : grid.find_block(geo.block_key(blk.x(), blk.y(), blk.z()));
+            }
+    return nb;
+}
+
+// sum_i w_i(xg) W_i / h^3 at a grid point within a cell of a particle block's window, a sealed
+// node counting as a full cell.
+Real volume_fraction_at(const SparseGrid& grid, const MoistureSeal& seal,
+                        const std::vector<Real>& W, const BlockNeighborhood& nb, const Vec3& xg) {
+    const mpm::GridGeometry& geo = grid.geo;
+    const Real cell_volume = geo.h * geo.h * geo.h;
+    const mpm::Stencil st = mpm::make_stencil(xg);
+    Real sum = 0;
+    for (int a = 0; a < 3; ++a)
+        for (int b = 0; b < 3; ++b)
+            for (int c = 0; c < 3; ++c) {
+                const Vec3i g(st.axis[0].base + a, st.axis[1].base + b, st.axis[2].base + c);
+                if (node_is_sealed(geo, seal, g)) {
+                    sum += st.weight(a, b, c) * cell_volume;
+                    continue;
+                }
+                const Vec3i blk = (g.array() >= 0).select(g / kBlockWidth, -Vec3i::Ones());
+                const Vec3i k = blk - nb.first_block;
+                if ((k.array() < 0).any() || (k.array() > 2).any()) continue;  // beyond: empty
+                const int32_t slot = nb.slot[k.x()][k.y()][k.z()];
+                if (slot < 0) continue;
+                const Vec3i in = g - blk * kBlockWidth;
+                sum += st.weight(a, b, c) * W[static_cast<int64_t>(slot) * kBlockNodes +
+                                              mpm::block_node_index(in.x(), in.y(), in.z())];
+            }
+    return sum / cell_volume;
+}
+
+// Surface evaporation's exposed layer (docs/physics.md §6.3): a particle evaporates when the
+// grid's volume fraction phi_p = sum_i w_ip W_i / h^3 at it is below kExposedVolumeFraction and it
+// faces air: a surface node (a node with mass beside an empty one that is not sealed) in its
+// stencil, as the grid mode's boundary particles have, or else, looking along -grad phi_p, no
+// ground or wall kSealProbeCells out (when the shot seals them) and no more than
+// kAirVolumeFraction of soil kAirProbeCells out. The second test finds the floor of a dimple or a
+// fold of a curled crust, where the soil around fills the nodes over the floor with mass up to a
+// node beyond its particles' stencils; with the first alone those particles kept their water in
+// cell-sized patches. It reads the sparse grid node by node, so it runs only where the first does
+// not decide. Each particle writes its own flag: no colours.
+template <class S>
+void exposed_layer_pass(const MoistureSeal& seal, const SparseGrid& grid,
+                        const MoistureParticlesOf<S>& pp, MoistureGrid& mg,
+                        std::vector<std::vector<Real>>& windows) {
+    const mpm::GridGeometry& geo = grid.geo;
+    const Real exposed_W = kExposedVolumeFraction * geo.h * geo.h * geo.h;
+    mpm::for_each_pblock(grid, [&](int t, int32_t pb) {
+        Real* ww = windows[t].data();   // W_i
+        Real* lw = ww + kWindowStride;  // 1 where W_i < exposed_W off the ground and walls
+        Real* sw = lw + kWindowStride;  // surface flags
+        mpm::gather_window<1, 1, 1>(grid, pb, mg.W.data(), 0, ww);
+        const Vec3i origin = geo.block_coord(grid.pblock_key[pb]) * kBlockWidth;
+        bool any_low = false;
+        for (int n = 0; n < kWindowNodes; ++n) {
+            lw[n] = 0;
+            if (ww[n] >= exposed_W) continue;
+            const int a = n / (kWindowWidth * kWindowWidth), b = n / kWindowWidth % kWindowWidth,
+                      c = n % kWindowWidth;
+            if (node_is_sealed(geo, seal, origin + Vec3i(a, b, c))) continue;
+            lw[n] = 1;
+            any_low = true;
+        }
+        // phi_p is a convex combination of its stencil's W_i / h^3, so a particle whose stencil
+        // has no node below the threshold is not in the exposed layer; one whose only such nodes
+        // are sealed faces the ground or a wall
+        if (!any_low) {
+            for (int32_t i = grid.pblock_begin[pb]; i < grid.pblock_begin[pb + 1]; ++i)
+                mg.particle_is_boundary[grid.order[i]] = 0;
+            return;
+        }
+        std::optional<BlockNeighborhood> neighborhood;  // for the air probes, on first use
+        StencilBaseFlags near_low, touches_surface;
+        stencil_bases_touching_surface(lw, near_low);
+        mpm::gather_window<1, 1, 1>(grid, pb, mg.surface.data(), 0, sw);
+        stencil_bases_touching_surface(sw, touches_surface);
+        for (int32_t i = grid.pblock_begin[pb]; i < grid.pblock_begin[pb + 1]; ++i) {
+            const int32_t p = grid.order[i];
+            const Vec3 xg = geo.to_grid(pp.x[p].template cast<Real>());
+            int o[3];
+            for (int d = 0; d < 3; ++d)
+                o[d] = static_cast<int>(std::floor(xg[d] - Real(0.5))) - origin[d];
+            mg.particle_is_boundary[p] = 0;
+            if (!near_low[o[0]][o[1]][o[2]]) continue;
+            const mpm::Stencil st = mpm::make_stencil(xg);
+            const mpm::AxisWeights &ax = st.axis[0], &ay = st.axis[1], &az = st.axis[2];
+            Real phi = 0;  // times h^3
+            for (int a = 0; a < 3; ++a)
+                for (int b = 0; b < 3; ++b) {
+                    const Real* row = ww + mpm::window_index(o[0] + a, o[1] + b, o[2]);
+                    phi += ax.w[a] * ay.w[b] *
+                           (az.w[0] * row[0] + az.w[1] * row[1] + az.w[2] * row[2]);
+                }
+            if (phi >= exposed_W) continue;
+            if (touches_surface[o[0]][o[1]][o[2]]) {
+                mg.particle_is_boundary[p] = 1;
+                continue;
+            }
+            // no surface node near: which way the outer layer faces here, and whether that is air
+            Vec3 grad = Vec3::Zero();  // of phi h^3, per cell
+            for (int a = 0; a < 3; ++a)
+                for (int b = 0; b < 3; ++b) {
+                    const Real* row = ww + mpm::window_index(o[0] + a, o[1] + b, o[2]);
+                    const Real wz = az.w[0] * row[0] + az.w[1] * row[1] + az.w[2] * row[2];
+                    const Real dwz = az.dw[0] * row[0] + az.dw[1] * row[1] + az.dw[2] * row[2];
+                    grad.x() += ax.dw[a] * ay.w[b] * wz;
+                    grad.y() += ax.w[a] * ay.dw[b] * wz;
+                    grad.z() += ax.w[a] * ay.w[b] * dwz;
+                }
+            const Real grad_norm = grad.norm();
+            if (grad_norm == 0) continue;  // amid sealed space: no side faces the air
+            const Vec3 outward = -grad / grad_norm;
+            const Vec3 near = xg + kSealProbeCells * outward;
+            if (node_is_sealed(geo, seal,
+                               Vec3i(static_cast<int>(std::floor(near.x() + 0.5)),
+                                     static_cast<int>(std::floor(near.y() + 0.5)),
+                                     static_cast<int>(std::floor(near.z() + 0.5)))))
+                continue;
+            if (!neighborhood) neighborhood = block_neighborhood(grid, pb);
+            mg.particle_is_boundary[p] =
+                volume_fraction_at(grid, seal, mg.W, *neighborhood,
+                                   xg + kAirProbeCells * outward) <= kAirVolumeFraction;
+        }
+    });
+}
 
 // The evaporation pass (docs/physics.md §4.2, §4.4): finds the boundary particles (a surface node
 // in their stencil; the containing-cell variant of docs/physics.md §4.4 misses flat faces: with 2
@@ -160,8 +346,6 @@ void evaporation_pass(const MoistureParams& mp, const SparseGrid& grid,
                       std::vector<std::vector<Real>>& windows) {
     const mpm::GridGeometry& geo = grid.geo;
     const bool implicit_robin = mp.implicit_robin;
-    const bool surface_layer = mp.evaporation == MoistureParams::Evaporation::Surface;
-    const Real inv_cell_volume = geo.inv_h * geo.inv_h * geo.inv_h;
     auto visit_block = [&](int t, int32_t pb) {
         Real* sw = windows[t].data();   // surface flags
         Real* rw = sw + kWindowStride;  // evaporation r
@@ -173,32 +357,9 @@ void evaporation_pass(const MoistureParams& mp, const SparseGrid& grid,
                 mg.particle_is_boundary[grid.order[i]] = 0;
             return;
         }
-        Real* ww = dw + kWindowStride;  // W_i (surface evaporation)
-        if (surface_layer)
-            mpm::gather_window<1, 1, 1>(grid, pb, mg.W.data(), 0, ww);
-        else
-            std::fill(rw, rw + 2 * kWindowStride, Real(0));
-        // which of the block's 4x4x4 stencil bases have a surface node in their 3x3x3 stencil: a
-        // separable 3-wide "any" over the window, along z, then y, then x
-        bool along_z[kWindowWidth][kWindowWidth][kBlockWidth],
-            along_yz[kWindowWidth][kBlockWidth][kBlockWidth];
-        bool touches_surface[kBlockWidth][kBlockWidth][kBlockWidth];
-        for (int a = 0; a < kWindowWidth; ++a)
-            for (int b = 0; b < kWindowWidth; ++b)
-                for (int c = 0; c < kBlockWidth; ++c) {
-                    const Real* row = sw + mpm::window_index(a, b, c);
-                    along_z[a][b][c] = row[0] > 0 || row[1] > 0 || row[2] > 0;
-                }
-        for (int a = 0; a < kWindowWidth; ++a)
-            for (int b = 0; b < kBlockWidth; ++b)
-                for (int c = 0; c < kBlockWidth; ++c)
-                    along_yz[a][b][c] =
-                        along_z[a][b][c] || along_z[a][b + 1][c] || along_z[a][b + 2][c];
-        for (int a = 0; a < kBlockWidth; ++a)
-            for (int b = 0; b < kBlockWidth; ++b)
-                for (int c = 0; c < kBlockWidth; ++c)
-                    touches_surface[a][b][c] =
-                        along_yz[a][b][c] || along_yz[a + 1][b][c] || along_yz[a + 2][b][c];
+        std::fill(rw, rw + 2 * kWindowStride, Real(0));
+        StencilBaseFlags touches_surface;
+        stencil_bases_touching_surface(sw, touches_surface);
         bool any_boundary = false;
         const Vec3i origin = geo.block_coord(grid.pblock_key[pb]) * kBlockWidth;
         for (int32_t i = grid.pblock_begin[pb]; i < grid.pblock_begin[pb + 1]; ++i) {
@@ -215,20 +376,6 @@ void evaporation_pass(const MoistureParams& mp, const SparseGrid& grid,
             const mpm::Stencil st = mpm::make_stencil(xg);
             const mpm::AxisWeights &ax = st.axis[0], &ay = st.axis[1], &az = st.axis[2];
             const int o0 = o[0], o1 = o[1], o2 = o[2];
-            if (surface_layer) {
-                // of the particles near an air-exposed face, those of the exposed layer: where the
-                // volume fraction sum_i w_ip W_i / h^3 (1 inside, ~0.64 on the outer layer of a
-                // flat face at 2 particles per cell, ~0.86 on the next) is below the threshold
-                Real fraction = 0;
-                for (int a = 0; a < 3; ++a)
-                    for (int b = 0; b < 3; ++b) {
-                        const Real* row = ww + mpm::window_index(o0 + a, o1 + b, o2);
-                        fraction += ax.w[a] * ay.w[b] *
-                                    (az.w[0] * row[0] + az.w[1] * row[1] + az.w[2] * row[2]);
-                    }
-                mg.particle_is_boundary[p] = fraction * inv_cell_volume < kExposedVolumeFraction;
-                continue;
-            }
             const Real lambda_S = mp.lambda * particle_area(pp.V0[p] * pp.J[p]);
             // explicit: r_i = -S lambda (theta_p - theta_0) w_ip; implicit: r_0,i =
             // S lambda theta_0 w_ip, and S lambda w_ip^2 on the diagonal
@@ -244,17 +391,12 @@ void evaporation_pass(const MoistureParams& mp, const SparseGrid& grid,
                     if (implicit_robin) add_z_row(dw + n, (lambda_S * wab * wab) * (wz * wz));
                 }
         }
-        if (any_boundary && !surface_layer) {
+        if (any_boundary) {
             mpm::flush_window<1, 1>(grid, pb, rw, mg.evaporation.data());
             if (implicit_robin) mpm::flush_window<1, 1>(grid, pb, dw, mg.diag.data());
         }
     };
-    // the surface layer only flags its particles, so its blocks need no colours: one parallel
-    // loop over all of them, balanced by particle count, instead of eight
-    if (surface_layer)
-        mpm::for_each_pblock(grid, visit_block);
-    else
-        mpm::for_each_pblock_colored(grid, visit_block);
+    mpm::for_each_pblock_colored(grid, visit_block);
 }
 
 // What the operator pass keeps of one particle between its gather and its scatter.
@@ -495,8 +637,10 @@ MoistureSolveStats solve_moisture(const MoistureParams& mp, const MoistureSeal& 
     });
 
     // surface nodes (docs/physics.md §4.4)
-    build_face_neighbors(grid, mg);
-    mark_surface_nodes(grid, seal, mg);
+    if (mp.lambda > 0) {
+        build_face_neighbors(grid, mg);
+        mark_surface_nodes(grid, seal, mg);
+    }
     resize_zero(mg.evaporation, n_nodes);
     mg.particle_is_boundary.resize(n_particles);
     mg.x.resize(n_nodes);
@@ -508,7 +652,9 @@ MoistureSolveStats solve_moisture(const MoistureParams& mp, const MoistureSeal& 
     // plus the Jacobi step on the explicit evaporation, r / diag (it takes most of the
     // evaporation's share of the initial residual), plus the increment dt F / W of the flux F
     // the history predicts (most of the diffusion's share); x holds x0 - theta^n
-    if (mp.lambda > 0)
+    if (mp.lambda > 0 && mp.evaporation == MoistureParams::Evaporation::Surface)
+        exposed_layer_pass(seal, grid, pp, mg, windows);
+    else if (mp.lambda > 0)
         evaporation_pass(mp, grid, pp, mg, windows);
     else
         std::fill(mg.particle_is_boundary.begin(), mg.particle_is_boundary.end(), uint8_t(0));

@@ -608,6 +608,103 @@ TEST(SurfaceEvaporation, AtZeroDiffusivityOnlyTheExposedLayerDriesExactly) {
     EXPECT_LT(expected_top, eta - 0.05) << "the test must dry the top layer visibly";
 }
 
+// A dimple in the top (docs/physics.md §6.3): the soil around a pit fills the grid nodes over its
+// floor with mass, so no node there has an empty neighbour within the floor particles' stencils.
+// The floor is still open to the air and must dry like the flat top; the bottom layer, on the
+// ground, and the soil under the floor keep their water (D = 0).
+TEST(SurfaceEvaporation, APitsFloorDriesLikeTheFlatTop) {
+    SimModel model = surface_evaporation_model(0);
+    const Real spacing = 0.05;  // 2 particles per cell and axis
+    const int n = 16, layers = 10, pit_lo = 5, pit_hi = 11, pit_depth = 2;
+    test::Lattice l;
+    for (int k = 0; k < n; ++k)
+        for (int j = 0; j < layers; ++j)
+            for (int i = 0; i < n; ++i) {
+                const bool in_pit = i >= pit_lo && i < pit_hi && k >= pit_lo && k < pit_hi;
+                if (in_pit && j >= layers - pit_depth) continue;
+                l.X.push_back(spacing * Vec3(i + 0.5, j + 0.5, k + 0.5));
+                l.V0.push_back(spacing * spacing * spacing);
+            }
+    SimState s = make_initial_state(model, l.X, l.V0);
+    const Real dt = 2e-3;
+    const int steps = 50;
+    for (int i = 0; i < steps; ++i) step(model, s, dt);
+    const Real eta = model.moisture->eta;
+    const Real V = spacing * spacing * spacing;
+    const Real expected_top =
+        eta * std::exp(-model.moisture->lambda * particle_area(V) / V * dt * steps);
+    const Real floor_y = spacing * (layers - pit_depth - 0.5);
+    int floor = 0, flat = 0, under = 0;
+    for (size_t p = 0; p < s.size(); ++p) {
+        const Vec3& x = s.x[p];
+        const long i = std::lround(x.x() / spacing - 0.5), k = std::lround(x.z() / spacing - 0.5);
+        const bool pit_column = i >= pit_lo && i < pit_hi && k >= pit_lo && k < pit_hi;
+        const bool pit_inside = i > pit_lo && i < pit_hi - 1 && k > pit_lo && k < pit_hi - 1;
+        const bool far_from_sides = i > 1 && i < n - 2 && k > 1 && k < n - 2;
+        if (pit_inside && std::abs(x.y() - floor_y) < spacing / 4) {
+            EXPECT_NEAR(s.theta[p], expected_top, kEvaporatedTop)
+                << "pit-floor particle " << s.id[p] << " at " << x.transpose();
+            ++floor;
+        } else if (!pit_column && far_from_sides && x.y() > spacing * (layers - 1)) {
+            EXPECT_NEAR(s.theta[p], expected_top, kEvaporatedTop)
+                << "top-layer particle " << s.id[p] << " at " << x.transpose();
+            ++flat;
+        } else if (far_from_sides && !pit_column && x.y() < spacing * (layers - 3)) {
+            EXPECT_EQ(s.theta[p], eta) << "particle " << s.id[p] << " at " << x.transpose()
+                                       << ": under the exposed layer, or on the ground";
+            ++under;
+        } else if (pit_inside && x.y() < floor_y - spacing / 2) {
+            EXPECT_EQ(s.theta[p], eta)
+                << "particle " << s.id[p] << " at " << x.transpose() << " under the pit's floor";
+            ++under;
+        }
+    }
+    EXPECT_EQ(floor, (pit_hi - pit_lo - 2) * (pit_hi - pit_lo - 2));
+    EXPECT_GT(flat, 50);
+    EXPECT_GT(under, 500);
+    EXPECT_LT(expected_top, eta - 0.05) << "the test must dry the top layer visibly";
+}
+
+// The walls of a slot cut into a slab (D = 0): a narrow one (1 cell) keeps its walls wet, as the
+// grid mode does (no node in it is empty of mass), and a wide one (4 cells) dries them as it
+// dries the top (docs/physics.md §6.3).
+TEST(SurfaceEvaporation, AWideSlotDriesItsWallsANarrowOneDoesNot) {
+    const Real spacing = 0.05;  // 2 particles per cell and axis
+    const int nx = 28, layers = 10, nz = 10, slot_lo = 10, slot_floor = 2;
+    for (const int slot_width : {2, 8}) {  // in particle spacings
+        SimModel model = surface_evaporation_model(0);
+        test::Lattice l;
+        for (int k = 0; k < nz; ++k)
+            for (int j = 0; j < layers; ++j)
+                for (int i = 0; i < nx; ++i) {
+                    if (i >= slot_lo && i < slot_lo + slot_width && j >= slot_floor) continue;
+                    l.X.push_back(spacing * Vec3(i + 0.5, j + 0.5, k + 0.5));
+                    l.V0.push_back(spacing * spacing * spacing);
+                }
+        SimState s = make_initial_state(model, l.X, l.V0);
+        for (int i = 0; i < 50; ++i) step(model, s, 2e-3);
+        const Real eta = model.moisture->eta;
+        int walls = 0, dry_walls = 0;
+        for (size_t p = 0; p < s.size(); ++p) {
+            const long i = std::lround(s.x[p].x() / spacing - 0.5);
+            const long j = std::lround(s.x[p].y() / spacing - 0.5);
+            const long k = std::lround(s.x[p].z() / spacing - 0.5);
+            const bool wall = i == slot_lo - 1 || i == slot_lo + slot_width;
+            // below the top's exposed corner, above the slot's floor, away from the end faces
+            if (!wall || j < slot_floor + 1 || j > layers - 3 || k < 2 || k > nz - 3) continue;
+            ++walls;
+            dry_walls += s.theta[p] < eta;
+        }
+        ASSERT_GT(walls, 40) << "slot " << slot_width;
+        if (slot_width == 2)
+            EXPECT_EQ(dry_walls, 0) << "a slot one cell wide dried " << dry_walls << " of its "
+                                    << walls << " wall particles";
+        else
+            EXPECT_EQ(dry_walls, walls) << "a slot four cells wide dried " << dry_walls
+                                        << " of its " << walls << " wall particles";
+    }
+}
+
 // The evaporation ramp (docs/physics.md §6.3): no water leaves before the ramp starts, and the
 // exposed layer then decays at lambda scaled by the ramp at each step's start, exactly.
 TEST(SurfaceEvaporation, TheRampHoldsTheWaterThenScalesTheRate) {
