@@ -147,6 +147,14 @@ constexpr int kWindowStride = kWindowNodes + 8;
 inline ZRow load_z_row(const Real* p) { return Eigen::Map<const ZRow>(p); }
 inline void add_z_row(Real* p, const ZRow& v) { Eigen::Map<ZRow>(p) += v; }
 
+// A particle's stencil base in its particle block's window coordinates (0 to 3 per axis).
+inline Vec3i stencil_base_in_block(const Vec3& xg, const Vec3i& block_origin) {
+    return Vec3i(static_cast<int>(std::floor(xg.x() - Real(0.5))),
+                 static_cast<int>(std::floor(xg.y() - Real(0.5))),
+                 static_cast<int>(std::floor(xg.z() - Real(0.5)))) -
+           block_origin;
+}
+
 // Which of a particle block's 4x4x4 stencil bases have a surface node in their 3x3x3 stencil,
 // from the block's window of surface flags: a separable 3-wide "any", along z, then y, then x.
 using StencilBaseFlags = bool[kBlockWidth][kBlockWidth][kBlockWidth];
@@ -288,9 +296,7 @@ void exposed_layer_pass(const MoistureSeal& seal, const SparseGrid& grid,
         for (int32_t i = grid.pblock_begin[pb]; i < grid.pblock_begin[pb + 1]; ++i) {
             const int32_t p = grid.order[i];
             const Vec3 xg = geo.to_grid(pp.x[p].template cast<Real>());
-            int o[3];
-            for (int d = 0; d < 3; ++d)
-                o[d] = static_cast<int>(std::floor(xg[d] - Real(0.5))) - origin[d];
+            const Vec3i o = stencil_base_in_block(xg, origin);
             mg.particle_is_boundary[p] = 0;
             if (!near_low[o[0]][o[1]][o[2]]) continue;
             const mpm::Stencil st = mpm::make_stencil(xg);
@@ -366,9 +372,7 @@ void evaporation_pass(const MoistureParams& mp, const SparseGrid& grid,
             const int32_t p = grid.order[i];
             // the stencil base first: the weights are needed only on boundary particles
             const Vec3 xg = geo.to_grid(pp.x[p].template cast<Real>());
-            int o[3];
-            for (int d = 0; d < 3; ++d)
-                o[d] = static_cast<int>(std::floor(xg[d] - Real(0.5))) - origin[d];
+            const Vec3i o = stencil_base_in_block(xg, origin);
             const bool is_boundary = touches_surface[o[0]][o[1]][o[2]];
             mg.particle_is_boundary[p] = is_boundary;
             if (!is_boundary) continue;
