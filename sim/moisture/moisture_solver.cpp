@@ -325,7 +325,9 @@ void exposed_layer_pass(const MoistureSeal& seal, const SparseGrid& grid,
                     grad.z() += ax.w[a] * ay.w[b] * dwz;
                 }
             const Real grad_norm = grad.norm();
-            if (grad_norm == 0) continue;  // amid sealed space: no side faces the air
+            // no outward direction (a neighbourhood symmetric about the particle, as in the middle
+            // of a narrow gap): no side to face the air from
+            if (grad_norm == 0) continue;
             const Vec3 outward = -grad / grad_norm;
             const Vec3 near = xg + kSealProbeCells * outward;
             if (node_is_sealed(geo, seal,
