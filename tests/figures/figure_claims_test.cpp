@@ -61,20 +61,27 @@ constexpr double kVisibleCurl = 0.015;
 constexpr double kPeel = 0.10;
 constexpr double kPeelAboveGroundCells = 2.0;
 constexpr double kMaxLiftOff = 0.02;
-// The demo: at least 6 crack polygons, at least 5 % of the columns peeled above the glued cells,
-// and a crack network that does not draw the grid: at most 50 % of its inland crack length within
-// 15 degrees of the grid axes, between the 33 % of an isotropic network and the 70-95 % of the
-// networks the fixed grid draws (fig4_bunny 70.1, fig6 91-95 on a uniform slab). The demo's share
-// moves with the arithmetic's last bits, as a chaotic network's does: 39.8, 39.9 and 40.6 % on
-// three builds whose stresses differ only in round-off (2026-11-25 to 2026-11-27), seed 2 34.6
-// and 33.8 %, seed 3 47.5 %. So the bar tests the claim, not the bits; issue 31's goal of 40 % on
-// every seed is measured by mc-measure and reported in the README.
-constexpr int kDemoPolygons = 6;
+// The demo (a Fig. 6 mud that dries through, since 2026-11-29): a closed network of plates, as
+// drying mud cracks. At least 6 effective plates with the largest holding at most 30 % of the top,
+// both by the broken edges and as its plates meshes cut it; a network that does not draw the grid:
+// at most 50 % of its inland crack length within 15 degrees of the grid axes, between the 33 % of
+// an isotropic network and the 70-95 % of the networks the fixed grid draws (fig4_bunny 70.1, fig6
+// 91-95 on a uniform slab). Measured on seeds 1-3 (2 threads, 2026-11-29): 8.57, 3.41 and 8.45
+// effective plates by the broken edges (the largest 24, 50 and 22 %), 22.3, 22.4 and 23.2 by the
+// meshes (8-11 %), and 43.8, 56.1 and 50.8 % along the axes: the square's edges set the share (a
+// round puddle of the same mud: 22.1 %), and a network of a few dozen cracks is a small sample.
+// So the bars test the claim on the shipped seed, not the bits; issue 31's goals on every seed are
+// measured by mc-measure and reported in the README. And cracks that come across the shot: half
+// of the last frame's broken edges by a frame between 35 and 65 % of the frame range (40 % on
+// seeds 1-3).
+constexpr double kDemoEffectivePlates = 6;
+constexpr double kDemoLargestPlate = 0.30;
 constexpr double kMaxAxisAligned = 0.50;
-constexpr double kDemoPeel = 0.05;
+constexpr double kDemoPaceEarliest = 0.35;
+constexpr double kDemoPaceLatest = 0.65;
 // The bar a close-up sets for the demo's plates: crack-wall roughness (the area-weighted mean angle
-// between neighbouring crack triangles) at most 15 degrees (as shipped 14.1, 2026-11-27; 42.3 with
-// `ours`).
+// between neighbouring crack triangles) at most 15 degrees (the peeling demo's 14.1 until
+// 2026-11-29, 42.3 with `ours`; the network demo's 7.4-7.7 on seeds 1-3, 1 thread).
 constexpr double kDemoWallRoughnessDeg = 15;
 
 // Fig. 7, the mossy ground with its strength field: at least 20 crack polygons and 3.5 effective
@@ -149,7 +156,10 @@ protected:
             !run_stage("mc-surface", flags + last_frame_only, shot) ||
             !run_stage("mc-measure", flags + last_frame_only + " --json " + table.string(), shot))
             return json();
-        const json last = json::parse(slurp(table)).at("frames").back();
+        const json whole = json::parse(slurp(table));
+        json last = whole.at("frames").back();
+        // the shot's pace (the surfacing's break history over every frame up to the last)
+        if (whole.contains("pace")) last["pace"] = whole.at("pace");
         std::printf(
             "%-14s frame %d: curl %.2f mm, median rise %.2f mm, split %.2f %% (%.2f cells up), lifted %.2f %%, "
             "%lld broken edges, %d surface polygons (effective %.2f), weighted mean polygon %.4f m^2, "
@@ -202,19 +212,25 @@ TEST_F(FigureClaims, Fig8NaccAloneShrinksWithoutPeelingWhileTheFullModelPeelsAnd
     EXPECT_EQ(a.at("broken_edges").get<long long>(), 0);
 }
 
-TEST_F(FigureClaims, DemoCracksIntoAWanderingNetworkThatPeels) {
+TEST_F(FigureClaims, DemoCracksIntoAClosedNetworkOfPlatesAcrossTheShot) {
     // One seed. "Another seed draws another network of the same statistics" (polygon counts
     // within a factor 1.5, axis shares within 10 points) is held by tools/seed_study.sh, which
     // fails outside those bounds, run with the shots a physics change touches: a second demo run
-    // here took 183 of a fresh clone's 1,855 ctest seconds (Zen 3, 2026-11-28), more than the CI's
-    // 45 minutes could hold.
+    // here would take minutes of the CI's 45.
     const json one = run_and_measure(write_shot("demo", read_shot("demo")));
     ASSERT_FALSE(one.is_null());
-    // the poster effect: plates between cracks that do not draw the grid, whose rims peel
-    EXPECT_GE(one.at("surface_polygons").get<int>(), kDemoPolygons);
+    // the poster effect: a closed network of plates, by the broken edges and by the meshes
+    EXPECT_GE(one.at("effective_surface_polygons").get<double>(), kDemoEffectivePlates);
+    EXPECT_LE(one.at("largest_polygon_fraction").get<double>(), kDemoLargestPlate);
+    EXPECT_GE(one.at("mesh_effective_surface_polygons").get<double>(), kDemoEffectivePlates);
+    EXPECT_LE(one.at("mesh_largest_polygon_fraction").get<double>(), kDemoLargestPlate);
+    // cracks that do not draw the grid
     EXPECT_LE(one.at("axis_aligned_fraction").get<double>(), kMaxAxisAligned);
-    EXPECT_GE(one.at("split_fraction").get<double>(), kDemoPeel);
-    EXPECT_GE(one.at("split_height_median_cells").get<double>(), kPeelAboveGroundCells);
+    // and that come across the shot, not in its first frames
+    ASSERT_TRUE(one.contains("pace"));
+    const double pace = one.at("pace").at("half_broken_range_fraction").get<double>();
+    EXPECT_GE(pace, kDemoPaceEarliest);
+    EXPECT_LE(pace, kDemoPaceLatest);
     // its plates meshes hold up in a close-up (docs/physics.md §5.7): no particle-sized chips,
     // every piece closed, smooth walls
     EXPECT_EQ(one.at("mesh_chips").get<int>(), 0);

@@ -35,13 +35,13 @@ edit() {
     sed -i "$2" "$1"
     [ "$(cat "$1")" != "$before" ] || fail "$1: '$2' changed nothing ($3)"
 }
-# the tiny base: 0.06 m lattice on a 0.12 m grid (17 x 4 x 17 particles), 4 frames, 160x90
+# the tiny base: 0.025 m lattice on a 0.05 m grid (36 x 2 x 36 particles), 4 frames, 160x90
 # previews, 4 views
 cp "$shot_src" "$base"
 edit "$base" 's/"name": "demo"/"name": "base"/' "the name"
-edit "$base" 's/"spacing": 0.015,/"spacing": 0.06,/' "the box spacing"
-edit "$base" 's/"h": 0.03,/"h": 0.12,/' "the grid spacing"
-edit "$base" 's/"end": 40,/"end": 4,/' "the frame range"
+edit "$base" 's/"spacing": 0.01,/"spacing": 0.025,/' "the box spacing"
+edit "$base" 's/"h": 0.02,/"h": 0.05,/' "the grid spacing"
+edit "$base" 's/"end": 36,/"end": 4,/' "the frame range"
 edit "$base" 's/"resolution": \[640, 360\]/"resolution": [160, 90]/' "the resolution"
 edit "$base" 's/"views": 12/"views": 4/' "the turntable"
 # the look: the same shot in the hardening colors, reusing base (the key right after the name)
@@ -146,7 +146,7 @@ done
 [ "$(base_files)" = "$before" ] || fail "make shot cut changed base's files"
 
 echo "== a sim key edited in both shots: base's sim and surfacing, then look's render (make -j2)"
-for f in "$base" "$look"; do edit "$f" 's/"D": 0.002,/"D": 0.0024,/' "the diffusivity"; done
+for f in "$base" "$look"; do edit "$f" 's/"D": 0.00556,/"D": 0.0066,/' "the diffusivity"; done
 base_render=$(stat -c %Y.%y "$out/base/render/manifest.json")
 shot_make look -j2 || { cat "$tmp/make.txt"; fail "make -j2 after the sim edit failed"; }
 got=$(ran)
@@ -159,7 +159,7 @@ for stage in init sim surface; do is_link_to_base $stage || fail "look/$stage is
   "$(jq -r .shot_slice_hash "$out/base/surface/manifest.json")" ] || fail "look's render did not read base's new surfacing"
 
 echo "== a sim key edited in look only: its sim is its own again"
-edit "$look" 's/"D": 0.0024,/"D": 0.0022,/' "the diffusivity"
+edit "$look" 's/"D": 0.0066,/"D": 0.0061,/' "the diffusivity"
 before=$(base_files)
 shot_make look || { cat "$tmp/make.txt"; fail "make after the look-only sim edit failed"; }
 [ "$(ran)" = "look:mc-sim,look:mc-surface,look:mc-render," ] ||
