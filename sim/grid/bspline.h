@@ -19,6 +19,11 @@ struct AxisWeights {
     Real dw[3] = {};  // d w / d fx (divide by h for world units)
 };
 
+/// The first node of the 3-node stencil along one axis for a particle at grid coordinate xg: the
+/// base fill_axis_weights computes with the weights, for the passes that need only the node
+/// (the binning, a particle's place in its block's window).
+inline int stencil_base(Real xg) { return static_cast<int>(std::floor(xg - Real(0.5))); }
+
 /// Fills `a` with the weights along one axis for a particle at grid coordinate xg = (x - origin)/h.
 /// Writes the fields in place: building an AxisWeights by value and copying it into a Stencil
 /// makes the compiler move the 4-byte base as part of 8-byte words, a store-forwarding stall that

@@ -7,6 +7,7 @@
 
 #include "sim/core/error.h"
 #include "sim/core/stats.h"
+#include "sim/grid/bspline.h"
 
 namespace mudcrack::mpm {
 
@@ -129,7 +130,7 @@ void bin_particles(SparseGrid& grid, const std::vector<Eigen::Matrix<StateReal, 
     parallel_for(n, [&](int64_t p) {
         const Vec3 xg = geo.to_grid(x[p].template cast<Real>());
         int b[3];
-        for (int d = 0; d < 3; ++d) b[d] = static_cast<int>(std::floor(xg[d] - Real(0.5))) >> 2;
+        for (int d = 0; d < 3; ++d) b[d] = stencil_base(xg[d]) >> 2;
         grid.particle_key[p] = geo.block_key(b[0], b[1], b[2]);
     });
 

@@ -149,9 +149,7 @@ inline void add_z_row(Real* p, const ZRow& v) { Eigen::Map<ZRow>(p) += v; }
 
 // A particle's stencil base in its particle block's window coordinates (0 to 3 per axis).
 inline Vec3i stencil_base_in_block(const Vec3& xg, const Vec3i& block_origin) {
-    return Vec3i(static_cast<int>(std::floor(xg.x() - Real(0.5))),
-                 static_cast<int>(std::floor(xg.y() - Real(0.5))),
-                 static_cast<int>(std::floor(xg.z() - Real(0.5)))) -
+    return Vec3i(mpm::stencil_base(xg.x()), mpm::stencil_base(xg.y()), mpm::stencil_base(xg.z())) -
            block_origin;
 }
 
