@@ -42,7 +42,7 @@ done
 # What the paper's figure shows, one sentence per shot (Tu et al. 2023; the demo is ours).
 paper_says() {
     case $1 in
-        demo) echo "(ours, what \`make demo\` runs) a layer of wet mud that dries through and cracks into a closed network of polygonal plates, the cracks coming across the shot." ;;
+        demo) echo "(ours, what \`make demo\` runs) a round puddle of wet mud that dries through and cracks into a closed network of polygonal plates, the cracks coming across the shot." ;;
         demo_float) echo "(ours) the demo with its particle state kept in float (/sim/precision): to hold against the demo's still." ;;
         fig4_bunny) echo "Fig. 4: a bunny made with wet soil gradually breaks into a pile of pieces." ;;
         fig5_riverbed) echo "Fig. 5: a riverbed dried in the sun shows deep cracks." ;;

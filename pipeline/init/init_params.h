@@ -17,6 +17,10 @@ enum class SourceType { Mesh, Box, Heightfield };
 /// them: docs/physics.md §6.6).
 enum class Lattice { Regular, Jittered, Mesh };
 
+/// A box lattice's footprint in XZ: the whole rectangle, or the ellipse inscribed in it (a round
+/// puddle when the box is square), whose rim points sit on the ellipse.
+enum class Footprint { Rectangle, Ellipse };
+
 struct MeshSource {
     std::string path;               // closed triangle mesh (OBJ, PLY, STL, OFF, glTF)
     Real scale = 1;                 // uniform scale applied after loading
@@ -33,6 +37,7 @@ struct BoxSource {
     Real spacing = 0.025;            // lattice spacing [m]
     Lattice lattice = Lattice::Regular;
     Real jitter = 0.25;  // jitter amplitude in units of spacing (interior only)
+    Footprint footprint = Footprint::Rectangle;
 };
 
 /// How a heightfield is filled: its lattice of columns (each column's points spread evenly from

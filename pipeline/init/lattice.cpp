@@ -5,6 +5,7 @@
 #include <cstdio>
 #include <random>
 #include <sstream>
+#include <utility>
 
 #include "pipeline/init/tet_mesh_ops.h"
 #include "sim/core/error.h"
@@ -127,33 +128,109 @@ TetMesh make_box_tets(const BoxSource& box, unsigned seed) {
             }
     mesh.tets = kuhn_tets(n[0], n[1], n[2]);
 
-    if (box.lattice == Lattice::Jittered && box.jitter > 0) {
-        // move interior points only, so the slab's faces stay flat and its volume exact; a
+    // the columns of cells the footprint keeps; a lattice column of points is on the rim where
+    // kept and dropped columns meet (the box's sides, for the rectangle), and only its points
+    // stay off the jitter, so the body's sides stay smooth and its volume that of its tets
+    const int columns_x = n[0], columns_z = n[2];
+    std::vector<char> is_kept(static_cast<size_t>(columns_x) * columns_z, 1);
+    const Vec3 centre = (box.min + box.max) / 2;
+    const Real semi_x = extent.x() / 2, semi_z = extent.z() / 2;
+    const bool is_ellipse = box.footprint == Footprint::Ellipse;
+    if (is_ellipse) {
+        for (int k = 0; k < columns_z; ++k)
+            for (int i = 0; i < columns_x; ++i) {
+                const Real u = (box.min.x() + (i + Real(0.5)) * step.x() - centre.x()) / semi_x;
+                const Real w = (box.min.z() + (k + Real(0.5)) * step.z() - centre.z()) / semi_z;
+                is_kept[i + columns_x * k] = u * u + w * w <= 1;
+            }
+        // kuhn_tets writes 6 tets per cell, cells x fastest, then y, then z
+        std::vector<Tet> kept;
+        kept.reserve(mesh.tets.size());
+        for (size_t t = 0; t < mesh.tets.size(); ++t) {
+            const size_t cell = t / 6;
+            const int i = static_cast<int>(cell % columns_x);
+            const int k = static_cast<int>(cell / (static_cast<size_t>(columns_x) * n[1]));
+            if (is_kept[i + columns_x * k]) kept.push_back(mesh.tets[t]);
+        }
+        mesh.tets = std::move(kept);
+    }
+    auto column_is_kept = [&](int i, int k) {
+        return i >= 0 && i < columns_x && k >= 0 && k < columns_z && is_kept[i + columns_x * k];
+    };
+    // (uses a kept column, meets a dropped one) for the lattice column of points (i, k)
+    auto point_column = [&](int i, int k) {
+        int n_kept = 0;
+        for (int dk = -1; dk <= 0; ++dk)
+            for (int di = -1; di <= 0; ++di) n_kept += column_is_kept(i + di, k + dk);
+        return std::pair<bool, bool>(n_kept > 0, n_kept > 0 && n_kept < 4);
+    };
+
+    constexpr Real kMinFraction = 0.2;  // no move may squash a tet below this share of its rest
+    const Real min_volume = kMinFraction * step.prod() / 6;  // every Kuhn tet is a sixth
+    const bool is_jittered = box.lattice == Lattice::Jittered && box.jitter > 0;
+    const VertexTets vt =
+        is_ellipse || is_jittered ? vertex_tets(mesh.X.size(), mesh.tets) : VertexTets{};
+    auto incident_tets_stay_positive = [&](int32_t v) {
+        for (int32_t e = vt.offset[v]; e < vt.offset[v + 1]; ++e) {
+            const Tet& t = mesh.tets[vt.ids[e]];
+            if (!(signed_tet_volume(mesh.X[t[0]], mesh.X[t[1]], mesh.X[t[2]], mesh.X[t[3]]) >
+                  min_volume))
+                return false;
+        }
+        return true;
+    };
+
+    if (is_ellipse) {
+        // the rim's staircase of cells onto the ellipse: each rim column of points moves as one
+        // (the side stays vertical) along the ray from the centre; where two rim points would
+        // meet (the staircase runs radially near the axes), or a corner cell's tets would be
+        // squashed, the move is cut short, by eighths
+        for (int k = 0; k <= n[2]; ++k)
+            for (int i = 0; i <= n[0]; ++i) {
+                if (!point_column(i, k).second) continue;
+                const Vec3 rest = mesh.X[lattice_index(i, 0, k, n[0], n[1])];
+                const Real u = (rest.x() - centre.x()) / semi_x;
+                const Real w = (rest.z() - centre.z()) / semi_z;
+                const Real radius = std::sqrt(u * u + w * w);
+                if (!(radius > 0)) continue;
+                const Real to_x = centre.x() + (rest.x() - centre.x()) / radius;
+                const Real to_z = centre.z() + (rest.z() - centre.z()) / radius;
+                for (int eighths = 8; eighths >= 0; --eighths) {
+                    const Real fraction = eighths / Real(8);
+                    for (int j = 0; j <= n[1]; ++j) {
+                        Vec3& x = mesh.X[lattice_index(i, j, k, n[0], n[1])];
+                        x.x() = rest.x() + fraction * (to_x - rest.x());
+                        x.z() = rest.z() + fraction * (to_z - rest.z());
+                    }
+                    bool is_ok = true;
+                    for (int j = 0; j <= n[1] && is_ok; ++j)
+                        is_ok = incident_tets_stay_positive(lattice_index(i, j, k, n[0], n[1]));
+                    if (is_ok) break;
+                }
+            }
+    }
+
+    if (is_jittered) {
+        // move interior points only, so the body's faces stay flat and its volume exact; a
         // move that would squash an incident tet below kMinFraction of its volume is re-drawn
-        constexpr Real kMinFraction = 0.2;
         constexpr int kTries = 8;
         const Real radius = box.jitter * step.minCoeff();
-        const Real min_volume = kMinFraction * step.prod() / 6;  // every Kuhn tet is a sixth
-        const VertexTets vt = vertex_tets(mesh.X.size(), mesh.tets);
         std::mt19937 rng(seed);
         for (int k = 1; k < n[2]; ++k)
             for (int j = 1; j < n[1]; ++j)
                 for (int i = 1; i < n[0]; ++i) {
+                    const auto [is_used, is_rim] = point_column(i, k);
+                    if (!is_used || is_rim) continue;
                     const int32_t v = lattice_index(i, j, k, n[0], n[1]);
                     const Vec3 rest = mesh.X[v];
                     for (int attempt = 0; attempt < kTries; ++attempt) {
                         mesh.X[v] = rest + radius * uniform_in_ball(rng);
-                        bool is_ok = true;
-                        for (int32_t e = vt.offset[v]; e < vt.offset[v + 1] && is_ok; ++e) {
-                            const Tet& t = mesh.tets[vt.ids[e]];
-                            is_ok = signed_tet_volume(mesh.X[t[0]], mesh.X[t[1]], mesh.X[t[2]],
-                                                      mesh.X[t[3]]) > min_volume;
-                        }
-                        if (is_ok) break;
+                        if (incident_tets_stay_positive(v)) break;
                         mesh.X[v] = rest;
                     }
                 }
     }
+    if (is_ellipse) drop_unused_vertices(mesh);
     return mesh;
 }
 

@@ -36,7 +36,11 @@ std::vector<Tet> kuhn_tets(int nx, int ny, int nz);
 /// A box slab: regular lattice, or jittered (interior points moved by up to
 /// jitter * spacing, seeded; a move that would leave an incident tet with less than a fifth of
 /// its rest volume is re-drawn, and after a few tries the point stays put, so every tet stays
-/// positive). Throws ShotValueError naming /source/box/... keys for an empty box or bad spacing.
+/// positive). With Footprint::Ellipse only the columns of cells whose centre lies in the ellipse
+/// inscribed in the box's x-z rectangle are kept, and the rim's points are moved onto the
+/// ellipse along the ray from its centre, each rim column as one, as far as the same rule allows
+/// (by eighths); unused points are dropped. Throws ShotValueError naming /source/box/... keys
+/// for an empty box or bad spacing.
 TetMesh make_box_tets(const BoxSource& box, unsigned seed);
 
 /// The column-mapped lattice over the rectangle [x0, x0 + sx] x [z0, z0 + sz] in XZ: columns

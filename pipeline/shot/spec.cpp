@@ -101,11 +101,13 @@ std::vector<KeySpec> build_fixed_table() {
     Key("/source/box/min", T::Vec3).def(vec(-0.5, 0, -0.5)).units("m").doc("lower corner"),
     Key("/source/box/max", T::Vec3).def(vec(0.5, 0.1, 0.5)).units("m").doc("upper corner; > min on every axis"),
     Key("/source/box/spacing", T::Number).def(0.025).gt(0).units("m")
-        .doc("lattice spacing; particles = prod(round(extent/spacing) + 1) (lattice regular or jittered)"),
+        .doc("lattice spacing; particles = prod(round(extent/spacing) + 1) (lattice regular or jittered, footprint rectangle)"),
     Key("/source/box/lattice", T::Enum).def("regular").choices({"regular", "jittered", "mesh"}).units("")
         .doc("regular lattice, interior points jittered, or mesh: CGAL Mesh_3 tets of the box at /init/edge_length, no axis-aligned rows"),
     Key("/source/box/jitter", T::Number).def(0.25).ge(0).lt(0.5).units("spacing")
         .doc("jitter amplitude of interior points (lattice = jittered)"),
+    Key("/source/box/footprint", T::Enum).def("rectangle").choices({"rectangle", "ellipse"}).units("")
+        .doc("the lattice's extent in x and z: the whole rectangle, or the ellipse inscribed in it (a round puddle on a square box), its rim on the ellipse; lattice regular or jittered"),
     Key("/source/heightfield", T::Section).def(json::object())
         .doc("terrain slab with a carved meandering channel, or a PNG heightmap (used when type = heightfield)"),
     Key("/source/heightfield/size", T::Vec2).def(json::array({4.0, 4.0})).gt(0).units("m")

@@ -116,6 +116,50 @@ TEST(InitBoxSource, JitterIsSeeded) {
     EXPECT_NE(a.X, c.X);
 }
 
+TEST(InitBoxSource, EllipseFootprintIsARoundSlabWithItsRimOnTheEllipse) {
+    // a 0.6 x 0.4 ellipse, 5 cm deep, jittered at 0.01: 61 x 6 x 41 lattice points before the cut
+    InitParams p = box_params(Vec3(-0.3, 0, -0.2), Vec3(0.3, 0.05, 0.2), 0.01, Lattice::Jittered);
+    p.box.footprint = Footprint::Ellipse;
+    const InitResult r = build_init(p, 0.02);
+    test::expect_all_tets_positive(r.mesh);
+    test::expect_volume_conserved(r.mesh, r.volume0);
+    test::expect_no_unused_vertices(r.mesh);
+    test::expect_closed_outward_boundary(r.mesh);
+    test::expect_finite_boundary_uvs(r.mesh);
+    // the body is the elliptic cylinder: pi a b H, and pi / 4 of the box's points (the rim's
+    // quarter-moves and the staircase's corners leave it within a few tenths of a percent)
+    const double pi = std::acos(-1.0);
+    EXPECT_NEAR(r.quality.tet_volume / (pi * 0.3 * 0.2 * 0.05), 1.0, 3e-3);
+    EXPECT_NEAR(double(r.quality.particles) / (61 * 6 * 41), pi / 4, 0.02);
+    // the side wall's points on the ellipse: all within half a spacing, nearly all exactly
+    // (the rest where a full move would squash a corner cell or run two rim points together)
+    auto ellipse_radius = [](const Vec3& x) { return std::hypot(x.x() / 0.3, x.z() / 0.2); };
+    int side_points = 0, on_the_ellipse = 0;
+    // the largest distances of a point outside the ellipse and of a side point inside it [m]
+    Real worst_outside = 0, worst_inside = 0;
+    std::vector<char> is_boundary(r.mesh.X.size(), 0);
+    for (const Tri& f : r.mesh.boundary)
+        for (int32_t v : f) is_boundary[v] = 1;
+    for (size_t v = 0; v < r.mesh.X.size(); ++v) {
+        const Vec3& x = r.mesh.X[v];
+        const Real rho = ellipse_radius(x);
+        worst_outside = std::max(worst_outside, (rho - 1) * 0.2);  // 0.2: the smaller semi-axis
+        const bool is_side = is_boundary[v] && x.y() > 0 && x.y() < 0.05;
+        if (!is_side) continue;
+        ++side_points;
+        on_the_ellipse += std::abs(rho - 1) < 1e-9;
+        worst_inside = std::max(worst_inside, (1 - rho) * 0.2);  // 0.2: the smaller semi-axis
+    }
+    EXPECT_GT(side_points, 4 * 150) << "the wall of a 1.6 m rim, 4 rows of side points";
+    EXPECT_GT(on_the_ellipse, 0.8 * side_points);
+    EXPECT_LT(worst_inside, 0.5 * 0.01);
+    EXPECT_LT(worst_outside, 0.5 * 0.01);
+    std::printf("side points %d, on the ellipse %d, worst outside %.2g m, inside %.2g m\n",
+                side_points, on_the_ellipse, worst_outside, worst_inside);
+    // the interior was jittered, as the rectangle's is
+    EXPECT_LT(r.quality.min_dihedral_deg, 45.0);
+}
+
 TEST(InitBoxSource, EmptyBoxIsAnInputErrorNamingTheKey) {
     InitParams p = box_params(Vec3(0, 0, 0), Vec3(1, 0, 1), 0.1, Lattice::Regular);
     try {

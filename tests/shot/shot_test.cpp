@@ -287,6 +287,18 @@ TEST_F(ShotTest, UnknownKeysSuggestTheNearestKey) {
               "/grund = {}: unknown key (did you mean /colliders/ground?)"});
 }
 
+TEST_F(ShotTest, EllipseFootprintNeedsALatticeNotMesh3) {
+    const std::string msg = error_of(R"({"mudcrack": 1, "source": {"type": "box",
+        "box": {"lattice": "mesh", "footprint": "ellipse"}}, "material": {}})");
+    expect_contains(msg, {"/source/box/footprint = \"ellipse\": needs /source/box/lattice "
+                          "regular or jittered, not mesh"});
+    EXPECT_EQ(line_count(msg), 1) << msg;
+    const Shot shot = parse_shot(R"({"mudcrack": 1, "source": {"type": "box",
+        "box": {"lattice": "jittered", "footprint": "ellipse"}}, "material": {}})",
+                                 "t.json");
+    EXPECT_EQ(shot.init.box.footprint, Footprint::Ellipse);
+}
+
 TEST_F(ShotTest, WrongTypesAreErrors) {
     const std::string msg =
         error_of(R"({"mudcrack": 1, "source": {"type": "box", "box": {"min": [0, 0]}},
@@ -592,7 +604,8 @@ TEST_F(ShotTest, ShippedShotsValidate) {
     const Real particles = (std::round(extent.x() / demo.init.box.spacing) + 1) *
                            (std::round(extent.y() / demo.init.box.spacing) + 1) *
                            (std::round(extent.z() / demo.init.box.spacing) + 1);
-    EXPECT_EQ(particles, 91 * 6 * 91);  // the count demo.json's comment gives
+    EXPECT_EQ(particles, 91 * 6 * 91);  // the box lattice demo.json's comment cuts its disc from
+    EXPECT_EQ(demo.init.box.footprint, Footprint::Ellipse);
 
     for (const char* name : {"bench_nacc_cube.json", "bench_moisture_cube.json"}) {
         const Shot bench = load_shot(dir + name);

@@ -35,7 +35,7 @@ edit() {
     sed -i "$2" "$1"
     [ "$(cat "$1")" != "$before" ] || fail "$1: '$2' changed nothing ($3)"
 }
-# the tiny base: 0.025 m lattice on a 0.05 m grid (36 x 2 x 36 particles), 4 frames, 160x90
+# the tiny base: the disc of a 0.025 m lattice (37 x 3 x 37) on a 0.05 m grid, 4 frames, 160x90
 # previews, 4 views
 cp "$shot_src" "$base"
 edit "$base" 's/"name": "demo"/"name": "base"/' "the name"
