@@ -170,7 +170,7 @@ TetMesh make_box_tets(const BoxSource& box, unsigned seed) {
     const bool is_jittered = box.lattice == Lattice::Jittered && box.jitter > 0;
     const VertexTets vt =
         is_ellipse || is_jittered ? vertex_tets(mesh.X.size(), mesh.tets) : VertexTets{};
-    auto incident_tets_stay_positive = [&](int32_t v) {
+    auto incident_tets_keep_min_volume = [&](int32_t v) {
         for (int32_t e = vt.offset[v]; e < vt.offset[v + 1]; ++e) {
             const Tet& t = mesh.tets[vt.ids[e]];
             if (!(signed_tet_volume(mesh.X[t[0]], mesh.X[t[1]], mesh.X[t[2]], mesh.X[t[3]]) >
@@ -204,7 +204,7 @@ TetMesh make_box_tets(const BoxSource& box, unsigned seed) {
                     }
                     bool is_ok = true;
                     for (int j = 0; j <= n[1] && is_ok; ++j)
-                        is_ok = incident_tets_stay_positive(lattice_index(i, j, k, n[0], n[1]));
+                        is_ok = incident_tets_keep_min_volume(lattice_index(i, j, k, n[0], n[1]));
                     if (is_ok) break;
                 }
             }
@@ -225,7 +225,7 @@ TetMesh make_box_tets(const BoxSource& box, unsigned seed) {
                     const Vec3 rest = mesh.X[v];
                     for (int attempt = 0; attempt < kTries; ++attempt) {
                         mesh.X[v] = rest + radius * uniform_in_ball(rng);
-                        if (incident_tets_stay_positive(v)) break;
+                        if (incident_tets_keep_min_volume(v)) break;
                         mesh.X[v] = rest;
                     }
                 }
