@@ -5,7 +5,6 @@
 #include <cstdio>
 #include <random>
 #include <sstream>
-#include <utility>
 
 #include "pipeline/init/tet_mesh_ops.h"
 #include "sim/core/error.h"
@@ -53,6 +52,120 @@ std::string vec_text(const Vec3& v) {
     std::ostringstream s;
     s << "[" << v.x() << ", " << v.y() << ", " << v.z() << "]";
     return s.str();
+}
+
+/// No move of a lattice point (the rim's snap, the jitter) may leave a tet with less than this
+/// share of its rest volume.
+constexpr Real kMinVolumeFraction = 0.2;
+
+/// The lattice's columns of cells (i, k), nx x nz, that a box's footprint keeps: all of them for
+/// the rectangle, those whose centre lies in the inscribed ellipse for the ellipse.
+class FootprintColumns {
+public:
+    FootprintColumns(const BoxSource& box, int nx, int nz, const Vec3& step)
+        : m_nx(nx),
+          m_nz(nz),
+          m_is_kept(static_cast<size_t>(nx) * nz, 1) {
+        if (box.footprint != Footprint::Ellipse) return;
+        const Vec3 centre = (box.min + box.max) / 2, semi = (box.max - box.min) / 2;
+        for (int k = 0; k < nz; ++k)
+            for (int i = 0; i < nx; ++i) {
+                const Real u = (box.min.x() + (i + Real(0.5)) * step.x() - centre.x()) / semi.x();
+                const Real w = (box.min.z() + (k + Real(0.5)) * step.z() - centre.z()) / semi.z();
+                m_is_kept[i + nx * k] = u * u + w * w <= 1;
+            }
+    }
+    bool is_kept(int i, int k) const {
+        return i >= 0 && i < m_nx && k >= 0 && k < m_nz && m_is_kept[i + m_nx * k];
+    }
+    /// How many of the 4 columns of cells around the lattice column of points (i, k) are kept:
+    /// 0, it is unused; 4, it is inside; between, it is on the rim (the box's sides, for the
+    /// rectangle).
+    int kept_around(int i, int k) const {
+        return is_kept(i - 1, k - 1) + is_kept(i, k - 1) + is_kept(i - 1, k) + is_kept(i, k);
+    }
+    /// The Kuhn tets of the kept cells (kuhn_tets writes 6 per cell, x fastest, then y, then z).
+    std::vector<Tet> kept_tets(const std::vector<Tet>& tets, int ny) const {
+        std::vector<Tet> kept;
+        kept.reserve(tets.size());
+        for (size_t t = 0; t < tets.size(); ++t) {
+            const size_t cell = t / 6;
+            if (is_kept(static_cast<int>(cell % m_nx),
+                        static_cast<int>(cell / (static_cast<size_t>(m_nx) * ny))))
+                kept.push_back(tets[t]);
+        }
+        return kept;
+    }
+
+private:
+    int m_nx, m_nz;
+    std::vector<char> m_is_kept;
+};
+
+/// True if every tet of vertex v keeps more than min_volume [m^3].
+bool incident_tets_keep(const TetMesh& mesh, const VertexTets& vt, int32_t v, Real min_volume) {
+    for (int32_t e = vt.offset[v]; e < vt.offset[v + 1]; ++e) {
+        const Tet& t = mesh.tets[vt.ids[e]];
+        if (!(signed_tet_volume(mesh.X[t[0]], mesh.X[t[1]], mesh.X[t[2]], mesh.X[t[3]]) >
+              min_volume))
+            return false;
+    }
+    return true;
+}
+
+/// The rim's staircase of cells onto the ellipse inscribed in the box: each rim column of points
+/// moves as one (the side stays vertical) along the ray from the centre; where two rim points
+/// would meet (the staircase runs radially near the axes), or a corner cell's tets would be
+/// squashed, the move is cut short, by eighths, until its tets keep min_volume.
+void snap_rim_to_ellipse(const BoxSource& box, const int n[3], const FootprintColumns& columns,
+                         const VertexTets& vt, Real min_volume, TetMesh& mesh) {
+    const Vec3 centre = (box.min + box.max) / 2, semi = (box.max - box.min) / 2;
+    for (int k = 0; k <= n[2]; ++k)
+        for (int i = 0; i <= n[0]; ++i) {
+            const int kept = columns.kept_around(i, k);
+            if (kept == 0 || kept == 4) continue;
+            const Vec3 rest = mesh.X[lattice_index(i, 0, k, n[0], n[1])];
+            const Real u = (rest.x() - centre.x()) / semi.x();
+            const Real w = (rest.z() - centre.z()) / semi.z();
+            const Real radius = std::sqrt(u * u + w * w);
+            if (!(radius > 0)) continue;
+            const Real to_x = centre.x() + (rest.x() - centre.x()) / radius;
+            const Real to_z = centre.z() + (rest.z() - centre.z()) / radius;
+            for (int eighths = 8; eighths >= 0; --eighths) {
+                const Real fraction = eighths / Real(8);
+                for (int j = 0; j <= n[1]; ++j) {
+                    Vec3& x = mesh.X[lattice_index(i, j, k, n[0], n[1])];
+                    x.x() = rest.x() + fraction * (to_x - rest.x());
+                    x.z() = rest.z() + fraction * (to_z - rest.z());
+                }
+                bool is_ok = true;
+                for (int j = 0; j <= n[1] && is_ok; ++j)
+                    is_ok = incident_tets_keep(mesh, vt, lattice_index(i, j, k, n[0], n[1]),
+                                               min_volume);
+                if (is_ok) break;
+            }
+        }
+}
+
+/// Moves the interior points (inside the footprint, off its rim, off the top and bottom) by up
+/// to radius, seeded; a move that would leave a tet below min_volume is re-drawn, and after a
+/// few tries the point stays put. The body's faces stay flat and its volume that of its tets.
+void jitter_interior(const int n[3], const FootprintColumns& columns, const VertexTets& vt,
+                     Real radius, Real min_volume, unsigned seed, TetMesh& mesh) {
+    constexpr int kTries = 8;
+    std::mt19937 rng(seed);
+    for (int k = 1; k < n[2]; ++k)
+        for (int j = 1; j < n[1]; ++j)
+            for (int i = 1; i < n[0]; ++i) {
+                if (columns.kept_around(i, k) != 4) continue;
+                const int32_t v = lattice_index(i, j, k, n[0], n[1]);
+                const Vec3 rest = mesh.X[v];
+                for (int attempt = 0; attempt < kTries; ++attempt) {
+                    mesh.X[v] = rest + radius * uniform_in_ball(rng);
+                    if (incident_tets_keep(mesh, vt, v, min_volume)) break;
+                    mesh.X[v] = rest;
+                }
+            }
 }
 
 }  // namespace
@@ -128,107 +241,16 @@ TetMesh make_box_tets(const BoxSource& box, unsigned seed) {
             }
     mesh.tets = kuhn_tets(n[0], n[1], n[2]);
 
-    // the columns of cells the footprint keeps; a lattice column of points is on the rim where
-    // kept and dropped columns meet (the box's sides, for the rectangle), and only its points
-    // stay off the jitter, so the body's sides stay smooth and its volume that of its tets
-    const int columns_x = n[0], columns_z = n[2];
-    std::vector<char> is_kept(static_cast<size_t>(columns_x) * columns_z, 1);
-    const Vec3 centre = (box.min + box.max) / 2;
-    const Real semi_x = extent.x() / 2, semi_z = extent.z() / 2;
+    const FootprintColumns columns(box, n[0], n[2], step);
     const bool is_ellipse = box.footprint == Footprint::Ellipse;
-    if (is_ellipse) {
-        for (int k = 0; k < columns_z; ++k)
-            for (int i = 0; i < columns_x; ++i) {
-                const Real u = (box.min.x() + (i + Real(0.5)) * step.x() - centre.x()) / semi_x;
-                const Real w = (box.min.z() + (k + Real(0.5)) * step.z() - centre.z()) / semi_z;
-                is_kept[i + columns_x * k] = u * u + w * w <= 1;
-            }
-        // kuhn_tets writes 6 tets per cell, cells x fastest, then y, then z
-        std::vector<Tet> kept;
-        kept.reserve(mesh.tets.size());
-        for (size_t t = 0; t < mesh.tets.size(); ++t) {
-            const size_t cell = t / 6;
-            const int i = static_cast<int>(cell % columns_x);
-            const int k = static_cast<int>(cell / (static_cast<size_t>(columns_x) * n[1]));
-            if (is_kept[i + columns_x * k]) kept.push_back(mesh.tets[t]);
-        }
-        mesh.tets = std::move(kept);
-    }
-    auto column_is_kept = [&](int i, int k) {
-        return i >= 0 && i < columns_x && k >= 0 && k < columns_z && is_kept[i + columns_x * k];
-    };
-    // (uses a kept column, meets a dropped one) for the lattice column of points (i, k)
-    auto point_column = [&](int i, int k) {
-        int n_kept = 0;
-        for (int dk = -1; dk <= 0; ++dk)
-            for (int di = -1; di <= 0; ++di) n_kept += column_is_kept(i + di, k + dk);
-        return std::pair<bool, bool>(n_kept > 0, n_kept > 0 && n_kept < 4);
-    };
-
-    constexpr Real kMinFraction = 0.2;  // no move may squash a tet below this share of its rest
-    const Real min_volume = kMinFraction * step.prod() / 6;  // every Kuhn tet is a sixth
     const bool is_jittered = box.lattice == Lattice::Jittered && box.jitter > 0;
-    const VertexTets vt =
-        is_ellipse || is_jittered ? vertex_tets(mesh.X.size(), mesh.tets) : VertexTets{};
-    auto incident_tets_keep_min_volume = [&](int32_t v) {
-        for (int32_t e = vt.offset[v]; e < vt.offset[v + 1]; ++e) {
-            const Tet& t = mesh.tets[vt.ids[e]];
-            if (!(signed_tet_volume(mesh.X[t[0]], mesh.X[t[1]], mesh.X[t[2]], mesh.X[t[3]]) >
-                  min_volume))
-                return false;
-        }
-        return true;
-    };
-
-    if (is_ellipse) {
-        // the rim's staircase of cells onto the ellipse: each rim column of points moves as one
-        // (the side stays vertical) along the ray from the centre; where two rim points would
-        // meet (the staircase runs radially near the axes), or a corner cell's tets would be
-        // squashed, the move is cut short, by eighths
-        for (int k = 0; k <= n[2]; ++k)
-            for (int i = 0; i <= n[0]; ++i) {
-                if (!point_column(i, k).second) continue;
-                const Vec3 rest = mesh.X[lattice_index(i, 0, k, n[0], n[1])];
-                const Real u = (rest.x() - centre.x()) / semi_x;
-                const Real w = (rest.z() - centre.z()) / semi_z;
-                const Real radius = std::sqrt(u * u + w * w);
-                if (!(radius > 0)) continue;
-                const Real to_x = centre.x() + (rest.x() - centre.x()) / radius;
-                const Real to_z = centre.z() + (rest.z() - centre.z()) / radius;
-                for (int eighths = 8; eighths >= 0; --eighths) {
-                    const Real fraction = eighths / Real(8);
-                    for (int j = 0; j <= n[1]; ++j) {
-                        Vec3& x = mesh.X[lattice_index(i, j, k, n[0], n[1])];
-                        x.x() = rest.x() + fraction * (to_x - rest.x());
-                        x.z() = rest.z() + fraction * (to_z - rest.z());
-                    }
-                    bool is_ok = true;
-                    for (int j = 0; j <= n[1] && is_ok; ++j)
-                        is_ok = incident_tets_keep_min_volume(lattice_index(i, j, k, n[0], n[1]));
-                    if (is_ok) break;
-                }
-            }
-    }
-
-    if (is_jittered) {
-        // move interior points only, so the body's faces stay flat and its volume exact; a
-        // move that would squash an incident tet below kMinFraction of its volume is re-drawn
-        constexpr int kTries = 8;
-        const Real radius = box.jitter * step.minCoeff();
-        std::mt19937 rng(seed);
-        for (int k = 1; k < n[2]; ++k)
-            for (int j = 1; j < n[1]; ++j)
-                for (int i = 1; i < n[0]; ++i) {
-                    const auto [is_used, is_rim] = point_column(i, k);
-                    if (!is_used || is_rim) continue;
-                    const int32_t v = lattice_index(i, j, k, n[0], n[1]);
-                    const Vec3 rest = mesh.X[v];
-                    for (int attempt = 0; attempt < kTries; ++attempt) {
-                        mesh.X[v] = rest + radius * uniform_in_ball(rng);
-                        if (incident_tets_keep_min_volume(v)) break;
-                        mesh.X[v] = rest;
-                    }
-                }
+    if (is_ellipse) mesh.tets = columns.kept_tets(mesh.tets, n[1]);
+    if (is_ellipse || is_jittered) {
+        const Real min_volume = kMinVolumeFraction * step.prod() / 6;  // every Kuhn tet is a sixth
+        const VertexTets vt = vertex_tets(mesh.X.size(), mesh.tets);
+        if (is_ellipse) snap_rim_to_ellipse(box, n, columns, vt, min_volume, mesh);
+        if (is_jittered)
+            jitter_interior(n, columns, vt, box.jitter * step.minCoeff(), min_volume, seed, mesh);
     }
     if (is_ellipse) drop_unused_vertices(mesh);
     return mesh;
