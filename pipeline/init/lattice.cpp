@@ -58,6 +58,19 @@ std::string vec_text(const Vec3& v) {
 /// share of its rest volume.
 constexpr Real kMinVolumeFraction = 0.2;
 
+/// The ellipse inscribed in a box's x-z rectangle.
+struct InscribedEllipse {
+    explicit InscribedEllipse(const BoxSource& box)
+        : centre((box.min + box.max) / 2),
+          semi((box.max - box.min) / 2) {}
+    /// The square of (x, z)'s radius in the ellipse's own units: 1 on it, below 1 inside.
+    Real radius2(Real x, Real z) const {
+        const Real u = (x - centre.x()) / semi.x(), w = (z - centre.z()) / semi.z();
+        return u * u + w * w;
+    }
+    Vec3 centre, semi;
+};
+
 /// The lattice's columns of cells (i, k), nx x nz, that a box's footprint keeps: all of them for
 /// the rectangle, those whose centre lies in the inscribed ellipse for the ellipse.
 class FootprintColumns {
@@ -67,13 +80,12 @@ public:
           m_nz(nz),
           m_is_kept(static_cast<size_t>(nx) * nz, 1) {
         if (box.footprint != Footprint::Ellipse) return;
-        const Vec3 centre = (box.min + box.max) / 2, semi = (box.max - box.min) / 2;
+        const InscribedEllipse ellipse(box);
         for (int k = 0; k < nz; ++k)
-            for (int i = 0; i < nx; ++i) {
-                const Real u = (box.min.x() + (i + Real(0.5)) * step.x() - centre.x()) / semi.x();
-                const Real w = (box.min.z() + (k + Real(0.5)) * step.z() - centre.z()) / semi.z();
-                m_is_kept[i + nx * k] = u * u + w * w <= 1;
-            }
+            for (int i = 0; i < nx; ++i)
+                m_is_kept[i + nx * k] =
+                    ellipse.radius2(box.min.x() + (i + Real(0.5)) * step.x(),
+                                    box.min.z() + (k + Real(0.5)) * step.z()) <= 1;
     }
     bool is_kept(int i, int k) const {
         return i >= 0 && i < m_nx && k >= 0 && k < m_nz && m_is_kept[i + m_nx * k];
@@ -119,15 +131,14 @@ bool incident_tets_keep(const TetMesh& mesh, const VertexTets& vt, int32_t v, Re
 /// squashed, the move is cut short, by eighths, until its tets keep min_volume.
 void snap_rim_to_ellipse(const BoxSource& box, const int n[3], const FootprintColumns& columns,
                          const VertexTets& vt, Real min_volume, TetMesh& mesh) {
-    const Vec3 centre = (box.min + box.max) / 2, semi = (box.max - box.min) / 2;
+    const InscribedEllipse ellipse(box);
+    const Vec3& centre = ellipse.centre;
     for (int k = 0; k <= n[2]; ++k)
         for (int i = 0; i <= n[0]; ++i) {
             const int kept = columns.kept_around(i, k);
             if (kept == 0 || kept == 4) continue;
             const Vec3 rest = mesh.X[lattice_index(i, 0, k, n[0], n[1])];
-            const Real u = (rest.x() - centre.x()) / semi.x();
-            const Real w = (rest.z() - centre.z()) / semi.z();
-            const Real radius = std::sqrt(u * u + w * w);
+            const Real radius = std::sqrt(ellipse.radius2(rest.x(), rest.z()));
             if (!(radius > 0)) continue;
             const Real to_x = centre.x() + (rest.x() - centre.x()) / radius;
             const Real to_z = centre.z() + (rest.z() - centre.z()) / radius;

@@ -65,14 +65,15 @@ constexpr double kMaxLiftOff = 0.02;
 // of plates, as drying mud cracks. At least 6 effective plates with the largest holding at most
 // 30 % of the top as its plates meshes cut it (what renders), and at least 20 polygons of 4 or more
 // top particles by the broken edges. The count of effective plates by the broken edges is not
-// held: one unbroken edge across a crack joins two polygons in it, and the puddle's leak into 1.38,
-// 2.04 and 4.84 effective plates on seeds 1-3 (2 threads, 2026-11-29) where its meshes cut 17.3,
-// 14.5 and 12.2 (the largest 11.5, 15.4 and 18.5 %) from 35, 39 and 48 polygons. A network that
-// does not draw the grid: at most 40 % of its inland crack length within 15 degrees of the grid
-// axes (issue 31's bar; 33 % is isotropic, the fixed grid draws 70-95 %: fig4_bunny 70.1, fig6
-// 91-95 on a uniform slab): 32.0, 28.1 and 30.6 % on seeds 1-3, where the 0.9 m square the demo
-// was until then put 43.8, 56.1 and 50.8 % along its edges. A network of a few dozen cracks is a
-// small sample, so the bars test the claim on the shipped seed, not the bits; the other seeds are
+// held: an unbroken edge across a crack joins two polygons in it, and near the puddle's rim
+// several bands of broken edges fade before they reach it (docs/physics.md §6.7), so that count
+// gives 1.38, 2.04 and 4.84 effective plates on seeds 1-3 (2 threads, 2026-11-29) where the meshes
+// cut 17.3, 14.5 and 12.2 (the largest 11.5, 15.4 and 18.5 %) from 35, 39 and 48 polygons. A
+// network that does not draw the grid: at most 40 % of its inland crack length within 15 degrees of
+// the grid axes (issue 31's bar; 33 % is isotropic, the fixed grid draws 70-95 %: fig4_bunny 70.1,
+// fig6 91-95 on a uniform slab): 32.0, 28.1 and 30.6 % on seeds 1-3, where the 0.9 m square the
+// demo was until then put 43.8, 56.1 and 50.8 % along its edges. A network of a few dozen cracks is
+// a small sample, so the bars test the claim on the shipped seed, not the bits; the other seeds are
 // measured by mc-measure and reported in the README. And cracks that come across the shot: half
 // of the last frame's broken edges by a frame between 35 and 65 % of the frame range (40 % on
 // seeds 1-3).
