@@ -210,21 +210,25 @@ void check_edges_and_columns(const CoreTopology& topo, const std::vector<uint8_t
                          std::to_string(topo.n_particles));
 }
 
-TopLayer top_layer_components(const CoreTopology& topo, const std::vector<uint8_t>& is_broken,
-                              const RestColumns& columns, const char* what) {
-    check_edges_and_columns(topo, is_broken, columns, what);
-    TopLayer layer;
+/// 1 for the particles within two column widths of their column's top.
+std::vector<uint8_t> top_layer_mask(const CoreTopology& topo, const RestColumns& columns) {
     std::vector<uint8_t> on_top(topo.n_particles, 0);
     for (int32_t c = 0; c < columns.n_columns(); ++c) {
         const Real top_y = topo.X[columns.particle[columns.begin[c + 1] - 1]].y();
         for (int32_t k = columns.begin[c]; k < columns.begin[c + 1]; ++k) {
             const int32_t p = columns.particle[k];
-            if (topo.X[p].y() > top_y - 2 * columns.width) {
-                on_top[p] = 1;
-                ++layer.top_particles;
-            }
+            if (topo.X[p].y() > top_y - 2 * columns.width) on_top[p] = 1;
         }
     }
+    return on_top;
+}
+
+TopLayer top_layer_components(const CoreTopology& topo, const std::vector<uint8_t>& is_broken,
+                              const RestColumns& columns, const char* what) {
+    check_edges_and_columns(topo, is_broken, columns, what);
+    TopLayer layer;
+    const std::vector<uint8_t> on_top = top_layer_mask(topo, columns);
+    layer.top_particles = static_cast<int32_t>(std::count(on_top.begin(), on_top.end(), 1));
     std::vector<int32_t> parent(topo.n_particles);
     std::iota(parent.begin(), parent.end(), 0);
     for (int32_t e = 0; e < topo.n_edges(); ++e) {
@@ -280,6 +284,34 @@ SurfacePolygons measure_surface_polygons(const CoreTopology& topo,
     polygons.largest_fraction = summary.largest_fraction;
     if (summary.weighted_mean > 0) polygons.effective_count = summary.total / summary.weighted_mean;
     return polygons;
+}
+
+UnopenedWalls measure_unopened_walls(const CoreTopology& topo,
+                                     const std::vector<uint8_t>& is_broken,
+                                     const std::vector<uint8_t>& is_cut, const RestColumns& columns,
+                                     const std::vector<Vec3>& x, const std::vector<float>& Jw) {
+    check_edges_and_columns(topo, is_broken, columns, "unopened walls");
+    check_edges_and_columns(topo, is_cut, columns, "unopened walls");
+    if (x.size() != static_cast<size_t>(topo.n_particles) || !(Jw.empty() || Jw.size() == x.size()))
+        throw InputError("unopened walls: " + std::to_string(x.size()) + " positions and " +
+                         std::to_string(Jw.size()) + " Jw for " + std::to_string(topo.n_particles) +
+                         " particles");
+    const std::vector<uint8_t> on_top = top_layer_mask(topo, columns);
+    const auto shrink = [&](int32_t p) { return Jw.empty() ? Real(1) : std::cbrt(Real(Jw[p])); };
+    UnopenedWalls walls;
+    std::vector<Real> strain;
+    for (int32_t e = 0; e < topo.n_edges(); ++e) {
+        const auto [p, q] = topo.edges[e];
+        if (!is_cut[e] || !on_top[p] || !on_top[q]) continue;
+        ++walls.wall_edges;
+        if (is_broken[e]) continue;
+        const Real dried_rest = (topo.X[p] - topo.X[q]).norm() * 0.5 * (shrink(p) + shrink(q));
+        strain.push_back((x[p] - x[q]).norm() / dried_rest - 1);
+    }
+    walls.unopened_edges = static_cast<int32_t>(strain.size());
+    if (walls.wall_edges > 0) walls.unopened_fraction = Real(strain.size()) / walls.wall_edges;
+    if (!strain.empty()) walls.unopened_strain_median = quantile(strain, 0.5);
+    return walls;
 }
 
 CrackDepth measure_crack_depth(const CoreTopology& topo, const std::vector<uint8_t>& is_broken,

@@ -131,6 +131,28 @@ std::vector<int32_t> top_polygon_labels(const CoreTopology& topo,
                                         const std::vector<uint8_t>& is_broken,
                                         const RestColumns& columns, int min_particles);
 
+/// Where the plates meshes part the top and the top did not open. The plates mode (surfacing's
+/// shot fracture) parts two plates wherever a band of broken edges separates them, and cuts the
+/// band where it opened most; a band whose breaks lie below the top, or are scattered through it,
+/// is cut across top-layer edges that never broke. Those walls close a polygon that the broken
+/// edges leave joined: the count by broken edges and the count by the meshes differ by them.
+struct UnopenedWalls {
+    int32_t wall_edges = 0;      // top-layer edges the plates mode cuts
+    int32_t unopened_edges = 0;  // of those, the edges that never broke
+    Real unopened_fraction = 0;  // unopened_edges / wall_edges
+    /// Median over the unopened edges of their length over their dried rest length (the rest
+    /// length times the mean Jw^(1/3) of their ends, which uniformly dried soil keeps), minus 1:
+    /// near 0 where the top holds as if no crack ran under it.
+    Real unopened_strain_median = 0;
+};
+
+/// `is_broken` and `is_cut` per edge of `topo` at one frame, `x` the particles' positions then and
+/// `Jw` their pore deformation (empty: no moisture, Jw = 1).
+UnopenedWalls measure_unopened_walls(const CoreTopology& topo,
+                                     const std::vector<uint8_t>& is_broken,
+                                     const std::vector<uint8_t>& is_cut, const RestColumns& columns,
+                                     const std::vector<Vec3>& x, const std::vector<float>& Jw);
+
 /// Bins of CrackNetwork's histograms: 15 degrees each, over a line's directions and around a
 /// junction.
 constexpr int kCrackDirectionBins = 12;

@@ -270,6 +270,46 @@ TEST_F(SurfacePolygonsTest, ACrackThatStopsBelowTheTopLayerDoesNotCutTheSurface)
     EXPECT_NEAR(s.weighted_mean_area, footprint(), tol::kRoundoff);
 }
 
+// The plates mode's walls over the top, against the breaks under them: a wall whose top edges
+// broke is open; one cut where only the soil below broke holds, and a uniformly dried top over it
+// sits at its dried rest length (Jw^(1/3) of the rest), so its strain is 0, not Jw^(1/3) - 1.
+TEST_F(SurfacePolygonsTest,
+       UnopenedWallsAreCutTopEdgesThatNeverBrokeAndTheirStrainOverTheDriedRest) {
+    const std::vector<uint8_t> wall = cut(1e9);
+    const float jw = 0.512f;  // Jw^(1/3) = 0.8
+    std::vector<Vec3> dried(m_topo.X.begin(), m_topo.X.end());
+    for (Vec3& p : dried) p *= std::cbrt(Real(jw));
+    const std::vector<float> Jw(dried.size(), jw);
+
+    const UnopenedWalls open = measure_unopened_walls(m_topo, wall, wall, m_columns, dried, Jw);
+    EXPECT_GT(open.wall_edges, 0);
+    EXPECT_EQ(open.unopened_edges, 0);
+    EXPECT_EQ(open.unopened_fraction, 0);
+
+    // broken only below the top layer (its two particle rows are y = 0.3 and 0.4)
+    const std::vector<uint8_t> below = cut(0.25);
+    const UnopenedWalls held = measure_unopened_walls(m_topo, below, wall, m_columns, dried, Jw);
+    EXPECT_EQ(held.wall_edges, open.wall_edges);
+    EXPECT_EQ(held.unopened_edges, held.wall_edges);
+    EXPECT_EQ(held.unopened_fraction, 1);
+    EXPECT_NEAR(held.unopened_strain_median, 0, tol::kRoundoff);
+
+    // the side beyond the cut moved away by 0.01 m: an edge along x, 0.08 m dried, opens by
+    // 0.01 / 0.08; an edge across at an angle opens by less than that share of its length
+    std::vector<Vec3> parted = dried;
+    for (Vec3& p : parted)
+        if (p.x() > 0.8 * 4 * kH) p.x() += 0.01;
+    const UnopenedWalls opening =
+        measure_unopened_walls(m_topo, below, wall, m_columns, parted, Jw);
+    EXPECT_GT(opening.unopened_strain_median, 0.01);
+    EXPECT_LE(opening.unopened_strain_median, 0.125 + tol::kRoundoff);
+
+    EXPECT_THROW(measure_unopened_walls(m_topo, below, wall, m_columns, dried, {jw}), InputError);
+    EXPECT_THROW(
+        measure_unopened_walls(m_topo, below, std::vector<uint8_t>(3, 0), m_columns, dried, Jw),
+        InputError);
+}
+
 TEST_F(SurfacePolygonsTest, RejectsMismatchedSizes) {
     EXPECT_THROW(measure_surface_polygons(m_topo, std::vector<uint8_t>(3, 0), m_columns, 1),
                  InputError);

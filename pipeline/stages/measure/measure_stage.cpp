@@ -130,14 +130,18 @@ json mesh_fields(const MeshPieces& m) {
 
 /// The plates mode's top polygons and crack directions, measured on the edges its meshes cut
 /// (the shot's fracture) where the fields without the prefix read the broken ones.
-json cut_fields(const SurfacePolygons& polygons, const CrackNetwork& network) {
+json cut_fields(const SurfacePolygons& polygons, const CrackNetwork& network,
+                const UnopenedWalls& unopened) {
     return {{"mesh_surface_polygons", polygons.count},
             {"mesh_effective_surface_polygons", polygons.effective_count},
             {"mesh_largest_polygon_fraction", polygons.largest_fraction},
             {"mesh_weighted_mean_polygon_area", polygons.weighted_mean_area},
             {"mesh_oriented_crack_points", network.oriented_points},
             {"mesh_axis_aligned_fraction", network.axis_aligned_fraction},
-            {"mesh_crack_direction_histogram", network.direction_histogram}};
+            {"mesh_crack_direction_histogram", network.direction_histogram},
+            {"mesh_top_wall_edges", unopened.wall_edges},
+            {"mesh_unopened_wall_fraction", unopened.unopened_fraction},
+            {"mesh_unopened_wall_strain_median", unopened.unopened_strain_median}};
 }
 
 json motion_fields(const SurfaceMotion& m) {
@@ -389,7 +393,9 @@ FrameMeasures measure_frame(const Shot& shot, const RestSetup& rest,
         f.cut_polygons =
             measure_surface_polygons(topo, is_cut, rest.columns, surfacing.min_particles);
         f.cut_network = measure_crack_network(topo, is_cut, rest.columns, surfacing.min_particles);
-        f.row.update(cut_fields(*f.cut_polygons, *f.cut_network));
+        f.row.update(
+            cut_fields(*f.cut_polygons, *f.cut_network,
+                       measure_unopened_walls(topo, is_broken, is_cut, rest.columns, x, frame.Jw)));
     }
     if (motion_tracker) f.motion = motion_tracker->step(frame);
     if (f.motion) f.row.update(motion_fields(*f.motion));
