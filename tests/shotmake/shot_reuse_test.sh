@@ -146,7 +146,7 @@ done
 [ "$(base_files)" = "$before" ] || fail "make shot cut changed base's files"
 
 echo "== a sim key edited in both shots: base's sim and surfacing, then look's render (make -j2)"
-for f in "$base" "$look"; do edit "$f" 's/"D": 0.00556,/"D": 0.0066,/' "the diffusivity"; done
+for f in "$base" "$look"; do edit "$f" 's/"D": 0.01,/"D": 0.0066,/' "the diffusivity"; done
 base_render=$(stat -c %Y.%y "$out/base/render/manifest.json")
 shot_make look -j2 || { cat "$tmp/make.txt"; fail "make -j2 after the sim edit failed"; }
 got=$(ran)
