@@ -137,7 +137,7 @@ for arg in "$@"; do
             (if $m.fragments > 1 then "\($m.fragments) fragments (the largest \($m.largest_fragment_fraction | pct) of the soil)" else empty end),
             "\($m.split_fraction | pct) of columns split" + (if $m.split_fraction > 0 then " \($m.split_height_median_cells * 10 | round / 10) cells up" else "" end),
             "\($m.lifted_fraction | pct) lifted",
-            (if $m.oriented_crack_points > 0 then "\($m.axis_aligned_fraction | pct) of the crack length along the grid axes" else empty end),
+            (if $m.oriented_crack_points > 0 then "\($m.axis_aligned_fraction | pct) of the crack length along the grid axes" + (if $m.axis_aligned_fraction_stderr != null then " (standard error \($m.axis_aligned_fraction_stderr | pct) over its \($m.oriented_cracks) cracks)" else "" end) else empty end),
             (if $m.junctions > 0 then "\($m.junctions) junctions (\($m.t_junction_fraction | pct) T, \($m.y_junction_fraction | pct) Y)" else empty end),
             (if ($m.cracked_top_fraction // 0) > 0 then "\($m.cracked_top_fraction | pct) of the top cracked, \($m.crack_depth_p90 * 100 | round / 100) m deep at the 90th percentile (\($m.crack_depth_max * 100 | round / 100) m at most)" else empty end),
             "surface \($m.surface_stretched_fraction | pct) stretched, \($m.surface_compressed_fraction | pct) compressed",

@@ -4,6 +4,7 @@
 #include <cmath>
 #include <map>
 #include <numeric>
+#include <random>
 #include <set>
 #include <string>
 
@@ -417,15 +418,41 @@ bool is_inland(const ColumnCells& footprint, const RestColumns& columns, const V
     return true;
 }
 
+// The standard error of the aligned share over the cracks it is drawn from: `crack` holds each
+// crack's aligned and oriented point counts; the share is resampled kBootstrapResamples times by
+// drawing as many cracks with replacement (mt19937_64 from a fixed seed, whose output the standard
+// fixes bit for bit, reduced by our own modulo: the same figure with any standard library)
+Real crack_bootstrap_stderr(const std::vector<std::pair<int32_t, int32_t>>& crack) {
+    constexpr int kBootstrapResamples = 1000;
+    const uint64_t n = crack.size();
+    if (n < 2) return 0;
+    std::mt19937_64 rng(0x5eed);
+    Real sum = 0, sum_sq = 0;
+    for (int r = 0; r < kBootstrapResamples; ++r) {
+        int64_t aligned = 0, oriented = 0;
+        for (uint64_t k = 0; k < n; ++k) {
+            const auto& [a, o] = crack[rng() % n];
+            aligned += a, oriented += o;
+        }
+        const Real share = Real(aligned) / Real(oriented);
+        sum += share, sum_sq += share * share;
+    }
+    const Real mean = sum / kBootstrapResamples;
+    return std::sqrt(std::max(Real(0), sum_sq / kBootstrapResamples - mean * mean));
+}
+
 // local direction: the principal axis of the crack points around each inland one, where they
 // line up (an isotropic cloud, the rubble of a wide crack band or a junction, has no direction:
-// an eigen solver would hand back a coordinate axis for it); sets oriented_points and
-// axis_aligned_fraction
-void measure_crack_directions(const std::vector<Vec2>& point, const PointGrid& grid, Real radius,
-                              const ColumnCells& footprint, const RestColumns& columns,
-                              CrackNetwork& net) {
+// an eigen solver would hand back a coordinate axis for it); sets oriented_points,
+// axis_aligned_fraction and its standard error over the cracks (`pair`: each point's crack)
+void measure_crack_directions(const std::vector<Vec2>& point,
+                              const std::vector<std::pair<int32_t, int32_t>>& pair,
+                              const PointGrid& grid, Real radius, const ColumnCells& footprint,
+                              const RestColumns& columns, CrackNetwork& net) {
     int32_t aligned = 0, oriented = 0;
-    for (const Vec2& at : point) {
+    std::map<std::pair<int32_t, int32_t>, std::pair<int32_t, int32_t>> by_crack;
+    for (size_t i = 0; i < point.size(); ++i) {
+        const Vec2& at = point[i];
         if (!is_inland(footprint, columns, at)) continue;
         Vec2 mean = Vec2::Zero();
         int n = 0;
@@ -442,10 +469,17 @@ void measure_crack_directions(const std::vector<Vec2>& point, const PointGrid& g
         const Real angle = line_angle_deg(eig.eigenvectors().col(1));  // the larger eigenvalue's
         const Real off_axis = std::min({angle, std::abs(angle - 90), 180 - angle});
         aligned += off_axis <= 15;
+        auto& [crack_aligned, crack_oriented] = by_crack[pair[i]];
+        crack_aligned += off_axis <= 15, ++crack_oriented;
         ++net.direction_histogram[angle_bin(angle, kCrackDirectionBins)];
     }
     net.oriented_points = oriented;
     if (oriented > 0) net.axis_aligned_fraction = Real(aligned) / oriented;
+    std::vector<std::pair<int32_t, int32_t>> crack;
+    crack.reserve(by_crack.size());
+    for (const auto& [key, counts] : by_crack) crack.push_back(counts);
+    net.oriented_cracks = static_cast<int32_t>(crack.size());
+    net.axis_aligned_fraction_stderr = crack_bootstrap_stderr(crack);
 }
 
 // The crack points of one polygon pair near a junction, as offsets from its centre. Its
@@ -568,8 +602,8 @@ CrackNetwork measure_crack_network(const CoreTopology& topo, const std::vector<u
     const PointGrid grid(point, branch_radius);
     // the rim is left out of the directions: cracks along the slab's own edges follow its
     // outline, not the grid, and a box's outline runs along the grid axes
-    measure_crack_directions(point, grid, direction_radius, footprint_cells(topo, columns), columns,
-                             net);
+    measure_crack_directions(point, pair, grid, direction_radius, footprint_cells(topo, columns),
+                             columns, net);
     classify_junctions(point, pair, grid, junction_radius, branch_radius, w, net);
     return net;
 }

@@ -3,6 +3,7 @@
 
 #include <array>
 #include <cmath>
+#include <cstdio>
 #include <numeric>
 #include <vector>
 
@@ -405,6 +406,36 @@ TEST_F(CrackNetworkTest, CracksAlongTheGridAreAxisAlignedOnesAcrossItAreNot) {
     EXPECT_EQ(sum(b.direction_histogram), b.oriented_points);
     EXPECT_GT(a.direction_histogram[6], 0.95 * a.oriented_points);
     EXPECT_GT(b.direction_histogram[2], 0.9 * b.oriented_points);
+}
+
+// The axis share's standard error is over cracks, not points: a crack's points all share its
+// direction, so one crack is one draw however long it is. One crack: no spread. Two through
+// cracks that cross, one along z and one at 30 degrees, part four polygons along four cracks,
+// two aligned and two not: an error near that of a 4-sample share (sqrt(p (1 - p) / 4), 0.25 at
+// p = 1/2), many times what the same share over its hundreds of points would claim.
+TEST_F(CrackNetworkTest, TheAxisShareIsASampleOfCracksWhoseErrorTheCrackCountSets) {
+    std::vector<uint8_t> one = none(), crossed = none();
+    cut(Vec2(1.53, -1), Vec2(1.53, 4), one);
+    cut(Vec2(1.53, -1), Vec2(1.53, 4), crossed);
+    cut(Vec2(-1, 0.5), Vec2(4, 0.5 + 5 * std::tan(0.5236)), crossed);
+    const CrackNetwork a = measure_crack_network(m_topo, one, m_columns, 1);
+    EXPECT_EQ(a.oriented_cracks, 1);
+    EXPECT_EQ(a.axis_aligned_fraction_stderr, 0);
+
+    const CrackNetwork b = measure_crack_network(m_topo, crossed, m_columns, 1);
+    ASSERT_EQ(b.oriented_cracks, 4);
+    const double p = b.axis_aligned_fraction;
+    ASSERT_GT(p, 0.2);
+    ASSERT_LT(p, 0.8);
+    const double by_points = std::sqrt(p * (1 - p) / b.oriented_points);
+    EXPECT_GT(b.axis_aligned_fraction_stderr, 0.12);
+    EXPECT_LT(b.axis_aligned_fraction_stderr, 0.4);
+    EXPECT_GT(b.axis_aligned_fraction_stderr, 3 * by_points) << b.oriented_points << " points";
+    std::printf("aligned %.3f over %d points in %d cracks: stderr %.3f (over points %.3f)\n", p,
+                b.oriented_points, b.oriented_cracks, b.axis_aligned_fraction_stderr, by_points);
+    // a fixed seed: the same network, the same figure
+    EXPECT_EQ(measure_crack_network(m_topo, crossed, m_columns, 1).axis_aligned_fraction_stderr,
+              b.axis_aligned_fraction_stderr);
 }
 
 TEST_F(CrackNetworkTest, ACrackEndingOnAnotherIsATJunctionThreeFromAPointAreAY) {
