@@ -179,7 +179,9 @@ struct CrackNetwork {
     int32_t oriented_cracks = 0;
     /// The share's standard error over those cracks: the spread of the share over 1,000
     /// resamplings of the cracks with replacement (a bootstrap; fixed seed, so the same network
-    /// gives the same figure). 0 for a single crack. A few long cracks give a wide error; a
+    /// gives the same figure). 0 for a single crack. The cracks inside one polygon that have not
+    /// yet cut it count as one, so a network that has not closed (a shot's first cracks) reads
+    /// as a few cracks with too small an error. A few long cracks give a wide error; a
     /// share two or more of these over 1/3 is more than the chance of which cracks the network
     /// drew (treating its cracks as independent draws).
     Real axis_aligned_fraction_stderr = 0;
