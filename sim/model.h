@@ -57,6 +57,15 @@ struct MoistureParams {
     /// Surface: the particles of the exposed layer lose water themselves, exactly (an exponential
     /// decay towards theta0), and the CG carries only diffusion (docs/physics.md §6.3).
     enum class Evaporation { Grid, Surface } evaporation = Evaporation::Grid;
+    /// How L, the diffusion's stiffness, is discretised (docs/physics.md §4.9). Particles: the
+    /// paper's particle quadrature, L_ij = sum_p V_p D grad w_ip . grad w_jp, applied matrix-free
+    /// by one gather/scatter pass over the particles per CG iteration. Grid: a finite-volume
+    /// Laplacian between face-adjacent nodes, conductance D hm(W_i, W_j) / h^2 (hm the harmonic
+    /// mean), applied on the grid alone; the same conservation and zero flux into empty nodes.
+    enum class DiffusionOperator {
+        Particles,
+        Grid
+    } diffusion_operator = DiffusionOperator::Particles;
     int interval = 1;             // solve moisture every k MPM steps with dt_m = k dt
     Real max_log_jw_step = 1e-3;  // cap on |log(Jw^n/Jw^{n+1})| per step (docs/physics.md §3.2)
     /// When the drying starts (docs/physics.md §6.3): no evaporation until ramp_start, then

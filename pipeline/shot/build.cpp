@@ -268,6 +268,16 @@ void build_moisture(json& tree, SimModel& model, Issues& issues) {
     m.evaporation = text(tree, "/moisture/evaporation") == "surface"
                         ? MoistureParams::Evaporation::Surface
                         : MoistureParams::Evaporation::Grid;
+    // optional, so the slices of the shots that leave it out (the paper's operator) stay as they
+    // were and their caches stay valid
+    m.diffusion_operator = has(tree, "/moisture/diffusion_operator") &&
+                                   text(tree, "/moisture/diffusion_operator") == "grid"
+                               ? MoistureParams::DiffusionOperator::Grid
+                               : MoistureParams::DiffusionOperator::Particles;
+    if (m.implicit_robin && m.diffusion_operator == MoistureParams::DiffusionOperator::Grid)
+        issues.add("/moisture/implicit_robin", issues.value_of(tree, "/moisture/implicit_robin"),
+                   "must be false with /moisture/diffusion_operator = \"grid\" (the implicit "
+                   "Robin term is a particle sum; the grid operator makes no particle pass)");
     if (m.implicit_robin && m.evaporation == MoistureParams::Evaporation::Surface)
         issues.add(
             "/moisture/implicit_robin", issues.value_of(tree, "/moisture/implicit_robin"),

@@ -180,6 +180,10 @@ std::vector<KeySpec> build_fixed_table() {
         .doc("grid: the paper's r term, from particles whose stencil touches a surface node (a drying "
              "front about 2 cells deep); surface: the exposed particle layer loses water itself, so a "
              "crust can be one particle layer thin when D is small (docs/physics.md §6.3)"),
+    Key("/moisture/diffusion_operator", T::Enum).optional().choices({"particles", "grid"}).units("")
+        .doc("particles (when omitted): the paper's particle-quadrature L, one pass over the particles "
+             "per CG iteration; grid: a finite-volume Laplacian between face-adjacent grid nodes, no "
+             "particle pass (docs/physics.md §4.9); grid needs implicit_robin false"),
     Key("/moisture/evaporation_ramp", T::Vec2).optional().ge(0).units("frames")
         .doc("[start, full]: when the drying begins, in the shot's own frames: no evaporation until "
              "the end of frame start, then lambda rising linearly to its full value at the end of "

@@ -533,12 +533,90 @@ void operator_pass(const MoistureParams& mp, const SparseGrid& grid,
     });
 }
 
+// The node beside node (a, b, c) of block slot `blk` along axis d, on the + side or the - side:
+// its index in the node fields, or -1 where its block is not allocated (no material there).
+inline int64_t face_neighbor_node(const MoistureGrid& mg, int64_t blk, int a, int b, int c, int d,
+                                  bool plus) {
+    int q[3] = {a, b, c};
+    q[d] += plus ? 1 : -1;
+    int64_t slot = blk;
+    if (q[d] < 0 || q[d] >= kBlockWidth) {
+        slot = mg.block_face_neighbors[blk][2 * d + (plus ? 1 : 0)];
+        if (slot < 0) return -1;
+        q[d] = plus ? 0 : kBlockWidth - 1;
+    }
+    return slot * kBlockNodes + mpm::block_node_index(q[0], q[1], q[2]);
+}
+
+// Calls body(blk, a, b, c, i) for every node of every allocated block, blocks in parallel: (a, b,
+// c) its coordinates in block slot blk, i its index in the node fields.
+template <class Body>
+void for_each_node(const SparseGrid& grid, Body&& body) {
+    parallel_for(static_cast<int64_t>(grid.n_blocks()), [&](int64_t blk) {
+        for (int a = 0; a < kBlockWidth; ++a)
+            for (int b = 0; b < kBlockWidth; ++b)
+                for (int c = 0; c < kBlockWidth; ++c)
+                    body(blk, a, b, c, blk * kBlockNodes + mpm::block_node_index(a, b, c));
+    });
+}
+
+// The grid operator's conductances (docs/physics.md §4.9): mg.conductance[3 i + d] = D hm(W_i,
+// W_{i+e_d}) / h^2 towards the + neighbour along axis d, 0 where either node is empty.
+void build_conductances(const MoistureParams& mp, const SparseGrid& grid, MoistureGrid& mg) {
+    const Real scale = mp.D * grid.geo.inv_h * grid.geo.inv_h;
+    mg.conductance.resize(static_cast<int64_t>(grid.n_blocks()) * kBlockNodes * 3);
+    for_each_node(grid, [&](int64_t blk, int a, int b, int c, int64_t i) {
+        for (int d = 0; d < 3; ++d) {
+            const int64_t j = face_neighbor_node(mg, blk, a, b, c, d, true);
+            mg.conductance[3 * i + d] = j < 0 ? Real(0) : scale * face_weight(mg.W[i], mg.W[j]);
+        }
+    });
+}
+
+// Over node i's six faces: the sum of the conductances, and the sum of each times x at the node
+// across it (x = nullptr: the first alone).
+inline std::array<Real, 2> face_sums(const MoistureGrid& mg, int64_t blk, int a, int b, int c,
+                                     int64_t i, const Real* x) {
+    Real k_sum = 0, kx_sum = 0;
+    for (int d = 0; d < 3; ++d) {
+        const int64_t up = face_neighbor_node(mg, blk, a, b, c, d, true);
+        const int64_t down = face_neighbor_node(mg, blk, a, b, c, d, false);
+        const Real k_up = mg.conductance[3 * i + d];
+        const Real k_down = down < 0 ? Real(0) : mg.conductance[3 * down + d];
+        k_sum += k_up + k_down;
+        if (x) {
+            if (k_up != 0) kx_sum += k_up * x[up];
+            if (k_down != 0) kx_sum += k_down * x[down];
+        }
+    }
+    return {k_sum, kx_sum};
+}
+
+// y = L x with the grid operator: (L x)_i = sum over the faces k_f (x_i - x_j), node by node (no
+// scatter, so no colours, and the same bits for any thread count).
+void grid_operator_pass(const SparseGrid& grid, const MoistureGrid& mg, const Real* x, Real* y) {
+    for_each_node(grid, [&](int64_t blk, int a, int b, int c, int64_t i) {
+        const std::array<Real, 2> s = face_sums(mg, blk, a, b, c, i, x);
+        y[i] = s[0] * x[i] - s[1];
+    });
+}
+
+// The grid operator's Jacobi diagonal, W_i / dt plus the conductances of node i's six faces.
+void grid_operator_diagonal(const SparseGrid& grid, Real dt, MoistureGrid& mg) {
+    for_each_node(grid, [&](int64_t blk, int a, int b, int c, int64_t i) {
+        mg.diag[i] =
+            mg.W[i] > 0 ? mg.W[i] / dt + face_sums(mg, blk, a, b, c, i, nullptr)[0] : Real(0);
+    });
+}
+
 // y = L x (+ R x when the evaporation is implicit and on)
 template <class S>
 void apply_stiffness(const MoistureParams& mp, const SparseGrid& grid,
                      const MoistureParticlesOf<S>& pp, const MoistureGrid& mg, const Real* x,
                      Real* y, std::vector<std::vector<Real>>& windows) {
-    if (mp.implicit_robin && mp.lambda > 0)
+    if (mp.diffusion_operator == MoistureParams::DiffusionOperator::Grid)
+        grid_operator_pass(grid, mg, x, y);
+    else if (mp.implicit_robin && mp.lambda > 0)
         operator_pass<true, S>(mp, grid, pp, mg, x, y, windows);
     else
         operator_pass<false, S>(mp, grid, pp, mg, x, y, windows);
@@ -556,8 +634,9 @@ Real particle_area(Real volume) {
 int64_t MoistureGrid::memory_bytes() const {
     return capacity_bytes(W) + capacity_bytes(theta) + capacity_bytes(diag) +
            capacity_bytes(evaporation) + capacity_bytes(x) + capacity_bytes(r) + capacity_bytes(p) +
-           capacity_bytes(Ap) + capacity_bytes(surface) + capacity_bytes(particle_is_boundary) +
-           capacity_bytes(block_partial) + capacity_bytes(block_face_neighbors);
+           capacity_bytes(Ap) + capacity_bytes(surface) + capacity_bytes(conductance) +
+           capacity_bytes(particle_is_boundary) + capacity_bytes(block_partial) +
+           capacity_bytes(block_face_neighbors);
 }
 
 void begin_moisture_p2g(MoistureGrid& mg, const SparseGrid& grid) {
@@ -640,10 +719,14 @@ MoistureSolveStats solve_moisture(const MoistureParams& mp, const MoistureSeal& 
         }
     });
 
-    // surface nodes (docs/physics.md §4.4)
-    if (mp.lambda > 0) {
-        build_face_neighbors(grid, mg);
-        mark_surface_nodes(grid, seal, mg);
+    // surface nodes (docs/physics.md §4.4); the grid operator's conductances and its exact
+    // diagonal (§4.9)
+    const bool grid_operator = mp.diffusion_operator == MoistureParams::DiffusionOperator::Grid;
+    if (mp.lambda > 0 || grid_operator) build_face_neighbors(grid, mg);
+    if (mp.lambda > 0) mark_surface_nodes(grid, seal, mg);
+    if (grid_operator) {
+        build_conductances(mp, grid, mg);
+        grid_operator_diagonal(grid, dt, mg);
     }
     resize_zero(mg.evaporation, n_nodes);
     mg.particle_is_boundary.resize(n_particles);

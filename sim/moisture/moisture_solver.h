@@ -38,6 +38,8 @@ struct MoistureGrid {
     std::vector<Real> x;         // CG iterate; after the solve: theta^{n+1} - theta^n
     std::vector<Real> r, p, Ap;  // CG residual, direction, operator times direction
     std::vector<Real> surface;   // 1 at surface nodes (docs/physics.md §4.4), else 0
+    // the grid operator's conductances to the +x, +y and +z neighbour, 3 per node (§4.9)
+    std::vector<Real> conductance;
     std::vector<uint8_t> particle_is_boundary;  // per slot: evaporates this step
     std::vector<Real> block_partial;            // per-block partial sums (deterministic dots)
     // slots of the 6 face-adjacent blocks or -1
@@ -85,6 +87,12 @@ MoistureSolveStats solve_moisture(const MoistureParams& params, const MoistureSe
                                   const MoistureParticlesOf<StateReal>& particles, Real dt,
                                   MoistureGrid& mg, MoistureFluxHistory& history,
                                   std::vector<std::vector<Real>>& windows);
+
+/// The grid operator's conductance between two face-adjacent nodes of material weights W_i and
+/// W_j, per D / h^2: their harmonic mean, 0 when either is empty (docs/physics.md §4.9) [m^3].
+inline Real face_weight(Real Wi, Real Wj) {
+    return Wi > 0 && Wj > 0 ? 2 * Wi * Wj / (Wi + Wj) : Real(0);
+}
 
 /// Equivalent-sphere cross-section S = pi R^2, R = (3 V / (4 pi))^(1/3) of a particle of
 /// volume V (docs/physics.md §4.4) [m^2].

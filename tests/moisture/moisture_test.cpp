@@ -45,9 +45,12 @@ SimModel still_model(Real h) {
     return m;
 }
 
-TEST(Moisture, WaterIsConservedWithoutEvaporation) {
+class MoistureOperator : public ::testing::TestWithParam<MoistureParams::DiffusionOperator> {};
+
+TEST_P(MoistureOperator, WaterIsConservedWithoutEvaporation) {
     SimModel model = still_model(0.1);
     model.moisture->D = 0.5;  // D dt/h^2 = 0.05
+    model.moisture->diffusion_operator = GetParam();
     const test::Lattice l = make_lattice(Vec3::Zero(), Vec3i(10, 6, 8), 0.05);
     SimState s = make_initial_state(model, l.X, l.V0);
     std::mt19937 rng(11);
@@ -82,6 +85,15 @@ TEST(Moisture, WaterIsConservedWithoutEvaporation) {
     EXPECT_LT(spread(), 0.9 * spread0);
 }
 
+INSTANTIATE_TEST_SUITE_P(Operators, MoistureOperator,
+                         ::testing::Values(MoistureParams::DiffusionOperator::Particles,
+                                           MoistureParams::DiffusionOperator::Grid),
+                         [](const auto& info) {
+                             return info.param == MoistureParams::DiffusionOperator::Grid
+                                        ? "Grid"
+                                        : "Particles";
+                         });
+
 // L2 error of theta along a thin insulated bar against eta/2 erfc(x / (2 sqrt(D t)))
 Real diffusion_error(Real h) {
     const Real D = 0.01, t0 = 0.25, t1 = 0.5, L = 1.0;
@@ -113,9 +125,16 @@ TEST(Moisture, DiffusionMatchesErfAndConvergesAtSecondOrder) {
     EXPECT_GT(order23, 1.7);
 }
 
-TEST(Moisture, ConjugateGradientsMatchAnEigenDirectSolve) {
+using DiffusionOperator = MoistureParams::DiffusionOperator;
+
+// One step of still soil with random theta against an Eigen direct solve of (M + L) theta^{n+1} =
+// M theta^n assembled over the nodes the particles touch, L as `op` discretises it
+// (docs/physics.md §4.2, §4.9): the particles' quadrature of grad w . grad w, or the grid
+// operator's face conductances D hm(W_i, W_j) / h^2 between face-adjacent nodes.
+void expect_step_matches_direct_solve(DiffusionOperator op) {
     SimModel model = still_model(0.1);
     model.moisture->D = 1.0;  // D dt/h^2 = 1: L matters
+    model.moisture->diffusion_operator = op;
     const Real dt = 1e-2;
     const test::Lattice l = make_lattice(Vec3::Zero(), Vec3i(8, 7, 6), 0.05);
     SimState s = make_initial_state(model, l.X, l.V0);
@@ -159,9 +178,25 @@ TEST(Moisture, ConjugateGradientsMatchAnEigenDirectSolve) {
         for (const auto& [i, wi] : nodes) {
             W[i] += V[p] * wi.first;
             Vtheta[i] += V[p] * wi.first * theta0[p];
-            for (const auto& [j, wj] : nodes) A(i, j) += V[p] * D * wi.second.dot(wj.second);
+            if (op == DiffusionOperator::Particles)
+                for (const auto& [j, wj] : nodes) A(i, j) += V[p] * D * wi.second.dot(wj.second);
         }
     }
+    if (op == DiffusionOperator::Grid)
+        for (const auto& [node, i] : index)
+            for (int d = 0; d < 3; ++d) {
+                std::array<int, 3> up = node;
+                ++up[d];
+                const auto it = index.find(up);
+                if (it == index.end()) continue;
+                const int j = it->second;
+                // the harmonic mean of the two weights, written out (both are > 0 here)
+                const Real k = D * inv_h * inv_h * 2 * W[i] * W[j] / (W[i] + W[j]);
+                A(i, i) += k;
+                A(j, j) += k;
+                A(i, j) -= k;
+                A(j, i) -= k;
+            }
     Eigen::VectorXd theta_n = Vtheta.cwiseQuotient(W);
     for (int i = 0; i < n; ++i) A(i, i) += W[i] / dt;
     const Eigen::VectorXd rhs = (W / dt).cwiseProduct(theta_n);
@@ -191,6 +226,14 @@ TEST(Moisture, ConjugateGradientsMatchAnEigenDirectSolve) {
     }
     ASSERT_TRUE(std::isfinite(max_err));
     EXPECT_LT(max_err, 1e-10) << "CG and the Cholesky solve disagree";
+}
+
+TEST(Moisture, ConjugateGradientsMatchAnEigenDirectSolve) {
+    expect_step_matches_direct_solve(DiffusionOperator::Particles);
+}
+
+TEST(Moisture, TheGridOperatorMatchesAnEigenDirectSolveOfItsFaceLaplacian) {
+    expect_step_matches_direct_solve(DiffusionOperator::Grid);
 }
 
 // The preconditioner's kappa is L's diagonal per unit of W for a node amid evenly spread

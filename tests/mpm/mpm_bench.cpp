@@ -45,8 +45,12 @@ int bench_repetitions() {
     return env ? std::max(1, std::atoi(env)) : 3;
 }
 
-// moisture_interval: 0 = no moisture section, k = solve the moisture every k steps
-SimModel reference_model(int moisture_interval) {
+using DiffusionOperator = MoistureParams::DiffusionOperator;
+
+// moisture_interval: 0 = no moisture section, k = solve the moisture every k steps, with L
+// discretised by `diffusion_operator` (docs/physics.md §4.9)
+SimModel reference_model(int moisture_interval,
+                         DiffusionOperator diffusion_operator = DiffusionOperator::Particles) {
     SimModel m;
     m.h = 0.02;
     m.gravity = Vec3(0, -9.81, 0);
@@ -66,6 +70,7 @@ SimModel reference_model(int moisture_interval) {
     if (moisture_interval > 0) {
         m.moisture = MoistureParams{};
         m.moisture->interval = moisture_interval;
+        m.moisture->diffusion_operator = diffusion_operator;
     }
     return m;
 }
@@ -86,10 +91,11 @@ void reference_particles(std::vector<Vec3>& X, std::vector<Real>& V0) {
 }
 
 template <class S>
-void run_reference_scene(benchmark::State& bs, int moisture_interval) {
+void run_reference_scene(benchmark::State& bs, int moisture_interval,
+                         DiffusionOperator diffusion_operator) {
     const int threads = static_cast<int>(bs.range(0));
     set_thread_count(threads);
-    const SimModel model = reference_model(moisture_interval);
+    const SimModel model = reference_model(moisture_interval, diffusion_operator);
     std::vector<Vec3> X;
     std::vector<Real> V0;
     reference_particles(X, V0);
@@ -141,12 +147,14 @@ void run_reference_scene(benchmark::State& bs, int moisture_interval) {
     bs.counters["ns_rest"] = ns(loop_seconds - phases.total());
 }
 
-void BM_ReferenceScene(benchmark::State& bs, int moisture_interval) {
-    run_reference_scene<double>(bs, moisture_interval);
+void BM_ReferenceScene(benchmark::State& bs, int moisture_interval,
+                       DiffusionOperator diffusion_operator) {
+    run_reference_scene<double>(bs, moisture_interval, diffusion_operator);
 }
 // the same scene with a float state (/sim/precision "float"): its speed and bytes per particle
-void BM_ReferenceSceneFloat(benchmark::State& bs, int moisture_interval) {
-    run_reference_scene<float>(bs, moisture_interval);
+void BM_ReferenceSceneFloat(benchmark::State& bs, int moisture_interval,
+                            DiffusionOperator diffusion_operator) {
+    run_reference_scene<float>(bs, moisture_interval, diffusion_operator);
 }
 
 // the rollback point of sim/mpm/step_retry.h: a copy of the reference state (moisture arrays
@@ -175,11 +183,16 @@ void reference_scene_runs(benchmark::internal::Benchmark* b) {
     b->Unit(benchmark::kSecond);
 }
 
-BENCHMARK_CAPTURE(BM_ReferenceScene, NoMoisture, 0)->Apply(reference_scene_runs);
-BENCHMARK_CAPTURE(BM_ReferenceScene, Moisture, 1)->Apply(reference_scene_runs);
-BENCHMARK_CAPTURE(BM_ReferenceScene, MoistureEvery4Steps, 4)->Apply(reference_scene_runs);
-BENCHMARK_CAPTURE(BM_ReferenceSceneFloat, NoMoisture, 0)->Apply(reference_scene_runs);
-BENCHMARK_CAPTURE(BM_ReferenceSceneFloat, Moisture, 1)->Apply(reference_scene_runs);
+constexpr DiffusionOperator kParticles = DiffusionOperator::Particles;
+BENCHMARK_CAPTURE(BM_ReferenceScene, NoMoisture, 0, kParticles)->Apply(reference_scene_runs);
+BENCHMARK_CAPTURE(BM_ReferenceScene, Moisture, 1, kParticles)->Apply(reference_scene_runs);
+BENCHMARK_CAPTURE(BM_ReferenceScene, MoistureEvery4Steps, 4, kParticles)
+    ->Apply(reference_scene_runs);
+// the grid operator's L (/moisture/diffusion_operator "grid"): no particle pass in the CG
+BENCHMARK_CAPTURE(BM_ReferenceScene, MoistureGridOperator, 1, DiffusionOperator::Grid)
+    ->Apply(reference_scene_runs);
+BENCHMARK_CAPTURE(BM_ReferenceSceneFloat, NoMoisture, 0, kParticles)->Apply(reference_scene_runs);
+BENCHMARK_CAPTURE(BM_ReferenceSceneFloat, Moisture, 1, kParticles)->Apply(reference_scene_runs);
 
 }  // namespace
 }  // namespace mudcrack

@@ -63,6 +63,17 @@ TEST_P(ReportAccuracy, Diffusion3dConvergesInH) {
     EXPECT_LT(last_error(s), s.points.front().error);
 }
 
+// The grid operator (/moisture/diffusion_operator "grid") converges to the same solutions at the
+// same orders: it is another discretisation of the same equation, not a coarser one.
+TEST_P(ReportAccuracy, GridOperatorDiffusionConvergesInH) {
+    const Sweep bar = sweep_diffusion_1d_h(Scale::Reduced, GetParam(), DiffusionOperator::Grid);
+    EXPECT_GE(bar.order, kMinDiffusion1dOrderInH);
+    EXPECT_LT(last_error(bar), 1e-3);
+    const Sweep cube = sweep_diffusion_3d_h(Scale::Reduced, GetParam(), DiffusionOperator::Grid);
+    EXPECT_GE(cube.order, kMinDiffusion3dOrderInH);
+    EXPECT_LT(last_error(cube), cube.points.front().error);
+}
+
 TEST_P(ReportAccuracy, FreeDryingBlockEndsAtDryVolume) {
     for (const Sweep& s : {sweep_shrinkage_h(Scale::Reduced, GetParam()),
                            sweep_shrinkage_ppc(Scale::Reduced, GetParam())})

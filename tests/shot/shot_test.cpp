@@ -492,6 +492,27 @@ TEST_F(ShotTest, EvaporationRampFramesBecomeTimes) {
                     {"/moisture/evaporation_ramp"});
 }
 
+// The diffusion operator is chosen by name; a name the solver does not know, or the grid operator
+// with the implicit Robin term (a particle sum it has no pass for), is refused by key and value.
+TEST_F(ShotTest, DiffusionOperatorIsChosenByNameAndRefusedWhereItCannotServe) {
+    const std::string box = R"("source": {"type": "box", "box": {"min": [0, 0, 0],
+        "max": [1, 0.1, 1]}}, "material": {})";
+    const Shot shot = parse_shot(
+        R"({"mudcrack": 1, )" + box + R"(, "moisture": {"diffusion_operator": "grid"}})", "t.json");
+    ASSERT_TRUE(shot.sim.moisture);
+    EXPECT_EQ(shot.sim.moisture->diffusion_operator, MoistureParams::DiffusionOperator::Grid);
+    const Shot paper = parse_shot(R"({"mudcrack": 1, )" + box + R"(, "moisture": {}})", "t.json");
+    EXPECT_EQ(paper.sim.moisture->diffusion_operator, MoistureParams::DiffusionOperator::Particles);
+    expect_contains(
+        error_of(R"({"mudcrack": 1, )" + box + R"(, "moisture": {"diffusion_operator": "fv"}})"),
+        {"/moisture/diffusion_operator = \"fv\": must be one of \"particles\", \"grid\""});
+    expect_contains(error_of(R"({"mudcrack": 1, )" + box +
+                             R"(, "moisture": {"diffusion_operator": "grid",
+                                 "implicit_robin": true}})"),
+                    {"/moisture/implicit_robin = true: must be false with "
+                     "/moisture/diffusion_operator = \"grid\""});
+}
+
 TEST_F(ShotTest, MissingMeshFileIsAnError) {
     const std::string msg =
         error_of(R"({"mudcrack": 1, "source": {"type": "mesh", "mesh": {"path": "assets/none.obj"}},

@@ -36,9 +36,10 @@ void fit_order(Sweep& sweep) {
 
 // a model whose mechanics stay still (no gravity, a vanishing stiffness, no evaporation) so only
 // theta evolves; CG solved to near round-off so the error is the discretisation's
-SimModel still_moisture_model(Real h, Real D) {
+SimModel still_moisture_model(Real h, Real D, DiffusionOperator op) {
     SimModel m = bare_model(h, 1e-9, 0.3, 1000);
     m.moisture = MoistureParams{};
+    m.moisture->diffusion_operator = op;
     m.moisture->eta = 0.5;
     m.moisture->D = D;
     m.moisture->lambda = 0;
@@ -58,10 +59,10 @@ struct DiffusionRun {
 
 // the 1D bar [-L, L] x 2h x 2h, 2 particles per cell per axis, erfc step from t0 to t1
 template <class S>
-DiffusionRun run_diffusion_1d(Real h, int steps) {
+DiffusionRun run_diffusion_1d(Real h, int steps, DiffusionOperator op) {
     const Real D = 0.01, t0 = 0.25, t1 = 0.5, L = 0.5;
     const WallClock clock;
-    SimModel model = still_moisture_model(h, D);
+    SimModel model = still_moisture_model(h, D, op);
     const Real eta = model.moisture->eta;
     const int n_along = static_cast<int>(std::lround(2 * L / h)) * 2;
     const ParticleBlock b = lattice_block(Vec3(-L, 0, 0), Vec3i(n_along, 4, 4), h / 2);
@@ -86,14 +87,14 @@ DiffusionRun run_diffusion_1d(Real h, int steps) {
 
 // the cube [0, L]^3 with one cosine mode per axis and zero-flux faces
 template <class S>
-DiffusionRun run_diffusion_3d(int cells_per_side) {
+DiffusionRun run_diffusion_3d(int cells_per_side, DiffusionOperator op) {
     const Real L = 0.5, D = 0.01;
     const Real h = L / cells_per_side;
     const Real decay_rate = 3 * D * (kPi / L) * (kPi / L);
     const Real t1 = 1 / decay_rate;  // the mode decays to 1/e
     const int steps = std::max(2, static_cast<int>(std::ceil(t1 / (0.4 * h * h / D))));
     const WallClock clock;
-    SimModel model = still_moisture_model(h, D);
+    SimModel model = still_moisture_model(h, D, op);
     const Real eta = model.moisture->eta, A = eta / 4;
     const int n = 2 * cells_per_side;
     const ParticleBlock b = lattice_block(Vec3::Zero(), Vec3i(n, n, n), h / 2);
@@ -362,19 +363,19 @@ Sweep cg_cap_sweep(Scale scale, Real diffusion_number) {
 }
 
 // one table row of a sweep from one knob value
-template <class S>
+template <class S, DiffusionOperator kOp = DiffusionOperator::Particles>
 SweepPoint diffusion_1d_h_point(Real h) {
     const Real D = 0.01, span = 0.25;
     const int steps = static_cast<int>(std::lround(span / (0.4 * h * h / D)));
-    const DiffusionRun r = run_diffusion_1d<S>(h, steps);
+    const DiffusionRun r = run_diffusion_1d<S>(h, steps, kOp);
     return {h, r.error, r.wall_s,
             format("%d steps, %zu particles, mean CG %.1f", r.steps, r.particles, r.mean_cg)};
 }
 
-template <class S>
+template <class S, DiffusionOperator kOp = DiffusionOperator::Particles>
 SweepPoint diffusion_3d_h_point(Real cells_per_side) {
     const int n = static_cast<int>(cells_per_side);
-    const DiffusionRun r = run_diffusion_3d<S>(n);
+    const DiffusionRun r = run_diffusion_3d<S>(n, kOp);
     return {0.5 / n, r.error, r.wall_s,
             format("%d steps, %zu particles, mean CG %.1f", r.steps, r.particles, r.mean_cg)};
 }
@@ -439,6 +440,25 @@ const SweepPlan& plan(const std::string& id) {
          {12, 16},
          diffusion_3d_h_point<double>,
          diffusion_3d_h_point<float>},
+        {"diffusion_1d_h_grid_operator",
+         "1D moisture diffusion (erfc) over h, dt = 0.4 h^2/D, the grid operator",
+         "h [m]",
+         "RMS theta error at t1 (jump eta/2 = 0.25)",
+         "a finite-volume Laplacian between face-adjacent nodes with lumped mass, dt ~ h^2: 2 expected",
+         {0.04, 0.02, 0.01},
+         {0.005},
+         diffusion_1d_h_point<double, DiffusionOperator::Grid>,
+         diffusion_1d_h_point<float, DiffusionOperator::Grid>},
+        {"diffusion_3d_h_grid_operator",
+         "3D moisture diffusion (cosine mode in a cube, zero flux) over h, dt ~ 0.4 h^2/D, the grid "
+         "operator",
+         "h [m]",
+         "RMS theta error at t = 1/(3 D k^2), / mode amplitude",
+         "2 expected in the interior; the material boundary sits within a B-spline support of the faces",
+         {4, 6, 8},
+         {12, 16},
+         diffusion_3d_h_point<double, DiffusionOperator::Grid>,
+         diffusion_3d_h_point<float, DiffusionOperator::Grid>},
         {"shrinkage_h",
          "Free drying shrinkage to (1-eta) V0 over h, 2x2x2 particles per cell",
          "h [m]",
@@ -518,10 +538,10 @@ Sweep diffusion_1d_dt_sweep(Scale scale) {
     std::vector<int> step_counts = {2, 4, 8, 16};
     if (scale == Scale::Full) step_counts.push_back(32);
     // the time error alone: against the same h with 8x the finest step count
-    const DiffusionRun ref = run_diffusion_1d<S>(h, 8 * step_counts.back());
+    const DiffusionRun ref = run_diffusion_1d<S>(h, 8 * step_counts.back(), kParticleOperator);
     std::vector<Real> dts, time_errors;
     for (int steps : step_counts) {
-        const DiffusionRun r = run_diffusion_1d<S>(h, steps);
+        const DiffusionRun r = run_diffusion_1d<S>(h, steps, kParticleOperator);
         Real e2 = 0;
         for (size_t i = 0; i < r.theta_by_id.size(); ++i)
             e2 += std::pow(r.theta_by_id[i] - ref.theta_by_id[i], 2);
@@ -577,8 +597,10 @@ std::vector<Sweep> cg_cap_sweeps(Scale scale) {
 
 }  // namespace
 
-Sweep sweep_diffusion_1d_h(Scale scale, StatePrecision precision) {
-    return planned_sweep("diffusion_1d_h", scale, precision);
+Sweep sweep_diffusion_1d_h(Scale scale, StatePrecision precision, DiffusionOperator op) {
+    return planned_sweep(
+        op == DiffusionOperator::Grid ? "diffusion_1d_h_grid_operator" : "diffusion_1d_h", scale,
+        precision);
 }
 
 Sweep sweep_diffusion_1d_dt(Scale scale, StatePrecision precision) {
@@ -586,8 +608,10 @@ Sweep sweep_diffusion_1d_dt(Scale scale, StatePrecision precision) {
                                 [&](auto s) { return diffusion_1d_dt_sweep<decltype(s)>(scale); });
 }
 
-Sweep sweep_diffusion_3d_h(Scale scale, StatePrecision precision) {
-    return planned_sweep("diffusion_3d_h", scale, precision);
+Sweep sweep_diffusion_3d_h(Scale scale, StatePrecision precision, DiffusionOperator op) {
+    return planned_sweep(
+        op == DiffusionOperator::Grid ? "diffusion_3d_h_grid_operator" : "diffusion_3d_h", scale,
+        precision);
 }
 
 Sweep sweep_shrinkage_h(Scale scale, StatePrecision precision) {
@@ -620,9 +644,22 @@ std::vector<Sweep> all_sweeps(Scale scale, const std::function<void(const Sweep&
         out.push_back(std::move(s));
     };
     using Run = Sweep (*)(Scale, StatePrecision);
-    for (const Run run : {Run(sweep_diffusion_1d_h), Run(sweep_diffusion_1d_dt),
-                          Run(sweep_diffusion_3d_h), Run(sweep_shrinkage_h),
-                          Run(sweep_shrinkage_ppc), Run(sweep_column_h), Run(sweep_column_E)}) {
+    const Run diffusion_1d_h = [](Scale sc, StatePrecision p) {
+        return sweep_diffusion_1d_h(sc, p);
+    };
+    const Run diffusion_3d_h = [](Scale sc, StatePrecision p) {
+        return sweep_diffusion_3d_h(sc, p);
+    };
+    const Run diffusion_1d_h_grid_operator = [](Scale sc, StatePrecision p) {
+        return sweep_diffusion_1d_h(sc, p, DiffusionOperator::Grid);
+    };
+    const Run diffusion_3d_h_grid_operator = [](Scale sc, StatePrecision p) {
+        return sweep_diffusion_3d_h(sc, p, DiffusionOperator::Grid);
+    };
+    for (const Run run :
+         {diffusion_1d_h, Run(sweep_diffusion_1d_dt), diffusion_3d_h, diffusion_1d_h_grid_operator,
+          diffusion_3d_h_grid_operator, Run(sweep_shrinkage_h), Run(sweep_shrinkage_ppc),
+          Run(sweep_column_h), Run(sweep_column_E)}) {
         add(run(scale, StatePrecision::Double));
         add(run(scale, StatePrecision::Float));
     }

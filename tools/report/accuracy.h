@@ -5,20 +5,27 @@
 #include <functional>
 #include <vector>
 
+#include "sim/model.h"
 #include "tools/report/report_types.h"
 
 namespace mudcrack::report {
 
+using DiffusionOperator = MoistureParams::DiffusionOperator;
+constexpr DiffusionOperator kParticleOperator = DiffusionOperator::Particles;
+
 /// Moisture diffusion along a long insulated bar (no evaporation, no motion) from an erfc step
-/// profile at t0 to t1, against eta/2 erfc(x / (2 sqrt(D t))); h swept with dt ~ h^2.
-Sweep sweep_diffusion_1d_h(Scale scale, StatePrecision precision = StatePrecision::Double);
+/// profile at t0 to t1, against eta/2 erfc(x / (2 sqrt(D t))); h swept with dt ~ h^2. `op`: the
+/// paper's particle-quadrature L or the grid operator (/moisture/diffusion_operator).
+Sweep sweep_diffusion_1d_h(Scale scale, StatePrecision precision = StatePrecision::Double,
+                           DiffusionOperator op = kParticleOperator);
 
 /// The same bar at a fine h, dt swept (backward Euler: first order in time).
 Sweep sweep_diffusion_1d_dt(Scale scale, StatePrecision precision = StatePrecision::Double);
 
 /// A cube with theta = eta/2 + A cos(pi x/L) cos(pi y/L) cos(pi z/L) and zero-flux faces,
-/// against its decay exp(-3 D (pi/L)^2 t); h swept with dt ~ h^2.
-Sweep sweep_diffusion_3d_h(Scale scale, StatePrecision precision = StatePrecision::Double);
+/// against its decay exp(-3 D (pi/L)^2 t); h swept with dt ~ h^2; `op` as above.
+Sweep sweep_diffusion_3d_h(Scale scale, StatePrecision precision = StatePrecision::Double,
+                           DiffusionOperator op = kParticleOperator);
 
 /// A free block (no gravity, no plasticity) drying fully: its final volume against
 /// (1 - eta) V0, over h (2x2x2 particles per cell).

@@ -225,6 +225,16 @@ const std::vector<CaseEntry>& case_table() {
                 format("drying soil with D dt/h^2 = %.0e at a fixed dt = half the elastic bound",
                        r),
                 [r](Scale s) { return diffusion_number_scene(s, r); });
+        for (Real r : {1e2, 1e4})
+            add(format("D_dt_h2_%.0e_grid_operator", r), "diffusion number",
+                format("drying soil with D dt/h^2 = %.0e at a fixed dt = half the elastic bound, "
+                       "the grid operator (docs/physics.md §4.9)",
+                       r),
+                [r](Scale s) {
+                    CaseSetup c = diffusion_number_scene(s, r);
+                    c.model.moisture->diffusion_operator = MoistureParams::DiffusionOperator::Grid;
+                    return c;
+                });
         add("dt_past_bound_shot", "time step",
             "shot with /sim/dt = 2x the elastic bound, through the shot loader",
             on_base([](CaseSetup& c) { c.shot_json = dt_past_bound_shot(); }));
