@@ -207,11 +207,12 @@ void print_mesh_row(int n, const MeshRow& row) {
     else
         std::printf(" %7s %6s %6s %6s %10s %11s", "-", "-", "-", "-", "-", "-");
     if (row.cut_polygons && row.cut_network)
-        std::printf(" %9d %7.2f %8.1f %8.1f", row.cut_polygons->count,
+        std::printf(" %9d %7.2f %8.1f %8.1f %6.1f", row.cut_polygons->count,
                     row.cut_polygons->effective_count, 100 * row.cut_polygons->largest_fraction,
-                    100 * row.cut_network->axis_aligned_fraction);
+                    100 * row.cut_network->axis_aligned_fraction,
+                    100 * row.cut_network->axis_aligned_fraction_stderr);
     else
-        std::printf(" %9s %7s %8s %8s", "-", "-", "-", "-");
+        std::printf(" %9s %7s %8s %8s %6s", "-", "-", "-", "-", "-");
     if (const auto& motion = row.motion)
         std::printf(" %9.3f %9.3f %9lld\n", motion->jump_max_cells, motion->jump_p99_cells,
                     static_cast<long long>(motion->piece_changes));
@@ -409,10 +410,10 @@ FrameMeasures measure_frame(const Shot& shot, const RestSetup& rest,
 void print_frame_header(const Shot& shot, const RestSetup& rest) {
     std::printf("%s: %s, %zu particles in %d columns of %.4g m\n", kProgram, shot.name.c_str(),
                 rest.mesh.X.size(), rest.columns.n_columns(), rest.spacing);
-    std::printf("%6s %8s %11s %9s %9s %8s %10s %8s %10s %9s %7s %13s %8s %6s %6s %8s %8s\n",
+    std::printf("%6s %8s %11s %9s %9s %8s %10s %8s %10s %9s %7s %13s %8s %6s %6s %6s %8s %8s\n",
                 "frame", "time[s]", "rise50[mm]", "curl[mm]", "split[%]", "splitH", "lifted[%]",
-                "broken", "fragments", "polygons", "plates", "polygon[m^2]", "axis[%]", "T[%]",
-                "Y[%]", "str[%]", "comp[%]");
+                "broken", "fragments", "polygons", "plates", "polygon[m^2]", "axis[%]", "+-[%]",
+                "T[%]", "Y[%]", "str[%]", "comp[%]");
 }
 
 void print_frame_row(int n, const FrameMeasures& f, bool has_surfacing) {
@@ -420,13 +421,15 @@ void print_frame_row(int n, const FrameMeasures& f, bool has_surfacing) {
                 1e3 * f.shape.top_rise_median, 1e3 * f.shape.curl, 100 * f.shape.split_fraction,
                 f.shape.split_height_median, 100 * f.shape.lifted_fraction);
     if (has_surfacing)
-        std::printf(" %8lld %10d %9d %7.2f %13.4g %8.1f %6.1f %6.1f",
+        std::printf(" %8lld %10d %9d %7.2f %13.4g %8.1f %6.1f %6.1f %6.1f",
                     static_cast<long long>(f.broken), f.sizes.count, f.polygons.count,
                     f.polygons.effective_count, f.polygons.weighted_mean_area,
-                    100 * f.network.axis_aligned_fraction, 100 * f.network.t_fraction,
+                    100 * f.network.axis_aligned_fraction,
+                    100 * f.network.axis_aligned_fraction_stderr, 100 * f.network.t_fraction,
                     100 * f.network.y_fraction);
     else
-        std::printf(" %8s %10s %9s %7s %13s %8s %6s %6s", "-", "-", "-", "-", "-", "-", "-", "-");
+        std::printf(" %8s %10s %9s %7s %13s %8s %6s %6s %6s", "-", "-", "-", "-", "-", "-", "-",
+                    "-", "-");
     if (f.halves)
         std::printf(" %8.1f %8.1f\n", 100 * f.halves->stretched_fraction,
                     100 * f.halves->compressed_fraction);
@@ -452,14 +455,14 @@ void print_mesh_table(const json& surface_manifest, bool has_motion, int first,
         "\nsurfacing meshes (%s): pieces, chips under 2 h, edges not shared by two triangles and those of "
         "an odd number (holes), crack-wall roughness, crack area per metre of top crack line; in "
         "the plates mode the top's polygons, effective plates, largest polygon and axis share as "
-        "its meshes cut it%s\n",
+        "its meshes cut it, with the share's standard error over its cracks%s\n",
         surface_manifest.value("mode", "?").c_str(),
         has_motion
             ? "; vertex jumps beyond the particles' moves (cells) and particles changing piece"
             : "");
-    std::printf("%6s %7s %6s %6s %6s %10s %11s %9s %7s %8s %8s %9s %9s %9s\n", "frame", "pieces",
-                "chips", "open", "holes", "rough[deg]", "wall[m2/m]", "polygons", "plates",
-                "largest", "axis[%]", "jump_max", "jump_p99", "changes");
+    std::printf("%6s %7s %6s %6s %6s %10s %11s %9s %7s %8s %8s %6s %9s %9s %9s\n", "frame",
+                "pieces", "chips", "open", "holes", "rough[deg]", "wall[m2/m]", "polygons",
+                "plates", "largest", "axis[%]", "+-[%]", "jump_max", "jump_p99", "changes");
     for (size_t i = 0; i < rows.size(); ++i) print_mesh_row(first + int(i), rows[i]);
 }
 
