@@ -706,22 +706,22 @@ MoistureSolveStats solve_moisture(const MoistureParams& mp, const MoistureSeal& 
     const Real inv_dt = 1 / dt;
     const size_t n_particles = grid.order.size();
 
-    // nodal theta^n = (V theta)_i / W_i and the Jacobi diagonal M_ii + kappa D W_i / h^2
+    // nodal theta^n = (V theta)_i / W_i and, for the paper's operator, the Jacobi diagonal M_ii +
+    // kappa D W_i / h^2 (the grid operator's exact one is set below, §4.9)
+    const bool grid_operator = mp.diffusion_operator == MoistureParams::DiffusionOperator::Grid;
     mg.diag.resize(n_nodes);
     parallel_for(n_nodes, [&](int64_t i) {
-        if (mg.W[i] > 0) {
-            mg.theta[i] /= mg.W[i];
-            mg.diag[i] =
-                mg.W[i] * (inv_dt + kJacobiStiffnessPerWeight * mp.D * geo.inv_h * geo.inv_h);
-        } else {
-            mg.theta[i] = 0;
-            mg.diag[i] = 0;
-        }
+        const bool has_material = mg.W[i] > 0;
+        mg.theta[i] = has_material ? mg.theta[i] / mg.W[i] : Real(0);
+        if (grid_operator) return;
+        mg.diag[i] =
+            has_material
+                ? mg.W[i] * (inv_dt + kJacobiStiffnessPerWeight * mp.D * geo.inv_h * geo.inv_h)
+                : Real(0);
     });
 
     // surface nodes (docs/physics.md §4.4); the grid operator's conductances and its exact
     // diagonal (§4.9)
-    const bool grid_operator = mp.diffusion_operator == MoistureParams::DiffusionOperator::Grid;
     if (mp.lambda > 0 || grid_operator) build_face_neighbors(grid, mg);
     if (mp.lambda > 0) mark_surface_nodes(grid, seal, mg);
     if (grid_operator) {
