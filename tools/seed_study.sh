@@ -12,7 +12,10 @@
 # second seed (tests/figures/figure_claims_test.cpp), checked here by hand after a physics change.
 # The columns: polygons = crack polygons of the top layer; plates = mc-measure's effective count
 # (sum A)^2 / sum A^2, which chips hardly move; largest = the largest polygon's share of the top;
-# axis = inland crack length within 15 degrees of the grid axes (33 % is isotropic); split =
+# axis = inland crack length within 15 degrees of the grid axes (33 % is isotropic); order and
+# phase = the network's right-angle order and the direction of its preferred pair of perpendicular
+# directions (degrees from the x axis, -45 to 45; docs/measures.md): a grid that draws the cracks
+# puts the phase near 0 on every seed; split =
 # columns split by a horizontal crack, at the median height in cells; lifted = footprint off its
 # ground; wall = the three stages' seconds.
 set -euo pipefail
@@ -39,7 +42,7 @@ WORK=$(mktemp -d "${TMPDIR:-/tmp}/seed_study.XXXXXX")
 base=$(basename "$SHOT" .json)
 canonical=$("$BUILD/bin/mc-shot" slice "$SHOT" surface)
 
-printf '%-5s %8s %7s %8s %6s %16s %7s %7s %7s\n' seed polygons plates largest axis "split [cells up]" lifted curl wall
+printf '%-5s %8s %7s %8s %6s %6s %6s %16s %7s %7s %7s\n' seed polygons plates largest axis order phase "split [cells up]" lifted curl wall
 rows=()
 for seed in "${SEEDS[@]}"; do
     name="${base}_seed$seed"
@@ -54,15 +57,16 @@ for seed in "${SEEDS[@]}"; do
     "$BUILD/bin/mc-measure" --shot "$WORK/$name.json" --out "$out" --threads "$THREADS" --quiet \
         --json "$out/measure.json" >/dev/null
     row=$(jq -r '.frames[-1] | [.surface_polygons, .effective_surface_polygons, .largest_polygon_fraction,
-                 .axis_aligned_fraction, .split_fraction, .split_height_median_cells, .lifted_fraction, .curl]
+                 .axis_aligned_fraction, .split_fraction, .split_height_median_cells, .lifted_fraction, .curl,
+                 .crack_square_order, .crack_square_phase_deg]
                  | if any(. == null) then error("a measure is missing: mc-measure is older than this script")
                    else @tsv end' "$out/measure.json") ||
         { echo "seed_study.sh: $out/measure.json: cannot read seed $seed's measures" >&2; exit 1; }
     rows+=("$row")
     awk -v s="$seed" -v w="$wall" -v r="$row" 'BEGIN {
         split(r, v, "\t")
-        printf "%-5s %8d %7.2f %7.1f%% %5.1f%% %8.1f%% [%4.1f] %6.2f%% %5.0fmm %6ss\n",
-               s, v[1], v[2], 100 * v[3], 100 * v[4], 100 * v[5], v[6], 100 * v[7], 1e3 * v[8], w }'
+        printf "%-5s %8d %7.2f %7.1f%% %5.1f%% %6.2f %6.1f %8.1f%% [%4.1f] %6.2f%% %5.0fmm %6ss\n",
+               s, v[1], v[2], 100 * v[3], 100 * v[4], v[9], v[10], 100 * v[5], v[6], 100 * v[7], 1e3 * v[8], w }'
 done
 
 spread_status=0

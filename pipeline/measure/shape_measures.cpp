@@ -419,22 +419,22 @@ bool is_inland(const ColumnCells& footprint, const RestColumns& columns, const V
 }
 
 // The standard error of the aligned share over the cracks it is drawn from: `crack` holds each
-// crack's aligned and oriented point counts; the share is resampled kBootstrapResamples times by
+// crack's aligned and oriented length; the share is resampled kBootstrapResamples times by
 // drawing as many cracks with replacement (mt19937_64 from a fixed seed, whose output the standard
 // fixes bit for bit, reduced by our own modulo: the same figure with any standard library)
-Real crack_bootstrap_stderr(const std::vector<std::pair<int32_t, int32_t>>& crack) {
+Real crack_bootstrap_stderr(const std::vector<std::pair<Real, Real>>& crack) {
     constexpr int kBootstrapResamples = 1000;
     const uint64_t n = crack.size();
     if (n < 2) return 0;
     std::mt19937_64 rng(0x5eed);
     Real sum = 0, sum_sq = 0;
     for (int r = 0; r < kBootstrapResamples; ++r) {
-        int64_t aligned = 0, oriented = 0;
+        Real aligned = 0, oriented = 0;
         for (uint64_t k = 0; k < n; ++k) {
             const auto& [a, o] = crack[rng() % n];
             aligned += a, oriented += o;
         }
-        const Real share = Real(aligned) / Real(oriented);
+        const Real share = aligned / oriented;
         sum += share, sum_sq += share * share;
     }
     const Real mean = sum / kBootstrapResamples;
@@ -443,14 +443,21 @@ Real crack_bootstrap_stderr(const std::vector<std::pair<int32_t, int32_t>>& crac
 
 // local direction: the principal axis of the crack points around each inland one, where they
 // line up (an isotropic cloud, the rubble of a wide crack band or a junction, has no direction:
-// an eigen solver would hand back a coordinate axis for it); sets oriented_points,
-// axis_aligned_fraction and its standard error over the cracks (`pair`: each point's crack)
+// an eigen solver would hand back a coordinate axis for it); sets oriented_points, the oriented
+// length, axis_aligned_fraction and its standard error over the cracks (`pair`: each point's
+// crack). Each oriented point stands for 2 radius / n of crack length, n the crack points within
+// `radius` of it: a straight crack through the disc's centre is 2 radius long there whatever its
+// points' spacing, and that spacing depends on the crack's direction (on a lattice's Kuhn tets a
+// vertical plane crosses 2.4 times as many edges a metre square to a face diagonal as along it),
+// so counting points would weigh the directions unequally.
 void measure_crack_directions(const std::vector<Vec2>& point,
                               const std::vector<std::pair<int32_t, int32_t>>& pair,
                               const PointGrid& grid, Real radius, const ColumnCells& footprint,
                               const RestColumns& columns, CrackNetwork& net) {
-    int32_t aligned = 0, oriented = 0;
-    std::map<std::pair<int32_t, int32_t>, std::pair<int32_t, int32_t>> by_crack;
+    int32_t oriented = 0;
+    Real aligned_length = 0;
+    Vec2 square_sum = Vec2::Zero();  // sum of length (cos 4 theta, sin 4 theta)
+    std::map<std::pair<int32_t, int32_t>, std::pair<Real, Real>> by_crack;
     for (size_t i = 0; i < point.size(); ++i) {
         const Vec2& at = point[i];
         if (!is_inland(footprint, columns, at)) continue;
@@ -466,18 +473,27 @@ void measure_crack_directions(const std::vector<Vec2>& point,
         const Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d> eig(cov);
         if (!(eig.eigenvalues()(1) >= kLineAnisotropy * eig.eigenvalues()(0))) continue;
         ++oriented;
+        const Real length = 2 * radius / n;
         const Real angle = line_angle_deg(eig.eigenvectors().col(1));  // the larger eigenvalue's
         const Real off_axis = std::min({angle, std::abs(angle - 90), 180 - angle});
-        aligned += off_axis <= 15;
+        const Real aligned = off_axis <= 15 ? length : Real(0);
+        aligned_length += aligned;
+        net.oriented_length += length;
         auto& [crack_aligned, crack_oriented] = by_crack[pair[i]];
-        crack_aligned += off_axis <= 15, ++crack_oriented;
-        ++net.direction_histogram[angle_bin(angle, kCrackDirectionBins)];
+        crack_aligned += aligned, crack_oriented += length;
+        net.direction_histogram[angle_bin(angle, kCrackDirectionBins)] += length;
+        const Real four_theta = 4 * angle * kPi / 180;
+        square_sum += length * Vec2(std::cos(four_theta), std::sin(four_theta));
     }
     net.oriented_points = oriented;
-    if (oriented > 0) net.axis_aligned_fraction = Real(aligned) / oriented;
-    std::vector<std::pair<int32_t, int32_t>> crack;
+    if (net.oriented_length > 0) {
+        net.axis_aligned_fraction = aligned_length / net.oriented_length;
+        net.square_order = square_sum.norm() / net.oriented_length;
+        net.square_phase_deg = std::atan2(square_sum.y(), square_sum.x()) * 180 / kPi / 4;
+    }
+    std::vector<std::pair<Real, Real>> crack;
     crack.reserve(by_crack.size());
-    for (const auto& [key, counts] : by_crack) crack.push_back(counts);
+    for (const auto& [key, lengths] : by_crack) crack.push_back(lengths);
     net.oriented_cracks = static_cast<int32_t>(crack.size());
     net.axis_aligned_fraction_stderr = crack_bootstrap_stderr(crack);
 }
