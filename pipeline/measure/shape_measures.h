@@ -193,7 +193,8 @@ struct CrackNetwork {
     /// The network's right-angle order: |<exp(4 i theta)>| over the oriented length, theta each
     /// point's direction. 0 when no pair of perpendicular directions is preferred (an isotropic
     /// network, or hexagons); 1 when every crack runs along one such pair. Drying mud, whose later
-    /// cracks meet earlier ones near 90 degrees, has order: the shots read 0.12-0.31.
+    /// cracks meet earlier ones near 90 degrees, has order: the demo's networks read 0.04-0.31
+    /// (docs/physics.md §6.5).
     Real square_order = 0;
     /// The direction of that pair [degrees, in (-45, 45], from x toward z]: arg <exp(4 i theta)>
     /// / 4. The axis share is about 1/3 + 0.55 square_order cos(4 square_phase) (the 4 theta
