@@ -44,6 +44,40 @@ InputSurface box_surface(const Vec3& lo, const Vec3& hi) {
     return s;
 }
 
+// The closed surface of the elliptic cylinder inscribed in the box [lo, hi] (a round puddle on a
+// square box): its rims are polygons of vertices on the ellipse, each side a chord of at most
+// half the mesher's edge length `edge` (Mesh_3 protects the rims, whose faces meet at 90
+// degrees, and meshes the sides, which turn by under a degree from chord to chord), its top and
+// bottom fans about their centres; counter-clockwise seen from outside
+InputSurface elliptic_cylinder_surface(const Vec3& lo, const Vec3& hi, Real edge) {
+    const Real a = (hi.x() - lo.x()) / 2, b = (hi.z() - lo.z()) / 2;
+    const Real cx = (lo.x() + hi.x()) / 2, cz = (lo.z() + hi.z()) / 2;
+    // Ramanujan's perimeter of the ellipse
+    const Real perimeter = kPi * (3 * (a + b) - std::sqrt((3 * a + b) * (a + 3 * b)));
+    const int n = std::max(32, static_cast<int>(std::ceil(perimeter / (edge / 2))));
+    InputSurface s;
+    for (int ring = 0; ring < 2; ++ring)  // bottom ring 0..n-1, top ring n..2n-1
+        for (int i = 0; i < n; ++i) {
+            const Real t = 2 * kPi * i / n;
+            s.positions.emplace_back(cx + a * std::cos(t), ring ? hi.y() : lo.y(),
+                                     cz + b * std::sin(t));
+        }
+    const int bottom = 2 * n, top = 2 * n + 1;
+    s.positions.emplace_back(cx, lo.y(), cz);
+    s.positions.emplace_back(cx, hi.y(), cz);
+    // t runs from x toward z, so the top's fan faces +y turning against t and the bottom's
+    // faces -y turning with it; a side quad is (bottom i, top i, top i + 1) and (bottom i,
+    // top i + 1, bottom i + 1), facing out
+    for (int i = 0; i < n; ++i) {
+        const int j = (i + 1) % n;
+        s.faces.push_back({bottom, i, j});
+        s.faces.push_back({top, n + j, n + i});
+        s.faces.push_back({i, n + i, n + j});
+        s.faces.push_back({i, n + j, j});
+    }
+    return s;
+}
+
 // A closed surface, checked and tetrahedralized by Mesh_3 (`check_bounds`, when given, sees its
 // bounds first); `name` is how the messages call it (a file, or the box's keys)
 InitResult tetrahedralize_checked(const InputSurface& surface, const std::string& name,
@@ -131,7 +165,11 @@ InitResult build_init(const InitParams& params, const MesherOptions& mesher,
     switch (params.type) {
         case SourceType::Box:
             // the loader has checked the box against the shot (as check_bounds does a mesh's)
-            if (params.box.lattice == Lattice::Mesh)
+            if (params.box.lattice == Lattice::Mesh && params.box.footprint == Footprint::Ellipse)
+                r = tetrahedralize_checked(
+                    elliptic_cylinder_surface(params.box.min, params.box.max, mesher.edge_length),
+                    "the box's ellipse (/source/box)", mesher, {});
+            else if (params.box.lattice == Lattice::Mesh)
                 r = tetrahedralize_checked(box_surface(params.box.min, params.box.max),
                                            "the box (/source/box)", mesher, {});
             else

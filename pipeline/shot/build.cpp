@@ -181,11 +181,6 @@ void build_box(const json& tree, BoxSource& box, Issues& issues) {
     box.footprint = text(tree, "/source/box/footprint") == "ellipse" ? Footprint::Ellipse
                                                                      : Footprint::Rectangle;
     const bool bounds_reported = issues.has("/source/box");
-    if (box.footprint == Footprint::Ellipse && box.lattice == Lattice::Mesh)
-        issues.add("/source/box/footprint", issues.value_of(tree, "/source/box/footprint"),
-                   "needs /source/box/lattice regular or jittered, not mesh (a round body "
-                   "filled by Mesh_3 is a mesh source)",
-                   "");
     if (bounds_reported) return;
     if (!all_less(box.min, box.max)) {
         issues.add("/source/box/max", issues.value_of(tree, "/source/box/max"),

@@ -107,7 +107,7 @@ std::vector<KeySpec> build_fixed_table() {
     Key("/source/box/jitter", T::Number).def(0.25).ge(0).lt(0.5).units("spacing")
         .doc("jitter amplitude of interior points (lattice = jittered)"),
     Key("/source/box/footprint", T::Enum).def("rectangle").choices({"rectangle", "ellipse"}).units("")
-        .doc("the lattice's extent in x and z: the whole rectangle, or the ellipse inscribed in it (a round puddle on a square box), its rim on the ellipse; lattice regular or jittered"),
+        .doc("the body's extent in x and z: the whole rectangle, or the ellipse inscribed in it (a round puddle on a square box), its rim on the ellipse; with lattice mesh, Mesh_3 fills the elliptic cylinder"),
     Key("/source/heightfield", T::Section).def(json::object())
         .doc("terrain slab with a carved meandering channel, or a PNG heightmap (used when type = heightfield)"),
     Key("/source/heightfield/size", T::Vec2).def(json::array({4.0, 4.0})).gt(0).units("m")

@@ -264,6 +264,46 @@ TEST(InitBoxSource, MeshLatticeFillsTheBoxWithMesh3TetsAlongNoAxis) {
     EXPECT_EQ(again.mesh.tets, r.mesh.tets);
 }
 
+// A box with an ellipse footprint and lattice "mesh" is Mesh_3's fill of the elliptic cylinder
+// inscribed in it (a round puddle with no rows): the ellipse's volume, every point inside it, a
+// rim that goes all the way round, and edges that run every way
+TEST(InitBoxSource, MeshLatticeFillsAnEllipseFootprintsCylinderAlongNoAxis) {
+    InitParams p;
+    p.type = SourceType::Box;
+    p.box.min = Vec3(-0.2, 0, -0.15);
+    p.box.max = Vec3(0.2, 0.06, 0.15);
+    p.box.lattice = Lattice::Mesh;
+    p.box.footprint = Footprint::Ellipse;
+    const Real h = 0.04;
+    const InitResult r = build_init(p, h);
+    const double a = 0.2, b = 0.15, thickness = 0.06;
+    // the rims' polygons of chords at most half an edge long (93 here) hold all but 0.08 % of the
+    // ellipse
+    EXPECT_NEAR(r.surface_volume / (kPi * a * b * thickness), 1, 2e-3);
+    EXPECT_NEAR(r.quality.tet_volume / r.surface_volume, 1, kFittedVolumeRel);
+    test::expect_closed_outward_boundary(r.mesh);
+    for (const Tet& t : r.mesh.tets)
+        ASSERT_GT(signed_tet_volume(r.mesh.X[t[0]], r.mesh.X[t[1]], r.mesh.X[t[2]], r.mesh.X[t[3]]),
+                  0);
+    // inside the ellipse, and on its rim in every 10-degree sector
+    std::vector<int> rim_points(36, 0);
+    for (const Vec3& x : r.mesh.X) {
+        const double u = x.x() / a, v = x.z() / b, radius2 = u * u + v * v;
+        ASSERT_LE(radius2, 1 + 1e-9) << x.transpose();
+        if (radius2 > 0.99) {
+            const double degrees = std::atan2(v, u) * 180 / kPi + 180;
+            ++rim_points[std::min(35, static_cast<int>(degrees / 10))];
+        }
+    }
+    for (int sector = 0; sector < 36; ++sector)
+        EXPECT_GT(rim_points[sector], 0) << "no rim point " << 10 * sector << " degrees round";
+    // a cylinder's rims and sides add no axis: about the box's share (4 %)
+    EXPECT_LT(axis_aligned_edge_share(r.mesh, 5), 0.15);
+    const InitResult again = build_init(p, h);
+    EXPECT_EQ(again.mesh.X, r.mesh.X);
+    EXPECT_EQ(again.mesh.tets, r.mesh.tets);
+}
+
 // A heightfield with lattice "mesh" is Mesh_3's fill of the terrain's closed surface: the top
 // sampled on the columns, the bottom flat at y = 0, the footprint's corners exact, and edges that
 // run every way where the columns' run in rows along x and z and up each column
