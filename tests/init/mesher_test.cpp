@@ -222,16 +222,22 @@ double axis_aligned_edge_share(const TetMesh& m, double degrees) {
     return aligned / total;
 }
 
+// A box source [lo, hi] with lattice "mesh"
+InitParams meshed_box(const Vec3& lo, const Vec3& hi) {
+    InitParams p;
+    p.type = SourceType::Box;
+    p.box.min = lo;
+    p.box.max = hi;
+    p.box.lattice = Lattice::Mesh;
+    return p;
+}
+
 // A box with lattice "mesh" is a mesh source of the box's own surface: Mesh_3 tets at the
 // derived edge length, the box's volume and corners exact, seeded, and edges that run every way
 // (the cracks follow the particles' edges; the Kuhn lattice lays 3 of its 7 edge directions on
 // the axes)
 TEST(InitBoxSource, MeshLatticeFillsTheBoxWithMesh3TetsAlongNoAxis) {
-    InitParams p;
-    p.type = SourceType::Box;
-    p.box.min = Vec3(-0.2, 0, -0.15);
-    p.box.max = Vec3(0.2, 0.1, 0.15);
-    p.box.lattice = Lattice::Mesh;
+    const InitParams p = meshed_box(Vec3(-0.2, 0, -0.15), Vec3(0.2, 0.1, 0.15));
     const Real h = 0.05;
     const InitResult r = build_init(p, h);
     const double box_volume = (p.box.max - p.box.min).prod();
@@ -268,11 +274,7 @@ TEST(InitBoxSource, MeshLatticeFillsTheBoxWithMesh3TetsAlongNoAxis) {
 // inscribed in it (a round puddle with no rows): the ellipse's volume, every point inside it, a
 // rim that goes all the way round, and edges that run every way
 TEST(InitBoxSource, MeshLatticeFillsAnEllipseFootprintsCylinderAlongNoAxis) {
-    InitParams p;
-    p.type = SourceType::Box;
-    p.box.min = Vec3(-0.2, 0, -0.15);
-    p.box.max = Vec3(0.2, 0.06, 0.15);
-    p.box.lattice = Lattice::Mesh;
+    InitParams p = meshed_box(Vec3(-0.2, 0, -0.15), Vec3(0.2, 0.06, 0.15));
     p.box.footprint = Footprint::Ellipse;
     const Real h = 0.04;
     const InitResult r = build_init(p, h);
