@@ -448,7 +448,7 @@ Real crack_bootstrap_stderr(const std::vector<std::pair<Real, Real>>& crack) {
 // crack). Each oriented point stands for 2 radius / n of crack length, n the crack points within
 // `radius` of it: a straight crack through the disc's centre is 2 radius long there whatever its
 // points' spacing, and that spacing depends on the crack's direction (on a lattice's Kuhn tets a
-// vertical plane crosses 2.4 times as many edges a metre square to a face diagonal as along it),
+// vertical plane crosses 1.8 times as many edges a metre square to a face diagonal as along it),
 // so counting points would weigh the directions unequally.
 void measure_crack_directions(const std::vector<Vec2>& point,
                               const std::vector<std::pair<int32_t, int32_t>>& pair,

@@ -172,7 +172,7 @@ struct CrackNetwork {
     int32_t oriented_points = 0;
     /// The crack length the oriented points stand for [m, rest]: each point 2 r / n of it, n the
     /// crack points within r (four column widths) of it. A crack's points lie closer together
-    /// in some directions than in others (on a lattice's Kuhn tets up to 2.4 times), so a count
+    /// in some directions than in others (on a lattice's Kuhn tets up to 1.8 times), so a count
     /// of points is not a length.
     Real oriented_length = 0;
     /// Share of the oriented crack length whose local direction lies within 15 degrees of the x or
