@@ -421,8 +421,9 @@ StepStats step(const SimModel& model, SimStateOf<S>& state, Real dt) {
     // 1. bin particles into grid blocks (and every few steps reorder their arrays). A turn
     // reorders them at once: the last grid's block order is scattered across the turned grid's
     // blocks, and every step until the next reorder would gather through it. Measured on the
-    // demo turned every 5 steps (frames 1-12, 2 threads, 2026-11-30): P2G and G2P took 72 and
-    // 145 ns per particle-step, 50 and 110 with the reorder, which adds 17 to the binning.
+    // demo's Mesh_3 puddle turned every 5 steps (frames 1-12, 2 threads, 2026-11-30): P2G and
+    // G2P took 96 and 172 ns per particle-step, 55 and 111 with the reorder, which adds 14 to
+    // the binning.
     WallTimer phase;
     bin_and_sort(state, ws, grid_turns_now, tau_is_current);
     stats.seconds.bin = phase.seconds();

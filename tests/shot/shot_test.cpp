@@ -620,12 +620,15 @@ TEST_F(ShotTest, ShippedShotsValidate) {
     const std::string dir = std::string(MUDCRACK_SOURCE_DIR) + "/shots/";
     const Shot demo = load_shot(dir + "demo.json");
     EXPECT_TRUE(demo.sim.nacc && demo.sim.moisture && demo.surface && demo.render);
-    const Vec3 extent = demo.init.box.max - demo.init.box.min;
-    const Real particles = (std::round(extent.x() / demo.init.box.spacing) + 1) *
-                           (std::round(extent.y() / demo.init.box.spacing) + 1) *
-                           (std::round(extent.z() / demo.init.box.spacing) + 1);
-    EXPECT_EQ(particles, 91 * 6 * 91);  // the box lattice demo.json's comment cuts its disc from
+    // the round puddle demo.json's comments describe: Mesh_3 fills the ellipse inscribed in a
+    // 0.9 x 0.05 x 0.9 m box at the edge length derived from h, on a grid turned every 5 steps
+    EXPECT_LT((demo.init.box.max - demo.init.box.min - Vec3(0.9, 0.05, 0.9)).norm(),
+              tol::kRoundoff);
+    EXPECT_EQ(demo.init.box.lattice, Lattice::Mesh);
     EXPECT_EQ(demo.init.box.footprint, Footprint::Ellipse);
+    EXPECT_EQ(demo.init.edge_length, 0);
+    EXPECT_EQ(demo.sim.h, 0.02);
+    EXPECT_EQ(demo.sim.grid_turn_interval, 5);
 
     for (const char* name : {"bench_nacc_cube.json", "bench_moisture_cube.json"}) {
         const Shot bench = load_shot(dir + name);

@@ -35,11 +35,11 @@ edit() {
     sed -i "$2" "$1"
     [ "$(cat "$1")" != "$before" ] || fail "$1: '$2' changed nothing ($3)"
 }
-# the tiny base: the disc of a 0.025 m lattice (37 x 3 x 37) on a 0.05 m grid, 4 frames, 160x90
-# previews, 4 views
+# the tiny base: the disc of a jittered 0.025 m lattice (37 x 3 x 37) in place of the demo's
+# Mesh_3 fill, on a 0.05 m grid, 4 frames, 160x90 previews, 4 views
 cp "$shot_src" "$base"
 edit "$base" 's/"name": "demo"/"name": "base"/' "the name"
-edit "$base" 's/"spacing": 0.01,/"spacing": 0.025,/' "the box spacing"
+edit "$base" 's/"lattice": "mesh",/"spacing": 0.025, "lattice": "jittered",/' "the box's lattice"
 edit "$base" 's/"h": 0.02,/"h": 0.05,/' "the grid spacing"
 edit "$base" 's/"end": 36,/"end": 4,/' "the frame range"
 edit "$base" 's/"resolution": \[640, 360\]/"resolution": [160, 90]/' "the resolution"
