@@ -337,6 +337,24 @@ TEST(MpmStep, ATurnedGridIsTheFixedGridUnderATurnedBody) {
     }
 }
 
+// A turn reorders the particle arrays by the turned grid's blocks at once, not at the next
+// periodic reorder: the last grid's block order, turned, is scattered across the new blocks, and
+// gathering through it made the demo's P2G and G2P 1.7 and 1.5 times as slow. After the turning
+// step the binning finds the slots in block order (its permutation is the identity); on a slab
+// three blocks across, the turned old order is not.
+TEST(MpmStep, ATurnReordersTheParticleArraysByTheTurnedGridsBlocks) {
+    SimModel model = drying_on_ground_model();
+    model.grid_turn_interval = 3;
+    SimState a = block_state(model, Vec3(0, 0, 0), Vec3i(24, 4, 24));
+    randomize(a, 3);
+    for (int i = 0; i < 3; ++i) step(model, a, stable_dt(model, a));
+    step(model, a, stable_dt(model, a));  // starts at step count 3: the grid turns
+    const std::vector<int32_t>& order = a.workspace->grid.order;
+    ASSERT_EQ(order.size(), a.size());
+    for (size_t slot = 0; slot < order.size(); ++slot)
+        ASSERT_EQ(order[slot], static_cast<int32_t>(slot)) << "slot " << slot;
+}
+
 // a turned grid's auto domain holds the footprint whatever the angle: a square in x and z around
 // the disc it sweeps, centred on it
 TEST(MpmStep, ATurnedGridsDomainHoldsEveryTurnOfTheBody) {
