@@ -380,6 +380,9 @@ InitParams build_init(json& tree, const std::string& shot_path, Issues& issues) 
         StrengthFieldParams field;
         field.correlation_length = number(tree, "/init/strength_field/correlation_length");
         field.weibull_modulus = number(tree, "/init/strength_field/weibull_modulus");
+        field.azimuths = text(tree, "/init/strength_field/azimuths") == "random"
+                             ? ModeAzimuths::Random
+                             : ModeAzimuths::Even;
         init.strength_field = field;
         if (!has(tree, "/plasticity"))
             issues.add(

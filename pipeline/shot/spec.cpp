@@ -140,6 +140,11 @@ std::vector<KeySpec> build_fixed_table() {
         .doc("l of the field's covariance exp(-r^2 / (2 l^2)): the size of weak and strong patches"),
     Key("/init/strength_field/weibull_modulus", T::Number).def(4.0).ge(0.5).le(100).units("-")
         .doc("Weibull modulus m of the multipliers (mean 1): smaller is more varied (m = 4: cv 0.28)"),
+    Key("/init/strength_field/azimuths", T::Enum).def("even").choices({"even", "random"}).units("")
+        .doc("how the field's 256 plane waves share out the horizontal directions: even (one per "
+             "stratum of the circle: no pair of directions preferred) or random (independent: the "
+             "sum prefers one pair by chance, and a large slab cracks along it; shots measured "
+             "before 2026-11-30 keep it; docs/physics.md §6.1)"),
 
     // --- material: neo-Hookean solid (Tu et al. 2023 Eq. 4-5; Table 1 (rho_s, E, nu))
     Key("/material", T::Section).required().doc("elastic solid (Eq. 4-5)"),

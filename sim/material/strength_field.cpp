@@ -29,6 +29,9 @@ StrengthField make_strength_field(const StrengthFieldParams& params, uint64_t se
     MC_CHECK(params.correlation_length > 0 && params.weibull_modulus > 0);
     // a stream of its own: the lattice jitter and the mesher draw from the same shot seed
     std::mt19937_64 rng(seed ^ 0x9e3779b97f4a7c15ull);
+    // the strata's offsets on a stream of their own, so that an even field is the random one's
+    // modes turned about the vertical, mode for mode
+    std::mt19937_64 azimuth_rng(seed ^ 0xbf58476d1ce4e5b9ull);
     StrengthField f;
     f.frequency.resize(kStrengthFieldModes);
     f.phase.resize(kStrengthFieldModes);
@@ -36,6 +39,13 @@ StrengthField make_strength_field(const StrengthFieldParams& params, uint64_t se
     for (int k = 0; k < kStrengthFieldModes; ++k) {
         for (int d = 0; d < 3; ++d) f.frequency[k][d] = standard_normal(rng) * inv_l;
         f.phase[k] = 2 * kPi * open_unit(rng);
+        if (params.azimuths == ModeAzimuths::Even) {
+            // the same length and vertical part, turned about the vertical into stratum k
+            const Real azimuth = 2 * kPi * (k + open_unit(azimuth_rng)) / kStrengthFieldModes;
+            const Real across = std::hypot(f.frequency[k].x(), f.frequency[k].z());
+            f.frequency[k].x() = across * std::cos(azimuth);
+            f.frequency[k].z() = across * std::sin(azimuth);
+        }
     }
     f.weibull_modulus = params.weibull_modulus;
     f.weibull_scale = 1 / std::tgamma(1 + 1 / params.weibull_modulus);

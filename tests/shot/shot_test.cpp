@@ -298,6 +298,21 @@ TEST_F(ShotTest, EllipseFootprintTakesEveryLattice) {
     }
 }
 
+TEST_F(ShotTest, StrengthFieldAzimuthsAreEvenUnlessAShotKeepsRandom) {
+    const auto field = [](const std::string& keys) {
+        return R"({"mudcrack": 1, "source": {"type": "box"}, "material": {}, "plasticity": {},
+            "init": {"strength_field": {)" +
+               keys + "}}}";
+    };
+    const Shot fresh = parse_shot(field(""), "t.json");
+    ASSERT_TRUE(fresh.init.strength_field);
+    EXPECT_EQ(fresh.init.strength_field->azimuths, ModeAzimuths::Even);
+    const Shot kept = parse_shot(field(R"("azimuths": "random")"), "t.json");
+    EXPECT_EQ(kept.init.strength_field->azimuths, ModeAzimuths::Random);
+    expect_contains(error_of(field(R"("azimuths": "spiral")"), "shots/mud.json"),
+                    {"shots/mud.json: /init/strength_field/azimuths = \"spiral\""});
+}
+
 TEST_F(ShotTest, WrongTypesAreErrors) {
     const std::string msg =
         error_of(R"({"mudcrack": 1, "source": {"type": "box", "box": {"min": [0, 0]}},
