@@ -143,7 +143,7 @@ std::vector<KeySpec> build_fixed_table() {
     Key("/init/strength_field/azimuths", T::Enum).def("even").choices({"even", "random"}).units("")
         .doc("how the field's 256 plane waves share out the horizontal directions: even (one per "
              "stratum of the circle: no pair of directions preferred) or random (independent: the "
-             "sum prefers one pair by chance, and a large slab cracks along it; shots measured "
+             "sum prefers one pair by chance, which a large slab's cracks can follow; shots measured "
              "before 2026-11-30 keep it; docs/physics.md §6.1)"),
 
     // --- material: neo-Hookean solid (Tu et al. 2023 Eq. 4-5; Table 1 (rho_s, E, nu))

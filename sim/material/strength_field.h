@@ -27,10 +27,10 @@ namespace mudcrack {
 /// perpendicular directions by chance: the mean of exp(4 i phi_k) over the modes is about
 /// 1 / sqrt(N) (0.03-0.09 on seeds 1-8 at N = 256), and every wave runs across the whole body,
 /// so a large slab's weak valleys can keep that pair, and its cracks with them (docs/physics.md
-/// §6.1). Drawn one per
-/// stratum of the circle, the azimuths' low moments vanish to about N^-1.5 (0.001-0.003), and each
-/// mode still has the isotropic Gaussian's distribution (its azimuth is uniform and independent of
-/// its length and vertical part).
+/// §6.1, §6.5: on fig6_eps_0.5 the even field did not take the cracks off the world's axes).
+/// Drawn one per stratum of the circle, the azimuths' low moments vanish to about N^-1.5
+/// (0.001-0.003), and each mode still has the isotropic Gaussian's distribution (its azimuth is
+/// uniform and independent of its length and vertical part).
 enum class ModeAzimuths {
     Even,    // mode k's azimuth uniform in [2 pi k / N, 2 pi (k + 1) / N)
     Random,  // each independent: the only way until 2026-11-30, which shots measured on it keep
