@@ -134,10 +134,14 @@ struct SimModel {
     // every this many steps the background grid moves by a fraction of a cell (0: a fixed grid;
     // sim/mpm/simulation.cpp, docs/physics.md §6.4)
     int grid_shift_interval = 0;
-    // every this many steps the background grid turns to a new random angle about the vertical
+    // every this many steps the background grid turns to a new angle about the vertical
     // (0: a grid along the world's axes; sim/mpm/simulation.cpp, docs/physics.md §6.5). Needs an
     // auto domain and a vertical gravity (the shot loader refuses the others).
     int grid_turn_interval = 0;
+    // how the turned grid's angles are drawn (/sim/grid_turn_angles; docs/physics.md §6.5):
+    // Golden, the golden-ratio sequence of quarter turns, leaves every run of a few turns without
+    // a preferred pair of directions; Random, uniform draws, can prefer one for a hundred steps
+    enum class TurnAngles { Golden, Random } grid_turn_angles = TurnAngles::Golden;
     // what the state keeps its directional arrays (x, v, C, Fe) in between steps: SimState or
     // SimStateFloat (sim/mpm/simulation.h); the step computes in double either way
     StatePrecision precision = StatePrecision::Double;

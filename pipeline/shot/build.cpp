@@ -413,6 +413,9 @@ SimModel build_sim(json& tree, Issues& issues) {
                            {"checkpoint_every", &SimModel::checkpoint_every},
                            {"grid_shift", &SimModel::grid_shift_interval},
                            {"grid_turn", &SimModel::grid_turn_interval}});
+    model.grid_turn_angles = text(tree, "/sim/grid_turn_angles") == "random"
+                                 ? SimModel::TurnAngles::Random
+                                 : SimModel::TurnAngles::Golden;
     model.precision =
         text(tree, "/sim/precision") == "float" ? StatePrecision::Float : StatePrecision::Double;
     model.initial_velocity = vec3(tree, "/source/initial_velocity");

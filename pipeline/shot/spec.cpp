@@ -211,9 +211,14 @@ std::vector<KeySpec> build_fixed_table() {
         .doc("every k steps the grid moves by a random fraction of a cell on each axis, so no crack or "
              "plastic band stays locked to its axes; 0 = a fixed grid (docs/physics.md §6.4)"),
     Key("/sim/grid_turn", T::Integer).def(0).ge(0).units("steps")
-        .doc("every k steps the grid turns to a new random angle about the vertical, so no crack follows "
-             "its axes; needs an auto domain and a vertical gravity; 0 = a grid along the world's axes "
-             "(docs/physics.md §6.5)"),
+        .doc("every k steps the grid turns to a new angle about the vertical (/sim/grid_turn_angles), so "
+             "no crack follows its axes; needs an auto domain and a vertical gravity; 0 = a grid along "
+             "the world's axes (docs/physics.md §6.5)"),
+    Key("/sim/grid_turn_angles", T::Enum).def("golden").choices({"golden", "random"}).units("")
+        .doc("how the turned grid's angles follow each other: golden (quarter turns by the golden "
+             "ratio: every run of a few turns spreads evenly, so no pair of directions is favoured "
+             "while a crack opens) or random (independent draws: a run of 20 can favour one pair; "
+             "shots measured before 2026-12-01 keep it; docs/physics.md §6.5)"),
     Key("/sim/precision", T::Enum).def("double").choices({"double", "float"}).units("")
         .doc("what the particles' positions, velocities, affine velocities and Fe are kept in between steps: "
              "float halves those arrays (a third less memory per particle); the step computes in double "

@@ -89,14 +89,23 @@ Vec3 grid_shift_cells(uint64_t shift_index) {
     return u;
 }
 
-// The turned grid's angle about the vertical for the steps from turn_index * interval on, in
-// [0, 2 pi): splitmix64's sequence from index 8.48e18 on (kTurnStream is that index times the
-// increment), which the shift's indices (3 j, from 0 up) never reach, so a shot that both shifts
-// and turns its grid does not turn it by its shifts.
-Real grid_turn_angle(uint64_t turn_index) {
+}  // namespace
+
+// Golden: 4 psi_j = 2 pi frac((j + 1) g) is the golden rotation. Random: splitmix64's sequence from
+// index 8.48e18 on (kTurnStream is that index times the increment), which the shift's indices
+// (3 j, from 0 up) never reach, so a shot that both shifts and turns its grid does not turn it by
+// its shifts.
+Real grid_turn_angle(SimModel::TurnAngles angles, uint64_t turn_index) {
+    if (angles == SimModel::TurnAngles::Golden) {
+        constexpr Real kGoldenFraction = 0.6180339887498948482;  // (sqrt 5 - 1) / 2
+        const Real turns = static_cast<Real>(turn_index + 1) * kGoldenFraction;
+        return kPi / 2 * (turns - std::floor(turns));
+    }
     constexpr uint64_t kTurnStream = 0xD1B54A32D192ED03ull;
     return 2 * kPi * splitmix64_unit(kTurnStream + turn_index * kGoldenGamma);
 }
+
+namespace {
 
 // the rotation by `angle` about the vertical (y) axis: x toward -z for a positive angle
 Mat3 rotation_about_vertical(Real angle) {
@@ -110,8 +119,9 @@ Mat3 rotation_about_vertical(Real angle) {
 // and the world's (0) before the first.
 Real state_turn_angle(const SimModel& model, int64_t step_count) {
     if (model.grid_turn_interval <= 0 || step_count == 0) return 0;
-    return grid_turn_angle(static_cast<uint64_t>(step_count - 1) /
-                           static_cast<uint64_t>(model.grid_turn_interval));
+    return grid_turn_angle(
+        model.grid_turn_angles,
+        static_cast<uint64_t>(step_count - 1) / static_cast<uint64_t>(model.grid_turn_interval));
 }
 
 // Carries the state's directional arrays by `turn` about the vertical through `centre`: positions
@@ -405,8 +415,8 @@ StepStats step(const SimModel& model, SimStateOf<S>& state, Real dt) {
     const bool grid_shifts_now = shift > 0 && state.step_count % shift == 0;
     if (grid_turns_now) {
         const GridFrame held = state_grid_frame(model, state);
-        const Mat3 next = rotation_about_vertical(
-            grid_turn_angle(static_cast<uint64_t>(state.step_count / turn)));
+        const Mat3 next = rotation_about_vertical(grid_turn_angle(
+            model.grid_turn_angles, static_cast<uint64_t>(state.step_count / turn)));
         turn_state(state, next * held.rotation.transpose(), held.centre);
     }
     // the moisture CG's warm start extrapolates fluxes at fixed nodes: none survive a move

@@ -313,6 +313,20 @@ TEST_F(ShotTest, StrengthFieldAzimuthsAreEvenUnlessAShotKeepsRandom) {
                     {"shots/mud.json: /init/strength_field/azimuths = \"spiral\""});
 }
 
+TEST_F(ShotTest, GridTurnAnglesAreGoldenUnlessAShotKeepsRandom) {
+    const auto turned = [](const std::string& keys) {
+        return R"({"mudcrack": 1, "source": {"type": "box"}, "material": {},
+            "sim": {"grid_turn": 5)" +
+               keys + "}}";
+    };
+    EXPECT_EQ(parse_shot(turned(""), "t.json").sim.grid_turn_angles, SimModel::TurnAngles::Golden);
+    EXPECT_EQ(
+        parse_shot(turned(R"(, "grid_turn_angles": "random")"), "t.json").sim.grid_turn_angles,
+        SimModel::TurnAngles::Random);
+    expect_contains(error_of(turned(R"(, "grid_turn_angles": "spiral")"), "shots/mud.json"),
+                    {"shots/mud.json: /sim/grid_turn_angles = \"spiral\""});
+}
+
 TEST_F(ShotTest, WrongTypesAreErrors) {
     const std::string msg =
         error_of(R"({"mudcrack": 1, "source": {"type": "box", "box": {"min": [0, 0]}},
