@@ -218,7 +218,7 @@ std::vector<KeySpec> build_fixed_table() {
         .doc("how the turned grid's angles follow each other: golden (quarter turns by the golden "
              "ratio: every run of a few turns spreads evenly, so no pair of directions is favoured "
              "while a crack opens) or random (independent draws: a run of 20 can favour one pair; "
-             "shots measured before 2026-12-01 keep it; docs/physics.md §6.5)"),
+             "the shots that were measured on it pin it; docs/physics.md §6.5)"),
     Key("/sim/precision", T::Enum).def("double").choices({"double", "float"}).units("")
         .doc("what the particles' positions, velocities, affine velocities and Fe are kept in between steps: "
              "float halves those arrays (a third less memory per particle); the step computes in double "
