@@ -3,7 +3,8 @@
 # killed surfacing task is all that a re-run resubmits.
 #
 #   farm_test.sh SOURCE_DIR BIN_DIR [SHOT_FILE]     (SHOT_FILE default: SOURCE_DIR/shots/fig8_c.json,
-#                                                    cut by tests/short_shot.sh: 24 frames, 6 views)
+#                                                    cut by tests/short_shot.sh: 24 frames, 6 views,
+#                                                    a quarter of a box source's footprint)
 #
 # 1. starts a one-node Slurm cluster (slurm-wlm + munge) in a temporary folder, stopped by a trap
 #    whatever happens;

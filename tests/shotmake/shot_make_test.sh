@@ -27,8 +27,8 @@ name=$(basename "$shot_src" .json)
 shot=$tmp/$name.json
 # a quarter of the pixels (a render key: the stages before it are the shot's own) keeps the four
 # render runs short; so does the cut every long pipeline test runs (tests/short_shot.sh: the first
-# 24 frames, a 6-view turntable; an earlier demo's 28,611 particles over 48 frames took 846 s of
-# the test's 900 on a loaded 2-core machine)
+# 24 frames, a 6-view turntable, a quarter of the slab's footprint; an earlier demo's 28,611
+# particles over 48 frames took 846 s of the test's 900 on a loaded 2-core machine)
 # shellcheck source=../short_shot.sh
 . "$src/tests/short_shot.sh"
 sed 's/"resolution": \[640, 360\]/"resolution": [320, 180]/' "$shot_src" >"$tmp/reduced.json"
