@@ -14,9 +14,9 @@
 // patch of eps 0.5 hardly cracks (248 broken edges) while the whole slab cracks into a network;
 // with the strength field the fig6 shots carry since 2026-11-29, a 1 m patch of eps 0.5 curls
 // less than eps 0.2's (3.36 against 3.74 mm) where the whole slabs curl 4.8 and 3.6 mm. The 1.2 m
-// patches hold every claim (docs/physics.md §6.5 has the rows), in 466 test-seconds where the
-// 1.4 m patches the case ran until 2026-12-02 took 711 (a Zen 5); their thinnest margin is the
-// lift from eps 0.2 to 0.5: 0 and 0.07 % of the footprint (1.4 m: 0 and 2.2 %).
+// patches hold every claim (docs/physics.md §6.5 has the rows): the case took 498 s of a fresh
+// clone's ctest on a Zen 5 (711 s on the 1.4 m patches it ran until 2026-12-02). Their thinnest
+// margin is the lift from eps 0.2 to 0.5: 0 and 0.07 % of the footprint (1.4 m: 0 and 2.2 %).
 // Measures are mc-measure's (pipeline/measure/shape_measures.h): curl = 95th percentile minus
 // median of the top surface's rise; split = share of columns with a horizontal gap; surface
 // polygons = pieces of the top layer between cracks (mesh_: as the plates mode's meshes cut it).
