@@ -440,8 +440,12 @@ StepStats step(const SimModel& model, SimStateOf<S>& state, Real dt) {
 
     // which parts of the moisture model run this step
     const bool has_pores = model.moisture && model.moisture->eta > 0;
+    // A solve every k-th step takes the time stepped since the last one, this step's included:
+    // the moisture's clock keeps the steps' own, however dt varies (a frame's shortened last
+    // steps, a retry's smaller ones). With k = 1 that is dt, to the bit.
     const int interval = has_pores ? std::max(1, model.moisture->interval) : 1;
-    const bool solve_moisture_now = has_pores && state.step_count % interval == 0;
+    const bool solve_moisture_now = has_pores && (state.step_count + 1) % interval == 0;
+    const double moisture_dt = state.moisture_lag + dt;
 
     // 1. P2G (with the moisture fields on solve steps)
     phase.reset();
@@ -459,12 +463,12 @@ StepStats step(const SimModel& model, SimStateOf<S>& state, Real dt) {
     mpm::update_grid_velocity(model, ws.grid, dt);
     stats.seconds.grid = phase.seconds();
 
-    // 3. implicit moisture diffusion with evaporation, dt_m = k dt; the evaporation as the
-    // shot's ramp has it at this step's start
+    // 3. implicit moisture diffusion with evaporation over moisture_dt; the evaporation as the
+    // shot's ramp has it where that time starts (this step's start when k = 1)
     MoistureParams drying;
     if (solve_moisture_now) {
         drying = *model.moisture;
-        drying.lambda = drying.lambda_at(state.time);
+        drying.lambda = drying.lambda_at(state.time - state.moisture_lag);
         phase.reset();
         MoistureSeal seal;
         seal.seal_colliders = model.moisture->seal_colliders;
@@ -472,7 +476,7 @@ StepStats step(const SimModel& model, SimStateOf<S>& state, Real dt) {
         if (seal.has_ground) seal.ground_height = model.ground->height;
         const MoistureParticlesOf<S> mp{state.x.data(), state.V0.data(), state.J.data(),
                                         state.theta.data()};
-        const MoistureSolveStats ms = solve_moisture(drying, seal, ws.grid, mp, interval * dt, *mg,
+        const MoistureSolveStats ms = solve_moisture(drying, seal, ws.grid, mp, moisture_dt, *mg,
                                                      state.moisture_flux, ws.windows);
         stats.cg_iterations = ms.iterations;
         stats.cg_residual = ms.residual;
@@ -484,7 +488,7 @@ StepStats step(const SimModel& model, SimStateOf<S>& state, Real dt) {
     mpm::MoistureUpdate moisture_update;
     if (mg) {
         moisture_update.dtheta = mg->x.data();
-        moisture_update.dt = interval * dt;
+        moisture_update.dt = moisture_dt;
         moisture_update.lambda = drying.lambda;
         if (drying.evaporation == MoistureParams::Evaporation::Surface && drying.lambda > 0)
             moisture_update.evaporating = mg->particle_is_boundary.data();
@@ -494,6 +498,7 @@ StepStats step(const SimModel& model, SimStateOf<S>& state, Real dt) {
     stats.seconds.g2p = phase.seconds();
     state.time += dt;
     state.step_count = substep;
+    if (has_pores) state.moisture_lag = solve_moisture_now ? 0 : moisture_dt;
     if (g2p.bad_slot >= 0) {
         std::string msg = find_non_finite(state, substep);
         if (msg.empty()) {

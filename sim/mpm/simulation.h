@@ -59,8 +59,10 @@ struct SimStateOf {
     using StateVec3 = Eigen::Matrix<StateReal, 3, 1>;
     using StateMat3 = Eigen::Matrix<StateReal, 3, 3>;
 
-    double time = 0;         // simulated time [s]
-    int64_t step_count = 0;  // substeps taken since t = 0
+    double time = 0;          // simulated time [s]
+    int64_t step_count = 0;   // substeps taken since t = 0
+    double moisture_lag = 0;  // time stepped since the last moisture solve, which the next solve
+                              //   takes (/moisture/interval > 1) [s]; part of the checkpoint
 #define MC_STATE_ARRAY_MEMBER(T, name, presence, doc) std::vector<T> name;
     MC_SIM_STATE_ARRAYS(MC_STATE_ARRAY_MEMBER)
 #undef MC_STATE_ARRAY_MEMBER

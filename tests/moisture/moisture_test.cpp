@@ -588,13 +588,45 @@ TEST(Moisture, SolvingEveryKStepsCountsItsIterations) {
     const test::Lattice l = make_lattice(Vec3::Zero(), Vec3i(6, 6, 6), 0.05);
     SimState s = make_initial_state(model, l.X, l.V0);
     set_moisture_field(model, s, [&](const Vec3& x) { return 0.1 + 0.3 * x.x(); });
-    for (int i = 0; i < 6; ++i) {
+    for (int i = 1; i <= 6; ++i) {  // the 3rd and 6th steps solve
         const StepStats st = step(model, s, 1e-3);
         if (i % 3 == 0)
             EXPECT_GT(st.cg_iterations, 0) << "step " << i;
         else
             EXPECT_EQ(st.cg_iterations, 0) << "step " << i;
     }
+}
+
+// A solve every k steps takes the time stepped since the last one, however the steps vary: steps
+// of 1, 2 and 3 units solve as 3 steps of 2 do, where k times the solving step's dt (3 against 6
+// units) would dry the first run half as fast.
+TEST(Moisture, SolvingEveryKStepsKeepsTheStepsClock) {
+    SimModel model = still_model(0.1);
+    model.moisture->D = 0.5;
+    model.moisture->interval = 3;
+    const test::Lattice l = make_lattice(Vec3::Zero(), Vec3i(6, 6, 6), 0.05);
+    auto run = [&](const std::vector<Real>& dts) {
+        SimState s = make_initial_state(model, l.X, l.V0);
+        set_moisture_field(model, s, [&](const Vec3& x) { return 0.1 + 0.3 * x.x(); });
+        const std::vector<Real> theta0 = s.theta;
+        for (int window = 0; window < 2; ++window)
+            for (Real dt : dts) step(model, s, dt);
+        EXPECT_EQ(s.moisture_lag, 0) << "the 6th step solved what was owed";
+        Real change = 0;
+        for (size_t p = 0; p < s.size(); ++p) change += std::abs(s.theta[p] - theta0[p]);
+        return std::make_pair(s.theta, change);
+    };
+    const auto [varying, varying_change] = run({1e-3, 2e-3, 3e-3});
+    const auto [even, even_change] = run({2e-3, 2e-3, 2e-3});
+    ASSERT_EQ(varying.size(), even.size());
+    EXPECT_GT(even_change, 0.01) << "the field diffuses";
+    for (size_t p = 0; p < even.size(); ++p)
+        EXPECT_NEAR(varying[p], even[p], 1e-12) << "particle slot " << p;
+    // and the lag in between: 1 + 2 units owed after two steps
+    SimState s = make_initial_state(model, l.X, l.V0);
+    step(model, s, 1e-3);
+    step(model, s, 2e-3);
+    EXPECT_DOUBLE_EQ(s.moisture_lag, 3e-3);
 }
 
 }  // namespace

@@ -186,6 +186,8 @@ void reference_scene_runs(benchmark::internal::Benchmark* b) {
 constexpr DiffusionOperator kParticles = DiffusionOperator::Particles;
 BENCHMARK_CAPTURE(BM_ReferenceScene, NoMoisture, 0, kParticles)->Apply(reference_scene_runs);
 BENCHMARK_CAPTURE(BM_ReferenceScene, Moisture, 1, kParticles)->Apply(reference_scene_runs);
+BENCHMARK_CAPTURE(BM_ReferenceScene, MoistureEvery2Steps, 2, kParticles)
+    ->Apply(reference_scene_runs);
 BENCHMARK_CAPTURE(BM_ReferenceScene, MoistureEvery4Steps, 4, kParticles)
     ->Apply(reference_scene_runs);
 // the grid operator's L (/moisture/diffusion_operator "grid"): no particle pass in the CG

@@ -113,17 +113,17 @@ TEST(MpmStep, PhaseTimesSplitTheStepAndNameOnlyItsPhases) {
     EXPECT_LE(d.total(), wall) << "a phase counted twice";
 
     SimModel wet = drying_on_ground_model();
-    wet.moisture->interval = 2;  // solves on steps 1, 3, ...
+    wet.moisture->interval = 2;  // solves on steps 2, 4, ...
     SimState b = block_state(wet);
     for (size_t p = 0; p < b.size(); p += 2) b.theta[p] /= 2;  // something to diffuse
-    const StepStats solved = timed_step(wet, b, wall);
-    EXPECT_GT(solved.cg_iterations, 0);
-    EXPECT_GT(solved.seconds.moisture, 0);
-    EXPECT_LE(solved.seconds.total(), wall) << "a phase counted twice";
     const StepStats skipped = timed_step(wet, b, wall);
     EXPECT_EQ(skipped.cg_iterations, 0);
     EXPECT_EQ(skipped.seconds.moisture, 0) << "a step that solves no moisture timed a solve";
     EXPECT_LE(skipped.seconds.total(), wall) << "a phase counted twice";
+    const StepStats solved = timed_step(wet, b, wall);
+    EXPECT_GT(solved.cg_iterations, 0);
+    EXPECT_GT(solved.seconds.moisture, 0);
+    EXPECT_LE(solved.seconds.total(), wall) << "a phase counted twice";
 }
 
 TEST(MpmStep, SameThreadCountIsBitwiseIdenticalAndThreadCountsAgree) {

@@ -29,6 +29,11 @@ constexpr Real kMinDiffusion3dOrderInH = 1.3;
 constexpr Real kMinColumnOrderInH = 0.8;
 // measured 1.4e-2 at h = 0.025 (H = 0.5 m, 20 cells)
 constexpr Real kMaxColumnErrorFinest = 0.03;
+// the moisture solved every k steps against every step: the difference per step of k - 1 at
+// k = 4 and 8 within this factor of k = 2's (measured 0.98 and 0.95, double and float), and
+// k = 2's RMS theta difference under this share of eta (measured 9.6e-5)
+constexpr Real kIntervalLinearity = 1.5;
+constexpr Real kMaxIntervalTwoError = 1e-3;
 // a free block that dries fully ends at (1 - eta) V0 within 1 % (measured <= 3e-4)
 constexpr Real kMaxShrinkageError = 0.01;
 
@@ -105,6 +110,23 @@ TEST_P(ReportAccuracy, FiveCgIterationsSufficeInThePapersRegime) {
         EXPECT_LT(p.error, kCgClaimTolerance);
     }
     EXPECT_TRUE(has_cap5);
+}
+
+// A solve every k-th step (/moisture/interval) is backward Euler over k dt, as a solve every step
+// is over dt: both are first order in time, so their difference grows as (k - 1) dt.
+TEST_P(ReportAccuracy, MoistureIntervalErrorGrowsAsTheIntervalLessOne) {
+    const Sweep s = sweep_moisture_interval(Scale::Reduced, GetParam());
+    ASSERT_EQ(s.points.size(), 4u);
+    EXPECT_EQ(s.points.front().knob, 1);
+    EXPECT_EQ(s.points.front().error, 0) << "the reference is a solve every step";
+    const Real per_step_of_k2 = s.points[1].error / (s.points[1].knob - 1);
+    EXPECT_GT(per_step_of_k2, 0);
+    EXPECT_LT(s.points[1].error, kMaxIntervalTwoError) << "k = 2";
+    for (size_t i = 2; i < s.points.size(); ++i) {
+        const Real per_step = s.points[i].error / (s.points[i].knob - 1);
+        EXPECT_GT(per_step, per_step_of_k2 / kIntervalLinearity) << "k = " << s.points[i].knob;
+        EXPECT_LT(per_step, per_step_of_k2 * kIntervalLinearity) << "k = " << s.points[i].knob;
+    }
 }
 
 INSTANTIATE_TEST_SUITE_P(Precisions, ReportAccuracy,

@@ -45,6 +45,7 @@ template <class S>
 void expect_same_state(const SimStateOf<S>& a, const SimStateOf<S>& b) {
     EXPECT_EQ(std::memcmp(&a.time, &b.time, sizeof(double)), 0) << a.time << " vs " << b.time;
     EXPECT_EQ(a.step_count, b.step_count);
+    EXPECT_EQ(std::memcmp(&a.moisture_lag, &b.moisture_lag, sizeof(double)), 0);
     EXPECT_TRUE(same_bits(a.id, b.id));
     EXPECT_TRUE(same_bits(a.x, b.x));
     EXPECT_TRUE(same_bits(a.v, b.v));
@@ -76,6 +77,7 @@ SimStateOf<S> random_state(size_t n, bool has_moisture, bool has_plasticity, uns
     SimStateOf<S> s;
     s.time = 0.1 + 1e-17;
     s.step_count = 12345;
+    s.moisture_lag = 3e-4 / 7;  // owed to the next solve (/moisture/interval)
     for (size_t i = 0; i < n; ++i) {
         s.id.push_back(int32_t((i * 7) % n));  // a permuted slot order
         s.x.push_back((Vec3(u(rng), u(rng), u(rng)) / 3.0).cast<S>());
@@ -287,7 +289,7 @@ TEST(SimCheckpoint, SavesEveryStateField) {
     // SimState's size changes when a field is added; the checkpoint must then save it too
     // (sim_checkpoint.cpp), or a resumed run silently diverges. Update this number with it.
     constexpr size_t kVectors = 13, kVec3s = 2;
-    constexpr size_t kExpected = sizeof(double) + sizeof(int64_t) +
+    constexpr size_t kExpected = 2 * sizeof(double) + sizeof(int64_t) +
                                  kVectors * sizeof(std::vector<Real>) + kVec3s * sizeof(Vec3) +
                                  sizeof(MoistureFluxHistory) + sizeof(Scratch<SimWorkspace>);
     EXPECT_EQ(sizeof(SimState), kExpected)

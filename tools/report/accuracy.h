@@ -45,6 +45,10 @@ Sweep sweep_column_E(Scale scale, StatePrecision precision = StatePrecision::Dou
 /// D dt / h^2 (the paper's regime first). The converged run is the last point, error 0.
 std::vector<Sweep> sweep_cg_caps(Scale scale, StatePrecision precision = StatePrecision::Double);
 
+/// Moisture solve intervals k = 1, 2, 4, 8 (/moisture/interval: a solve every k-th step with
+/// dt_m = k dt) in the drying slab at the paper's D dt / h^2, against a solve every step.
+Sweep sweep_moisture_interval(Scale scale, StatePrecision precision = StatePrecision::Double);
+
 /// Every sweep above in report order, each in double and then in float (/sim/precision); `on_done`
 /// (if set) is called after each one (progress).
 std::vector<Sweep> all_sweeps(Scale scale, const std::function<void(const Sweep&)>& on_done = {});

@@ -126,6 +126,7 @@ void write_sim_checkpoint(const fs::path& path, const SimCheckpointOf<S>& checkp
     // the state, slot order included (id maps slots to particles)
     c.meta_double["time"] = s.time;
     c.meta_int["step_count"] = s.step_count;
+    c.meta_double["moisture_lag"] = s.moisture_lag;
     c.meta_int["particles"] = int64_t(s.size());
     s.for_each_array(
         [&](const char* name, const auto& array, ArrayPresence) { save_array(c, name, array); });
@@ -179,6 +180,8 @@ SimCheckpointOf<S> read_sim_checkpoint(const fs::path& path) {
     SimStateOf<S>& s = sc.state;
     s.time = c.require_double("time");
     s.step_count = c.require_int("step_count");
+    // written before the key existed: every step solved its moisture, so none was owed
+    s.moisture_lag = c.meta_double.count("moisture_lag") ? c.meta_double.at("moisture_lag") : 0;
     s.for_each_array([&](const char* name, auto& array, ArrayPresence presence) {
         load_array(c, name, n, presence, array);
     });
