@@ -66,7 +66,7 @@ struct MoistureParams {
         Particles,
         Grid
     } diffusion_operator = DiffusionOperator::Particles;
-    int interval = 1;             // solve moisture every k MPM steps with dt_m = k dt
+    int interval = 1;             // solve moisture every k-th MPM step (docs/physics.md §4.2)
     Real max_log_jw_step = 1e-3;  // cap on |log(Jw^n/Jw^{n+1})| per step (docs/physics.md §3.2)
     /// When the drying starts (docs/physics.md §6.3): no evaporation until ramp_start, then
     /// lambda rising linearly to its full value at ramp_end; ramp_end <= ramp_start: lambda from

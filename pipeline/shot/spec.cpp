@@ -193,7 +193,7 @@ std::vector<KeySpec> build_fixed_table() {
         .doc("[start, full]: when the drying begins, in the shot's own frames: no evaporation until "
              "the end of frame start, then lambda rising linearly to its full value at the end of "
              "frame full; full > start (docs/physics.md §6.3); omit: lambda from the first step"),
-    Key("/moisture/interval", T::Integer).def(1).ge(1).units("steps").doc("solve moisture every k-th MPM step over the time since the last solve (k dt on equal steps)"),
+    Key("/moisture/interval", T::Integer).def(1).ge(1).units("steps").doc("solve moisture every k-th MPM step over the time since the last solve, each solve's theta increment applied over the k steps from it"),
     Key("/moisture/max_log_jw_step", T::Number).def(1e-3).gt(0).units("-")
         .doc("cap on |log(Jw^n / Jw^n+1)| per step (docs/physics.md §3.2)"),
 

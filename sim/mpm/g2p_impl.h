@@ -208,6 +208,8 @@ G2PResult g2p_impl(const SimModel& model, SimStateOf<S>& state, const SparseGrid
     const uint8_t* evaporating = kTheta ? moisture.evaporating : nullptr;
     const Real evaporation_rate_dt =
         evaporating ? moisture.lambda * moisture.dt * particle_area(1) : Real(0);
+    Real* const theta_rate = kPore ? moisture.theta_rate : nullptr;
+    const Real inv_moisture_dt = kTheta && theta_rate ? 1 / moisture.dt : Real(0);
     // particles stay inside the box with a full stencil on the grid
     const Vec3 lo = geo.origin + Vec3::Constant(h);
     const Vec3 hi = geo.origin + (geo.cells.cast<Real>() - Vec3::Ones()) * h;
@@ -275,15 +277,23 @@ G2PResult g2p_impl(const SimModel& model, SimStateOf<S>& state, const SparseGrid
                 if constexpr (kPore) {
                     Real theta = state.theta[p];
                     if constexpr (kTheta) {
-                        theta = std::clamp(theta + chunk.dtheta[j], Real(0), moist.eta);
+                        Real solved = std::clamp(theta + chunk.dtheta[j], Real(0), moist.eta);
                         if (evaporating && evaporating[p]) {
                             // the volume the moisture solve saw
                             const Real V = state.V0[p] * chunk.J_start[j];
-                            theta = moist.theta0 +
-                                    (theta - moist.theta0) *
-                                        std::exp(-evaporation_rate_dt * inv_cube_root(V));
+                            solved = moist.theta0 +
+                                     (solved - moist.theta0) *
+                                         std::exp(-evaporation_rate_dt * inv_cube_root(V));
                         }
+                        if (theta_rate)
+                            theta_rate[p] = (solved - theta) * inv_moisture_dt;
+                        else
+                            theta = solved;
                     }
+                    // a solve every k steps: its increment spread over the steps that follow,
+                    // so the crust shrinks every step, not in k-step jolts
+                    if (theta_rate)
+                        theta = std::clamp(theta + theta_rate[p] * dt, Real(0), moist.eta);
                     state.theta[p] = theta;
                     const Real s = saturation_of(theta, moist.eta);
                     const PoreStep ps = pore_step(state.Jw[p], s, moist.eta, moist.max_log_jw_step);
@@ -435,8 +445,11 @@ G2PResult grid_to_particle(const SimModel& model, SimStateOf<S>& state, const Sp
     using g2p_detail::dispatch_nacc;
     if (moisture.dtheta)
         return dispatch_nacc<true, true>(model, state, grid, moisture, dt, windows, tau);
-    if (pore_update)
-        return dispatch_nacc<false, true>(model, state, grid, MoistureUpdate{}, dt, windows, tau);
+    if (pore_update) {
+        MoistureUpdate rate_only;  // between two solves only the theta rate applies
+        rate_only.theta_rate = moisture.theta_rate;
+        return dispatch_nacc<false, true>(model, state, grid, rate_only, dt, windows, tau);
+    }
     return dispatch_nacc<false, false>(model, state, grid, MoistureUpdate{}, dt, windows, tau);
 }
 

@@ -486,6 +486,11 @@ StepStats step(const SimModel& model, SimStateOf<S>& state, Real dt) {
     // 4-8. G2P, kinematics, pore update, return mapping, advection, finite-ness
     phase.reset();
     mpm::MoistureUpdate moisture_update;
+    if (interval > 1) {
+        // a state from before the array (a checkpoint, a state built by hand) owes no rate
+        if (state.theta_rate.size() != state.size()) state.theta_rate.assign(state.size(), 0);
+        moisture_update.theta_rate = state.theta_rate.data();
+    }
     if (mg) {
         moisture_update.dtheta = mg->x.data();
         moisture_update.dt = moisture_dt;

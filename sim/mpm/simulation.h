@@ -24,19 +24,21 @@ struct SimWorkspace;  // grid and scratch, rebuilt every step; carries nothing f
 // X(element type, name, presence, doc); presence Always: n elements, Optional: n or none.
 // The directional arrays are stored in the state's precision (StateVec3, StateMat3); the scalars
 // are always double (see SimStateOf).
-#define MC_SIM_STATE_ARRAYS(X)                                                            \
-    X(int32_t, id, Always, "particle id per slot")                                        \
-    X(StateVec3, x, Always, "position [m]")                                               \
-    X(StateVec3, v, Always, "velocity [m/s]")                                             \
-    X(StateMat3, C, Always, "APIC affine velocity [1/s]")                                 \
-    X(StateMat3, Fe, Always, "elastic deformation gradient")                              \
-    X(Real, J, Always, "det of the total deformation gradient (volume tracking)")         \
-    X(Real, alpha, Optional, "NACC hardening state (empty without plasticity)")           \
-    X(Real, V0, Always, "rest volume [m^3]")                                              \
-    X(Real, mass, Always, "[kg]")                                                         \
-    X(Real, theta, Optional, "water content in [0, eta] (moisture only)")                 \
-    X(Real, Jw, Optional, "pore determinant 1 - eta (1 - s) (moisture only)")             \
-    X(Real, strength, Optional, "p0 multiplier of a heterogeneous soil (empty: uniform)") \
+#define MC_SIM_STATE_ARRAYS(X)                                                              \
+    X(int32_t, id, Always, "particle id per slot")                                          \
+    X(StateVec3, x, Always, "position [m]")                                                 \
+    X(StateVec3, v, Always, "velocity [m/s]")                                               \
+    X(StateMat3, C, Always, "APIC affine velocity [1/s]")                                   \
+    X(StateMat3, Fe, Always, "elastic deformation gradient")                                \
+    X(Real, J, Always, "det of the total deformation gradient (volume tracking)")           \
+    X(Real, alpha, Optional, "NACC hardening state (empty without plasticity)")             \
+    X(Real, V0, Always, "rest volume [m^3]")                                                \
+    X(Real, mass, Always, "[kg]")                                                           \
+    X(Real, theta, Optional, "water content in [0, eta] (moisture only)")                   \
+    X(Real, Jw, Optional, "pore determinant 1 - eta (1 - s) (moisture only)")               \
+    X(Real, theta_rate, Optional,                                                           \
+      "theta's rate from the last moisture solve, applied every step (interval > 1) [1/s]") \
+    X(Real, strength, Optional, "p0 multiplier of a heterogeneous soil (empty: uniform)")   \
     X(Real, damage, Optional, "tensile damage in [0, 1], never decreasing (NACC with damage)")
 
 /// Whether a state array may be empty (the model lacks its physics) or always has n elements.

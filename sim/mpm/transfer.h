@@ -45,8 +45,11 @@ struct MoistureUpdate {
     const Real* dtheta = nullptr;  // node field theta^{n+1} - theta^n
     // per slot: the particle loses water itself (surface evaporation)
     const uint8_t* evaporating = nullptr;
-    Real dt = 0;      // the moisture step dt_m = k dt [s]
+    Real dt = 0;      // the moisture step dt_m: the time since the last solve [s]
     Real lambda = 0;  // the evaporation coefficient this step (MoistureParams::lambda_at) [m/s]
+    // per slot, with /moisture/interval > 1: theta's rate, which a solve step sets from its
+    // increment over dt_m and every step applies over its own dt (null: the increment at once)
+    Real* theta_rate = nullptr;
 };
 
 /// G2P and the particle update of docs/physics.md §7 steps 4-8: v, C, theta (FLIP increment from

@@ -30,10 +30,10 @@ constexpr Real kMinColumnOrderInH = 0.8;
 // measured 1.4e-2 at h = 0.025 (H = 0.5 m, 20 cells)
 constexpr Real kMaxColumnErrorFinest = 0.03;
 // the moisture solved every k steps against every step: the difference per step of k - 1 at
-// k = 4 and 8 within this factor of k = 2's (measured 0.98 and 0.95, double and float), and
-// k = 2's RMS theta difference under this share of eta (measured 9.6e-5)
+// k = 4 and 8 within this factor of k = 2's (measured 1.00 and 1.00, double and float), and
+// k = 2's RMS theta difference under this share of eta (measured 7.9e-4)
 constexpr Real kIntervalLinearity = 1.5;
-constexpr Real kMaxIntervalTwoError = 1e-3;
+constexpr Real kMaxIntervalTwoError = 2e-3;
 // a free block that dries fully ends at (1 - eta) V0 within 1 % (measured <= 3e-4)
 constexpr Real kMaxShrinkageError = 0.01;
 
@@ -112,8 +112,9 @@ TEST_P(ReportAccuracy, FiveCgIterationsSufficeInThePapersRegime) {
     EXPECT_TRUE(has_cap5);
 }
 
-// A solve every k-th step (/moisture/interval) is backward Euler over k dt, as a solve every step
-// is over dt: both are first order in time, so their difference grows as (k - 1) dt.
+// A solve every k-th step (/moisture/interval) is backward Euler over k dt, its increment applied
+// over the k steps after it: both that and the window's lag are first order in time, so the
+// difference from a solve every step grows as (k - 1) dt.
 TEST_P(ReportAccuracy, MoistureIntervalErrorGrowsAsTheIntervalLessOne) {
     const Sweep s = sweep_moisture_interval(Scale::Reduced, GetParam());
     ASSERT_EQ(s.points.size(), 4u);

@@ -288,7 +288,7 @@ TEST(SimCheckpoint, AFloatStateRoundTripsBitwiseAndOnlyIntoAFloatRun) {
 TEST(SimCheckpoint, SavesEveryStateField) {
     // SimState's size changes when a field is added; the checkpoint must then save it too
     // (sim_checkpoint.cpp), or a resumed run silently diverges. Update this number with it.
-    constexpr size_t kVectors = 13, kVec3s = 2;
+    constexpr size_t kVectors = 14, kVec3s = 2;
     constexpr size_t kExpected = 2 * sizeof(double) + sizeof(int64_t) +
                                  kVectors * sizeof(std::vector<Real>) + kVec3s * sizeof(Vec3) +
                                  sizeof(MoistureFluxHistory) + sizeof(Scratch<SimWorkspace>);

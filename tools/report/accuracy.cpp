@@ -408,8 +408,9 @@ Sweep moisture_interval_sweep(Scale scale) {
     }
     fit_order(sw);  // the reference's error of 0 has no log and is left out
     sw.order_note =
-        "not a convergence order: k dt and dt are both backward Euler (first order), so the difference "
-        "grows as (k - 1) dt, a slope in k of about 1.4 over k = 2, 4, 8";
+        "not a convergence order: backward Euler over k dt and the increment applied over the next k "
+        "steps are both first order in time, so the difference grows as (k - 1) dt, a slope in k of "
+        "about 1.4 over k = 2, 4, 8";
     return sw;
 }
 
