@@ -581,13 +581,25 @@ TEST(Moisture, ParticleAreaIsTheEquivalentSphereCrossSection) {
     }
 }
 
-TEST(Moisture, SolvingEveryKStepsCountsItsIterations) {
+// the still model solving its moisture every `interval` steps, at D = 0.5
+SimModel interval_model(int interval) {
     SimModel model = still_model(0.1);
     model.moisture->D = 0.5;
-    model.moisture->interval = 3;
+    model.moisture->interval = interval;
+    return model;
+}
+
+// a 6x6x6 block whose theta rises along x, something to diffuse
+SimState graded_block(const SimModel& model) {
     const test::Lattice l = make_lattice(Vec3::Zero(), Vec3i(6, 6, 6), 0.05);
     SimState s = make_initial_state(model, l.X, l.V0);
     set_moisture_field(model, s, [&](const Vec3& x) { return 0.1 + 0.3 * x.x(); });
+    return s;
+}
+
+TEST(Moisture, SolvingEveryKStepsCountsItsIterations) {
+    const SimModel model = interval_model(3);
+    SimState s = graded_block(model);
     for (int i = 1; i <= 6; ++i) {  // the 3rd and 6th steps solve
         const StepStats st = step(model, s, 1e-3);
         if (i % 3 == 0)
@@ -600,12 +612,8 @@ TEST(Moisture, SolvingEveryKStepsCountsItsIterations) {
 // A solve every k steps takes the time stepped since the last one, however the steps vary: after
 // steps of 1, 2 and 3 units the 3rd step solves over 6 (k times its own dt would be 9).
 TEST(Moisture, SolvingEveryKStepsKeepsTheStepsClock) {
-    SimModel model = still_model(0.1);
-    model.moisture->D = 0.5;
-    model.moisture->interval = 3;
-    const test::Lattice l = make_lattice(Vec3::Zero(), Vec3i(6, 6, 6), 0.05);
-    SimState s = make_initial_state(model, l.X, l.V0);
-    set_moisture_field(model, s, [&](const Vec3& x) { return 0.1 + 0.3 * x.x(); });
+    const SimModel model = interval_model(3);
+    SimState s = graded_block(model);
     step(model, s, 1e-3);
     step(model, s, 2e-3);
     EXPECT_DOUBLE_EQ(s.moisture_lag, 3e-3) << "owed to the 3rd step's solve";
@@ -620,12 +628,8 @@ TEST(Moisture, SolvingEveryKStepsKeepsTheStepsClock) {
 // step applies that rate over its own dt, so theta (and the pore update it drives) moves every
 // step, not in k-step jolts; the k steps from a solve on apply its whole increment.
 TEST(Moisture, SolvingEveryKStepsSpreadsEachIncrementOverTheSteps) {
-    SimModel model = still_model(0.1);
-    model.moisture->D = 0.5;
-    model.moisture->interval = 3;
-    const test::Lattice l = make_lattice(Vec3::Zero(), Vec3i(6, 6, 6), 0.05);
-    SimState s = make_initial_state(model, l.X, l.V0);
-    set_moisture_field(model, s, [&](const Vec3& x) { return 0.1 + 0.3 * x.x(); });
+    const SimModel model = interval_model(3);
+    SimState s = graded_block(model);
     const std::vector<Real> theta0 = s.theta;
     const Real dt = 1e-3;
     step(model, s, dt);
@@ -652,10 +656,8 @@ TEST(Moisture, SolvingEveryKStepsSpreadsEachIncrementOverTheSteps) {
     EXPECT_GT(moved, 1e-3) << "the field diffuses";
     // the whole increment of the solve over 3 dt against a solve every step: the same diffusion,
     // up to the (k - 1) dt of time error `make report` measures
-    SimModel every_step = model;
-    every_step.moisture->interval = 1;
-    SimState e = make_initial_state(every_step, l.X, l.V0);
-    set_moisture_field(every_step, e, [&](const Vec3& x) { return 0.1 + 0.3 * x.x(); });
+    const SimModel every_step = interval_model(1);
+    SimState e = graded_block(every_step);
     for (int i = 0; i < 3; ++i) step(every_step, e, dt);
     Real diff = 0, change = 0;
     for (size_t p = 0; p < s.size(); ++p) {

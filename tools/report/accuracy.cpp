@@ -317,6 +317,22 @@ DryingRun run_drying_slab(Real h, int steps, Real diffusion_number, int cg_cap, 
     return r;
 }
 
+// RMS differences of theta and position between two runs of the drying slab, by particle id
+struct DryingDifference {
+    Real theta = 0;     // RMS theta difference
+    Real position = 0;  // RMS position difference [m]
+};
+
+DryingDifference rms_difference(const DryingRun& run, const DryingRun& reference) {
+    Real e2 = 0, dx2 = 0;
+    for (size_t i = 0; i < run.theta_by_id.size(); ++i) {
+        e2 += std::pow(run.theta_by_id[i] - reference.theta_by_id[i], 2);
+        dx2 += (run.x_by_id[i] - reference.x_by_id[i]).squaredNorm();
+    }
+    const Real n = static_cast<Real>(run.theta_by_id.size());
+    return {std::sqrt(e2 / n), std::sqrt(dx2 / n)};
+}
+
 template <class S>
 Sweep cg_cap_sweep(Scale scale, Real diffusion_number) {
     const bool full = scale == Scale::Full;
@@ -334,19 +350,14 @@ Sweep cg_cap_sweep(Scale scale, Real diffusion_number) {
     const DryingRun ref = run_drying_slab<S>(h, steps, diffusion_number, 2000, 1e-13);
     for (int cap : {1, 2, 5, 10}) {
         const DryingRun r = run_drying_slab<S>(h, steps, diffusion_number, cap, 1e-13);
-        Real e2 = 0, dx2 = 0;
-        for (size_t i = 0; i < r.theta_by_id.size(); ++i) {
-            e2 += std::pow(r.theta_by_id[i] - ref.theta_by_id[i], 2);
-            dx2 += (r.x_by_id[i] - ref.x_by_id[i]).squaredNorm();
-        }
+        const DryingDifference d = rms_difference(r, ref);
         SweepPoint pt;
         pt.knob = cap;
-        pt.error = std::sqrt(e2 / r.theta_by_id.size()) / eta;
+        pt.error = d.theta / eta;
         pt.wall_s = r.wall_s;
-        pt.note =
-            format("mean CG %.2f; saves %.2f s (%.0f%%) vs converged; RMS position diff %.2e m",
-                   r.mean_cg, ref.wall_s - r.wall_s, 100 * (ref.wall_s - r.wall_s) / ref.wall_s,
-                   std::sqrt(dx2 / r.x_by_id.size()));
+        pt.note = format(
+            "mean CG %.2f; saves %.2f s (%.0f%%) vs converged; RMS position diff %.2e m", r.mean_cg,
+            ref.wall_s - r.wall_s, 100 * (ref.wall_s - r.wall_s) / ref.wall_s, d.position);
         sw.points.push_back(pt);
     }
     SweepPoint conv;
@@ -391,19 +402,14 @@ Sweep moisture_interval_sweep(Scale scale) {
     sw.points.push_back(ref);
     for (int k : {2, 4, 8}) {
         const DryingRun r = run_drying_slab<S>(h, steps, diffusion_number, 2000, 1e-13, k);
-        Real e2 = 0, dx2 = 0;
-        for (size_t i = 0; i < r.theta_by_id.size(); ++i) {
-            e2 += std::pow(r.theta_by_id[i] - every_step.theta_by_id[i], 2);
-            dx2 += (r.x_by_id[i] - every_step.x_by_id[i]).squaredNorm();
-        }
+        const DryingDifference d = rms_difference(r, every_step);
         SweepPoint pt;
         pt.knob = k;
-        pt.error = std::sqrt(e2 / r.theta_by_id.size()) / eta;
+        pt.error = d.theta / eta;
         pt.wall_s = r.wall_s;
         pt.note = format("mean CG %.2f a step; saves %.2f s (%.0f%%); RMS position diff %.2e m",
                          r.mean_cg, every_step.wall_s - r.wall_s,
-                         100 * (every_step.wall_s - r.wall_s) / every_step.wall_s,
-                         std::sqrt(dx2 / r.x_by_id.size()));
+                         100 * (every_step.wall_s - r.wall_s) / every_step.wall_s, d.position);
         sw.points.push_back(pt);
     }
     fit_order(sw);  // the reference's error of 0 has no log and is left out
