@@ -53,11 +53,12 @@ struct MoistureUpdate {
 };
 
 /// G2P and the particle update of docs/physics.md §7 steps 4-8: v, C, theta (FLIP increment from
-/// moisture.dtheta, if non-null, then the exact decay of the evaporating particles), Fe_trial =
-/// (I + dt C) Fe, J *= det(I + dt C), the pore update when `pore_update`, the NACC return mapping
-/// with the particle's strength and damage (when the model has plasticity), x += dt v clamped
-/// into the domain box. Checks every particle for a finite state. Writes each slot's Kirchhoff
-/// stress of its new Fe to `tau` (n entries), for the next step's P2G.
+/// moisture.dtheta, if non-null, then the exact decay of the evaporating particles; with
+/// moisture.theta_rate that increment sets the rate instead, and every step applies rate dt),
+/// Fe_trial = (I + dt C) Fe, J *= det(I + dt C), the pore update when `pore_update`, the NACC
+/// return mapping with the particle's strength and damage (when the model has plasticity), x += dt
+/// v clamped into the domain box. Checks every particle for a finite state. Writes each slot's
+/// Kirchhoff stress of its new Fe to `tau` (n entries), for the next step's P2G.
 template <class S>
 G2PResult grid_to_particle(const SimModel& model, SimStateOf<S>& state, const SparseGrid& grid,
                            const MoistureUpdate& moisture, bool pore_update, Real dt,
