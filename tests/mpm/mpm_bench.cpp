@@ -1,11 +1,11 @@
 // The issue-3 reference scene: a 0.49 m cube of 125,000 NACC particles (2x2x2 per cell, h = 0.02)
 // falling at 2 m/s onto a sticky ground, dt = 2e-4 fixed, with and without moisture, on 1 and 2
 // threads, stepped as mc-sim steps (through sim/mpm/step_retry.h), with a double state and with
-// a float one (BM_ReferenceSceneFloat). Reports particle-steps/s,
-// bytes per particle of simulation state (grid and the rollback copy included), and the wall ns
-// per particle-step of each phase of the step (ns_bin ... ns_g2p, StepPhaseSeconds) and of the
-// loop's rest (ns_rest): the per-phase table, whose 1- and 2-thread columns show which phase
-// does not scale.
+// a float one (BM_ReferenceSceneFloat), and the moisture step's floor (BM_ReferenceSceneNoCg-
+// Iteration). Reports particle-steps/s, bytes per particle of simulation state (grid and the
+// rollback copy included), and the wall ns per particle-step of each phase of the step (ns_bin
+// ... ns_g2p, StepPhaseSeconds) and of the loop's rest (ns_rest): the per-phase table, whose 1-
+// and 2-thread columns show which phase does not scale.
 //
 //   build/bin/mpm_bench                        # 404 steps per run, 3 runs each, medians
 //   MUDCRACK_BENCH_STEPS=100 build/bin/mpm_bench --benchmark_filter=NoMoisture/1
@@ -48,9 +48,11 @@ int bench_repetitions() {
 using DiffusionOperator = MoistureParams::DiffusionOperator;
 
 // moisture_interval: 0 = no moisture section, k = solve the moisture every k steps, with L
-// discretised by `diffusion_operator` (docs/physics.md §4.9)
+// discretised by `diffusion_operator` (docs/physics.md §4.9) and at most cg_max_iterations
+// iterations a solve
 SimModel reference_model(int moisture_interval,
-                         DiffusionOperator diffusion_operator = DiffusionOperator::Particles) {
+                         DiffusionOperator diffusion_operator = DiffusionOperator::Particles,
+                         int cg_max_iterations = MoistureParams{}.cg_max_iterations) {
     SimModel m;
     m.h = 0.02;
     m.gravity = Vec3(0, -9.81, 0);
@@ -71,6 +73,7 @@ SimModel reference_model(int moisture_interval,
         m.moisture = MoistureParams{};
         m.moisture->interval = moisture_interval;
         m.moisture->diffusion_operator = diffusion_operator;
+        m.moisture->cg_max_iterations = cg_max_iterations;
     }
     return m;
 }
@@ -91,11 +94,9 @@ void reference_particles(std::vector<Vec3>& X, std::vector<Real>& V0) {
 }
 
 template <class S>
-void run_reference_scene(benchmark::State& bs, int moisture_interval,
-                         DiffusionOperator diffusion_operator) {
+void run_reference_scene(benchmark::State& bs, const SimModel& model) {
     const int threads = static_cast<int>(bs.range(0));
     set_thread_count(threads);
-    const SimModel model = reference_model(moisture_interval, diffusion_operator);
     std::vector<Vec3> X;
     std::vector<Real> V0;
     reference_particles(X, V0);
@@ -149,12 +150,18 @@ void run_reference_scene(benchmark::State& bs, int moisture_interval,
 
 void BM_ReferenceScene(benchmark::State& bs, int moisture_interval,
                        DiffusionOperator diffusion_operator) {
-    run_reference_scene<double>(bs, moisture_interval, diffusion_operator);
+    run_reference_scene<double>(bs, reference_model(moisture_interval, diffusion_operator));
+}
+// A cost probe, not a solver setting: every step sets up the solve and forms its first residual
+// (one operator pass) but runs no CG iteration, so its ns_moisture is the floor of a solve every
+// step with the paper's operator, whatever a better start or preconditioner would save
+void BM_ReferenceSceneNoCgIteration(benchmark::State& bs) {
+    run_reference_scene<double>(bs, reference_model(1, DiffusionOperator::Particles, 0));
 }
 // the same scene with a float state (/sim/precision "float"): its speed and bytes per particle
 void BM_ReferenceSceneFloat(benchmark::State& bs, int moisture_interval,
                             DiffusionOperator diffusion_operator) {
-    run_reference_scene<float>(bs, moisture_interval, diffusion_operator);
+    run_reference_scene<float>(bs, reference_model(moisture_interval, diffusion_operator));
 }
 
 // the rollback point of sim/mpm/step_retry.h: a copy of the reference state (moisture arrays
@@ -193,6 +200,7 @@ BENCHMARK_CAPTURE(BM_ReferenceScene, MoistureEvery4Steps, 4, kParticles)
 // the grid operator's L (/moisture/diffusion_operator "grid"): no particle pass in the CG
 BENCHMARK_CAPTURE(BM_ReferenceScene, MoistureGridOperator, 1, DiffusionOperator::Grid)
     ->Apply(reference_scene_runs);
+BENCHMARK(BM_ReferenceSceneNoCgIteration)->Apply(reference_scene_runs);
 BENCHMARK_CAPTURE(BM_ReferenceSceneFloat, NoMoisture, 0, kParticles)->Apply(reference_scene_runs);
 BENCHMARK_CAPTURE(BM_ReferenceSceneFloat, Moisture, 1, kParticles)->Apply(reference_scene_runs);
 
