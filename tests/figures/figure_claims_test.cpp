@@ -72,8 +72,9 @@ constexpr double kMaxLiftOff = 0.02;
 // Fig. 9 colours fig8_c's cache by each particle's hardening state (blue below alpha0, red above;
 // shots/fig9.json reuses fig8_c's sim). Both halves show when at least half of the surface
 // particles are hardened and at least 5 % softened: the dried crust, and the stretched crack walls
-// and peeled undersides (86.1 and 13.8 %, `mc-measure` on fig9, 2026-11-27). A cache without the
-// saturation hardening or without cracks shows one colour.
+// and peeled undersides (86.1 and 13.8 %, `mc-measure` on fig9, 2026-11-27). fig8_b's cache,
+// without the saturation hardening, is 0 % hardened and 68.9 % softened, and fig8_a's, without
+// shrinkage, 0.1 and 0 % (docs/gallery.md): either fails it.
 constexpr double kFig9Hardened = 0.50;
 constexpr double kFig9Softened = 0.05;
 // Fig. 10: "our surfacing shows more cracks", in the dry areas. On fig10_ours' whole cache, 96,925
