@@ -176,14 +176,26 @@ protected:
         return false;
     }
 
+    /// The folder the stages write `shot`'s outputs to.
+    fs::path out_dir(const fs::path& shot) const { return m_dir / shot.stem(); }
+
+    /// The flags every stage takes for `shot`: its file, its folder, kThreads, quiet.
+    std::string stage_flags(const fs::path& shot) const {
+        return " --shot " + shot.string() + " --out " + out_dir(shot).string() + " --threads " +
+               std::to_string(kThreads) + " --quiet";
+    }
+
+    /// The flag that surfaces or measures only `shot`'s last frame.
+    static std::string last_frame_only(const fs::path& shot) {
+        return " --frames " + std::to_string(last_frame(shot));
+    }
+
     /// Runs init and sim of `shot` into the scratch folder, then surfaces and measures its last
     /// frame; returns that frame's measures.
     json run_and_measure(const fs::path& shot) const {
-        const fs::path out = m_dir / shot.stem();
-        const fs::path table = out / "measure.json";
-        const std::string flags = " --shot " + shot.string() + " --out " + out.string() +
-                                  " --threads " + std::to_string(kThreads) + " --quiet";
-        const std::string last_frame_only = " --frames " + std::to_string(last_frame(shot));
+        const fs::path table = out_dir(shot) / "measure.json";
+        const std::string flags = stage_flags(shot);
+        const std::string last_frame_only = FigureClaims::last_frame_only(shot);
         if (!run_stage("mc-init", flags, shot) || !run_stage("mc-sim", flags, shot) ||
             !run_stage("mc-surface", flags + last_frame_only, shot) ||
             !run_stage("mc-measure", flags + last_frame_only + " --json " + table.string(), shot))
@@ -337,18 +349,15 @@ TEST_F(FigureClaims, Fig10OurCriterionBreaksMoreEdgesThanWang2019OnOneCache) {
     const fs::path path = write_shot("fig10_ours_patch", shot);
     const json ours = run_and_measure(path);
     ASSERT_FALSE(ours.is_null());
-    const fs::path out = m_dir / path.stem();
-    const long long ours_broken = json::parse(slurp(out / "surface" / "manifest.json"))
-                                      .at("per_frame")
-                                      .back()
-                                      .at("broken_edges")
-                                      .get<long long>();
+    // the surfacing's manifest: the mode it ran in and the broken edges at the last frame
+    const fs::path surface_manifest = out_dir(path) / "surface" / "manifest.json";
+    const json ours_manifest = json::parse(slurp(surface_manifest));
+    const long long ours_broken =
+        ours_manifest.at("per_frame").back().at("broken_edges").get<long long>();
     EXPECT_EQ(ours_broken, ours.at("broken_edges").get<long long>());  // mc-measure reads the same
-    const std::string wang_flags = " --shot " + path.string() + " --out " + out.string() +
-                                   " --threads " + std::to_string(kThreads) + " --quiet --frames " +
-                                   std::to_string(last_frame(path)) + " --mode wang2019";
-    ASSERT_TRUE(run_stage("mc-surface", wang_flags, path));
-    const json manifest = json::parse(slurp(out / "surface" / "manifest.json"));
+    ASSERT_TRUE(run_stage("mc-surface",
+                          stage_flags(path) + last_frame_only(path) + " --mode wang2019", path));
+    const json manifest = json::parse(slurp(surface_manifest));
     ASSERT_EQ(manifest.at("mode"), "wang2019");
     const long long wang_broken =
         manifest.at("per_frame").back().at("broken_edges").get<long long>();
